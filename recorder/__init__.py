@@ -1,0 +1,1 @@
+"""Writing trackreplay logs: MCAP writer, sources, synthetic scenes, salvage."""

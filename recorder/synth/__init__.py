@@ -1,0 +1,1 @@
+"""Synthetic scenes written as logs with ground truth."""

@@ -1,0 +1,1 @@
+"""Reading logs, bundling frames, the deterministic replay engine, Rerun, export and eval."""

@@ -1,0 +1,36 @@
+"""`trackreplay eval TRAJ LOG`: metrics against the log's ground truth."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from replay.eval import evaluate, format_summary
+from replay.export import read_trajectory
+from replay.groundtruth import read_groundtruth
+from replay.reader import LogReader
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("eval", help="centre error, IoU and velocity error against /groundtruth/objects")
+    p.add_argument("trajectory", type=Path, help=".parquet or .csv trajectory")
+    p.add_argument("log", type=Path, help="the log holding the ground truth")
+    p.add_argument("--track-id", type=int, help="track to evaluate (default: the longest)")
+    p.add_argument("--gt-id", type=int, help="ground-truth object (default: the one seen most)")
+    p.add_argument("--json", type=Path, help="also write the metrics as JSON")
+    p.add_argument("--per-frame", type=Path, help="also write the per-frame errors (.csv or .parquet)")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    traj = read_trajectory(args.trajectory)
+    gt = read_groundtruth(LogReader(args.log))
+    summary, frames = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
+    print(format_summary(summary))
+    if args.json:
+        args.json.write_text(json.dumps(summary.as_dict(), indent=2) + "\n")
+    if args.per_frame:
+        (frames.write_parquet if args.per_frame.suffix == ".parquet" else frames.write_csv)(args.per_frame)
+    return 0

@@ -1,0 +1,149 @@
+"""Gap filling and writing of the ★ trajectory table (Parquet, CSV, MOTChallenge txt)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+from scipy.interpolate import CubicSpline
+
+from schemas.errors import TrackreplayError
+from replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order
+
+METHODS = ("linear", "cubic")
+FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
+
+
+def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of runs of True that have valid samples on both sides."""
+    runs: list[tuple[int, int]] = []
+    i, n = 0, missing.size
+    while i < n:
+        if missing[i]:
+            j = i
+            while j < n and missing[j]:
+                j += 1
+            if i > 0 and j < n:
+                runs.append((i, j))
+            i = j
+        else:
+            i += 1
+    return runs
+
+
+def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
+    first, last = track["frame"].min(), track["frame"].max()
+    frames = pl.DataFrame({"frame": np.arange(first, last + 1, dtype=np.int64)})
+    full = frames.join(track, on="frame", how="left")
+    head = track.row(0, named=True)
+    full = full.with_columns(
+        pl.lit(head["tracker"]).alias("tracker"),
+        pl.lit(head["track_id"], dtype=pl.Int64).alias("track_id"),
+        pl.col("t_ns").cast(pl.Float64).interpolate().round().cast(pl.Int64),
+        pl.col("status").fill_null("lost"),
+    )
+    x = full["x"].to_numpy().astype(float)
+    missing = np.isnan(x) | (full["status"].to_numpy() == "lost")
+    fill = np.zeros(missing.size, bool)
+    for a, b in _gap_runs(missing):
+        if b - a <= max_gap:
+            fill[a:b] = True
+    if not fill.any():
+        return full.select(COLUMNS)
+    f = full["frame"].to_numpy().astype(float)
+    known = ~missing
+    columns = {}
+    for name in FLOAT_COLUMNS:
+        values = full[name].to_numpy().astype(float)
+        ok = known & ~np.isnan(values)
+        if ok.sum() < 2:
+            continue
+        if method == "cubic" and ok.sum() >= 4:
+            est = CubicSpline(f[ok], values[ok], bc_type="natural")(f[fill])
+        else:
+            est = np.interp(f[fill], f[ok], values[ok])
+        values[fill] = est
+        columns[name] = values
+    if all(k in columns for k in ("dx", "dy", "dz")):  # lines of sight stay unit vectors
+        d = np.stack([columns["dx"], columns["dy"], columns["dz"]])
+        d[:, fill] /= np.linalg.norm(d[:, fill], axis=0)
+        columns["dx"], columns["dy"], columns["dz"] = d
+    status = np.where(fill, "interpolated", full["status"].to_numpy())
+    return full.with_columns(
+        *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in columns.items()),
+        pl.Series("status", status, dtype=pl.String),
+    ).select(COLUMNS)
+
+
+def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl.DataFrame:
+    """Interpolate interior gaps of at most ``max_gap`` frames per track; longer gaps stay ``lost``.
+
+    Missing frames between a track's first and last row become rows; filled rows get
+    ``status = "interpolated"``. ``cubic`` uses a natural cubic spline through the known samples.
+    """
+    if method not in METHODS:
+        raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
+    if df.is_empty():
+        return df
+    parts = [
+        _fill_track(track, method, max_gap)
+        for _, track in df.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True)
+    ]
+    return canonical_order(pl.concat(parts))
+
+
+def write_mot(df: pl.DataFrame, path: Path) -> None:
+    """MOTChallenge: ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z`` (1-based frames)."""
+    rows = df.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost")).with_columns(
+        w=pl.col("w").fill_null(1.0), h=pl.col("h").fill_null(1.0)
+    )
+    out = rows.select(
+        (pl.col("frame") + 1).alias("frame"),
+        pl.col("track_id").alias("id"),
+        (pl.col("x") - pl.col("w") / 2).alias("bb_left"),
+        (pl.col("y") - pl.col("h") / 2).alias("bb_top"),
+        pl.col("w").alias("bb_width"),
+        pl.col("h").alias("bb_height"),
+        pl.when(pl.col("status") == "measured").then(1.0).otherwise(0.5).alias("conf"),
+        pl.col("X").fill_null(-1.0).alias("x"),
+        pl.col("Y").fill_null(-1.0).alias("y"),
+        pl.col("Z").fill_null(-1.0).alias("z"),
+    ).sort(["frame", "id"])
+    out.write_csv(path, include_header=False, float_precision=3)
+
+
+def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
+    """Write by suffix: ``.parquet`` (default format), ``.csv`` or ``.txt`` (MOTChallenge)."""
+    path = Path(path)
+    kind = FORMATS.get(path.suffix.lower())
+    if kind is None:
+        raise TrackreplayError(f"{path}: unknown trajectory format; use .parquet, .csv or .txt (MOTChallenge)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if kind == "parquet":
+        df.write_parquet(path)
+    elif kind == "csv":
+        df.write_csv(path)
+    else:
+        write_mot(df, path)
+    return path
+
+
+def read_trajectory(path: str | Path) -> pl.DataFrame:
+    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV)."""
+    path = Path(path)
+    if not path.is_file():
+        raise TrackreplayError(f"{path} does not exist")
+    try:
+        if path.suffix.lower() == ".parquet":
+            df = pl.read_parquet(path)
+        elif path.suffix.lower() == ".csv":
+            df = pl.read_csv(path, schema_overrides=SCHEMA)
+        else:
+            raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
+    except (pl.exceptions.PolarsError, OSError) as err:
+        raise TrackreplayError(f"{path} is not a readable trajectory table ({err})") from None
+    absent = [c for c in COLUMNS if c not in df.columns]
+    if absent:
+        raise TrackreplayError(f"{path} lacks trajectory columns: {', '.join(absent)}")
+    return canonical_order(df.cast({c: t for c, t in SCHEMA.items()}))

@@ -1,0 +1,173 @@
+"""Frame bundles from a log: mono frames, stereo pairs by equal log_time, PTZ at frame time."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from schemas import topics as T
+from schemas.errors import LogError
+from schemas.records import InitRegion, LensTable, PtzReading
+from trackers.frame import Frame
+
+from replay.decode import decode_image
+from replay.reader import LogMessage, LogReader
+
+
+@dataclass(frozen=True)
+class FrameTopics:
+    """Which topics make a frame; ``right``/``ptz`` None means not used."""
+
+    image: str = T.CAMERA_IMAGE
+    right: str | None = None
+    ptz: str | None = None
+    lens: str = T.PTZ_LENS_TABLE
+    hints: str = T.ANNOTATIONS_INIT
+
+    @classmethod
+    def detect(cls, reader: LogReader, image: str | None = None) -> FrameTopics:
+        """Mono camera if present, else the stereo pair; PTZ encoders when the log has them."""
+        present = reader.topics()
+        if image is None:
+            image = T.CAMERA_IMAGE if T.CAMERA_IMAGE in present or T.STEREO_LEFT_IMAGE not in present else T.STEREO_LEFT_IMAGE
+        right = T.STEREO_RIGHT_IMAGE if image == T.STEREO_LEFT_IMAGE and T.STEREO_RIGHT_IMAGE in present else None
+        ptz = T.PTZ_ENCODERS if T.PTZ_ENCODERS in present else None
+        return cls(image=image, right=right, ptz=ptz)
+
+
+@dataclass
+class BundleReport:
+    """What bundling noticed; filled while frames are produced."""
+
+    frames: int = 0
+    unpaired: list[tuple[str, int]] = field(default_factory=list)
+    outside_encoder_coverage: list[int] = field(default_factory=list)
+
+
+def interpolate_ptz(a: PtzReading, b: PtzReading, t_ns: int) -> PtzReading:
+    """Linear interpolation at ``t_ns``; pan takes the shorter way round the circle."""
+    if b.t_ns == a.t_ns:
+        return PtzReading(t_ns, a.pan, a.tilt, a.zoom, a.focus)
+    s = (t_ns - a.t_ns) / (b.t_ns - a.t_ns)
+    dpan = (b.pan - a.pan + 180.0) % 360.0 - 180.0
+    return PtzReading(
+        t_ns,
+        a.pan + s * dpan,
+        a.tilt + s * (b.tilt - a.tilt),
+        a.zoom + s * (b.zoom - a.zoom),
+        a.focus + s * (b.focus - a.focus),
+    )
+
+
+class PtzInterpolator:
+    """Streams encoder readings and answers the pose at increasing frame times."""
+
+    def __init__(self, readings: Iterator[PtzReading], tolerance_ns: int) -> None:
+        self._it = readings
+        self._tol = tolerance_ns
+        self._prev: PtzReading | None = None
+        self._next: PtzReading | None = next(self._it, None)
+
+    def at(self, t_ns: int) -> PtzReading | None:
+        while self._next is not None and self._next.t_ns < t_ns:
+            self._prev, self._next = self._next, next(self._it, None)
+        nxt, prev = self._next, self._prev
+        if nxt is not None and nxt.t_ns == t_ns:
+            return nxt
+        if prev is None or nxt is None or nxt.t_ns - prev.t_ns > self._tol:
+            return None
+        return interpolate_ptz(prev, nxt, t_ns)
+
+
+def _ptz_stream(reader: LogReader, topic: str, start_ns: int | None) -> Iterator[PtzReading]:
+    for item in reader.messages([topic], start_ns=None if start_ns is None else max(0, start_ns - 10**9)):
+        yield PtzReading.from_pb(item.decode())
+
+
+def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
+    if topic not in reader.topics():
+        return ()
+    regions: list[InitRegion] = []
+    for item in reader.messages([topic]):
+        regions.extend(InitRegion.from_pb(r) for r in item.decode().regions)
+    return tuple(regions)
+
+
+def iter_frames(
+    reader: LogReader,
+    topics: FrameTopics,
+    *,
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+    ptz_tolerance_ns: int = 100_000_000,
+    report: BundleReport | None = None,
+) -> Iterator[Frame]:
+    """Yield one immutable :class:`Frame` per image (or stereo pair) in log-time order."""
+    report = report if report is not None else BundleReport()
+    reader.require(topics.image, *([topics.right] if topics.right else []), *([topics.ptz] if topics.ptz else []))
+    lens_pb = reader.first(topics.lens)
+    lens = LensTable.from_pb(lens_pb) if lens_pb is not None else None
+    hints = read_hints(reader, topics.hints)
+    hints_by_frame: dict[int, list[InitRegion]] = {}
+    for region in hints:
+        hints_by_frame.setdefault(region.frame, []).append(region)
+    ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, start_ns), ptz_tolerance_ns) if topics.ptz else None
+
+    shape: tuple[int, ...] | None = None
+    image_topics = [topics.image] + ([topics.right] if topics.right else [])
+
+    def pixels(item: LogMessage):
+        nonlocal shape
+        where = f"{reader.path}: topic {item.topic} message {item.index}"
+        image, encoded, encoding = decode_image(item.decode(), item.schema, where)
+        if shape is None:
+            shape = image.shape
+        elif image.shape != shape:
+            raise LogError(f"{where} is {image.shape[1]}x{image.shape[0]} but earlier images are {shape[1]}x{shape[0]}")
+        return image, encoded, encoding
+
+    def bundle(left: LogMessage, right: LogMessage | None) -> Frame:
+        image, encoded, encoding = pixels(left)
+        right_image = pixels(right)[0] if right is not None else None
+        pose = ptz.at(left.log_time) if ptz is not None else None
+        if ptz is not None and pose is None:
+            report.outside_encoder_coverage.append(left.index)
+        report.frames += 1
+        return Frame(
+            index=left.index,
+            t_ns=left.log_time,
+            image=image,
+            right=right_image,
+            ptz=pose,
+            lens=lens,
+            hints=tuple(hints_by_frame.get(left.index, ())),
+            encoded=encoded,
+            encoding=encoding,
+        )
+
+    if topics.right is None:
+        for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
+            yield bundle(item, None)
+        return
+
+    group: dict[str, LogMessage] = {}
+    group_time: int | None = None
+
+    def flush() -> Iterator[Frame]:
+        left, right = group.get(topics.image), group.get(topics.right)
+        if left is not None and right is not None:
+            yield bundle(left, right)
+        else:
+            lone = left or right
+            report.unpaired.append((lone.topic, lone.index))
+        group.clear()
+
+    for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
+        if group_time is not None and item.log_time != group_time:
+            yield from flush()
+        group_time = item.log_time
+        if item.topic in group:  # two images of one side at one time: the first is unpaired
+            yield from flush()
+        group[item.topic] = item
+    if group:
+        yield from flush()

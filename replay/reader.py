@@ -1,0 +1,188 @@
+"""Reading trackreplay logs with clear, one-sentence errors.
+
+Messages come in a total, reproducible order: log_time, then channel id, then
+sequence (ARCHITECTURE.md ★ Log contract).
+"""
+
+from __future__ import annotations
+
+import heapq
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+from mcap.exceptions import McapError
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+
+from schemas.errors import LogError, TruncatedLogError
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    topic: str
+    schema: str
+    encoding: str
+    count: int
+
+
+@dataclass(frozen=True)
+class LogMessage:
+    """A message with its place in the log; ``decode()`` parses it on demand."""
+
+    topic: str
+    schema: str
+    log_time: int
+    channel_id: int
+    sequence: int
+    index: int  # position of this message within its topic (0-based)
+    data: bytes
+    _decoder: Callable[[bytes], Any]
+    _path: str
+
+    def decode(self) -> Any:
+        try:
+            return self._decoder(self.data)
+        except Exception as err:  # protobuf raises DecodeError or RuntimeWarning-ish errors
+            raise LogError(
+                f"{self._path}: message {self.index} on topic {self.topic} cannot be decoded as {self.schema} ({err})"
+            ) from None
+
+
+def _truncation_hint(path: Path) -> str:
+    return f"{path} is truncated or corrupt (no valid MCAP footer); run `trackreplay recover {path} FIXED.mcap` to salvage every complete chunk"
+
+
+class LogReader:
+    """Random-access reader over one MCAP log (opens the file per iteration)."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        if not self.path.is_file():
+            raise LogError(f"{self.path} does not exist or is not a file")
+        with open(self.path, "rb") as fh:
+            head = fh.read(8)
+            fh.seek(0, 2)
+            size = fh.tell()
+            fh.seek(max(0, size - 8))
+            tail = fh.read(8)
+        if head != MCAP_MAGIC:
+            raise LogError(f"{self.path} is not an MCAP file (bad magic bytes)")
+        if tail != MCAP_MAGIC:
+            raise TruncatedLogError(_truncation_hint(self.path))
+        try:
+            with open(self.path, "rb") as fh:
+                summary = make_reader(fh).get_summary()
+        except McapError as err:
+            raise TruncatedLogError(_truncation_hint(self.path) + f" ({type(err).__name__})") from None
+        if summary is None:
+            raise TruncatedLogError(_truncation_hint(self.path))
+        self._summary = summary
+        self._factory = DecoderFactory()
+        self._decoders: dict[int, Callable[[bytes], Any]] = {}
+
+    # -- what the log holds -------------------------------------------------
+
+    def topics(self) -> dict[str, TopicInfo]:
+        counts = self._summary.statistics.channel_message_counts if self._summary.statistics else {}
+        out: dict[str, TopicInfo] = {}
+        for cid in sorted(self._summary.channels):
+            ch = self._summary.channels[cid]
+            schema = self._summary.schemas.get(ch.schema_id)
+            name = schema.name if schema else ""
+            prev = out.get(ch.topic)
+            n = counts.get(cid, 0) + (prev.count if prev else 0)
+            out[ch.topic] = TopicInfo(ch.topic, name, ch.message_encoding, n)
+        return out
+
+    def time_range(self) -> tuple[int, int]:
+        st = self._summary.statistics
+        return (st.message_start_time, st.message_end_time) if st else (0, 0)
+
+    def require(self, *topics: str) -> None:
+        present = self.topics()
+        for topic in topics:
+            if topic not in present:
+                listed = ", ".join(sorted(present)) or "none"
+                raise LogError(f"{self.path} has no topic {topic}; topics present: {listed}")
+
+    def schema_of(self, topic: str) -> str:
+        self.require(topic)
+        return self.topics()[topic].schema
+
+    # -- messages -------------------------------------------------------------
+
+    def _decoder(self, schema, channel) -> Callable[[bytes], Any]:
+        dec = self._decoders.get(channel.id)
+        if dec is None:
+            try:
+                dec = self._factory.decoder_for(channel.message_encoding, schema)
+            except Exception as err:
+                raise LogError(f"{self.path}: schema of topic {channel.topic} cannot be loaded ({err})") from None
+            if dec is None:
+                raise LogError(
+                    f"{self.path}: topic {channel.topic} is not protobuf-encoded ({channel.message_encoding}); trackreplay reads protobuf channels only"
+                )
+            self._decoders[channel.id] = dec
+        return dec
+
+    def messages(
+        self,
+        topics: Iterable[str],
+        *,
+        start_ns: int | None = None,
+        end_ns: int | None = None,
+    ) -> Iterator[LogMessage]:
+        """Messages of ``topics`` with ``start_ns <= log_time < end_ns`` in total order.
+
+        ``index`` counts from the start of the log, not from ``start_ns``.
+        """
+        topics = sorted(set(topics))
+        self.require(*topics)
+        offsets = self._index_offsets(topics, start_ns)
+        counters = dict(offsets)
+        pending: list[tuple[int, int, int, int, LogMessage]] = []
+        try:
+            with open(self.path, "rb") as fh:
+                reader = make_reader(fh)
+                it = reader.iter_messages(topics=topics, starting_at=start_ns, ending_before=end_ns, log_time_order=True)
+                for schema, channel, msg in it:
+                    dec = self._decoder(schema, channel)
+                    idx = counters.get(channel.topic, 0)
+                    counters[channel.topic] = idx + 1
+                    item = LogMessage(
+                        channel.topic, schema.name if schema else "", msg.log_time, channel.id,
+                        msg.sequence, idx, msg.data, dec, str(self.path),
+                    )
+                    # Equal log_time: release only once time advances, ordered by channel then sequence.
+                    if pending and pending[0][0] != msg.log_time:
+                        while pending:
+                            yield heapq.heappop(pending)[4]
+                    heapq.heappush(pending, (msg.log_time, channel.id, msg.sequence, idx, item))
+                while pending:
+                    yield heapq.heappop(pending)[4]
+        except McapError as err:
+            raise LogError(f"{_truncation_hint(self.path)} ({type(err).__name__}: {err})") from None
+
+    def _index_offsets(self, topics: list[str], start_ns: int | None) -> dict[str, int]:
+        """How many messages each topic has before ``start_ns`` (reads no payloads twice)."""
+        if not start_ns:
+            return {t: 0 for t in topics}
+        counts = {t: 0 for t in topics}
+        with open(self.path, "rb") as fh:
+            for _, channel, _ in make_reader(fh).iter_messages(
+                topics=topics, ending_before=start_ns, log_time_order=False
+            ):
+                counts[channel.topic] += 1
+        return counts
+
+    def first(self, topic: str) -> Any | None:
+        """The first decoded message of ``topic``, or None when the topic is absent."""
+        if topic not in self.topics():
+            return None
+        for item in self.messages([topic]):
+            return item.decode()
+        return None

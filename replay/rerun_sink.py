@@ -1,0 +1,79 @@
+"""The Rerun stream of a replay: camera images on ``frame``/``log_time`` timelines, to an .rrd file.
+
+Built only when ``--rrd`` is given; without it no Rerun object is ever constructed.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from datetime import timedelta
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from trackers.frame import Frame
+
+CAMERA = "camera/image"
+RIGHT = "camera/right"
+
+
+def _batcher() -> rr.ChunkBatcherConfig:
+    # Chunk boundaries from data volume only (never from elapsed time), so two replays
+    # write the same chunks.
+    return rr.ChunkBatcherConfig(flush_tick=timedelta(days=1), flush_num_bytes=8 * 1024 * 1024, flush_num_rows=2**20)
+
+
+class RerunSink:
+    """Owns the RecordingStream; trackers' views log into ``self.rec``."""
+
+    def __init__(self, path: str | Path, recording_id: str, blueprint: rrb.Blueprint) -> None:
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.rec = rr.RecordingStream(
+            "trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher()
+        )
+        # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
+        self.rec.set_log_time_enabled(False)
+        self.rec.save(str(self.path), default_blueprint=blueprint)
+
+    def begin_frame(self, frame: Frame) -> None:
+        rec = self.rec
+        rec.set_time("frame", sequence=frame.index)
+        rec.set_time("log_time", timestamp=np.datetime64(frame.t_ns, "ns"))
+        if frame.encoded is not None and frame.encoding in ("jpeg", "png"):
+            media = "image/jpeg" if frame.encoding == "jpeg" else "image/png"
+            rec.log(CAMERA, rr.EncodedImage(contents=frame.encoded, media_type=media))
+        else:
+            model = "L" if frame.image.ndim == 2 else "BGR"
+            rec.log(CAMERA, rr.Image(frame.image, color_model=model))
+        if frame.right is not None:
+            model = "L" if frame.right.ndim == 2 else "BGR"
+            rec.log(RIGHT, rr.Image(frame.right, color_model=model))
+
+    def close(self) -> None:
+        self.rec.flush()
+        self.rec.disconnect()
+
+
+def rrd_digest(path: str | Path) -> str:
+    """sha256 of an .rrd's logged content, ignoring row and chunk ids (which are time-based).
+
+    Two replays of the same log, config and seed give the same value.
+    """
+    import pyarrow as pa
+    import rerun.chunk as rc
+
+    digests: list[bytes] = []
+    for chunk in rc.RrdReader(str(path)).stream():
+        batch = chunk.to_record_batch()
+        keep = [i for i, name in enumerate(batch.schema.names) if name != "rerun.controls.RowId"]
+        table = pa.Table.from_arrays([batch.column(i) for i in keep], names=[batch.schema.names[i] for i in keep])
+        sink = pa.BufferOutputStream()
+        with pa.ipc.new_stream(sink, table.schema) as writer:
+            writer.write_table(table)
+        h = hashlib.sha256(str(chunk.entity_path).encode() + b"\0" + bytes(chunk.is_static))
+        h.update(sink.getvalue().to_pybytes())
+        digests.append(h.digest())
+    return hashlib.sha256(b"".join(sorted(digests))).hexdigest()

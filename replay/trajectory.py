@@ -1,0 +1,58 @@
+"""The ★ trajectory table: one row per track per frame, and its canonical bytes for digests."""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Iterable, Sequence
+
+import numpy as np
+import polars as pl
+
+from trackers.base import TrackState
+
+FLOAT_COLUMNS = ("x", "y", "w", "h", "X", "Y", "Z", "dx", "dy", "dz", "vx", "vy")
+SCHEMA: dict[str, pl.DataType] = {
+    "tracker": pl.String,
+    "track_id": pl.Int64,
+    "frame": pl.Int64,
+    "t_ns": pl.Int64,
+    **{c: pl.Float64 for c in FLOAT_COLUMNS},
+    "status": pl.String,
+}
+COLUMNS = tuple(SCHEMA)
+
+
+def state_row(tracker: str, frame: int, t_ns: int, state: TrackState) -> tuple:
+    return (tracker, state.track_id, frame, t_ns, *(getattr(state, c) for c in FLOAT_COLUMNS), state.status)
+
+
+def trajectory_table(rows: Iterable[Sequence]) -> pl.DataFrame:
+    """Build the table from row tuples in ``COLUMNS`` order, sorted canonically."""
+    df = pl.DataFrame(list(rows), schema=SCHEMA, orient="row")
+    return canonical_order(df)
+
+
+def canonical_order(df: pl.DataFrame) -> pl.DataFrame:
+    return df.select(COLUMNS).sort(["tracker", "track_id", "frame"], maintain_order=True)
+
+
+def canonical_bytes(df: pl.DataFrame) -> bytes:
+    """A byte string that depends only on the table's values (column order fixed, nulls marked)."""
+    df = canonical_order(df)
+    parts: list[bytes] = [",".join(COLUMNS).encode(), np.int64(df.height).tobytes()]
+    for name in COLUMNS:
+        col = df.get_column(name)
+        nulls = col.is_null().to_numpy()
+        parts.append(np.packbits(nulls).tobytes())
+        if SCHEMA[name] == pl.String:
+            parts.append("\0".join(col.fill_null("").to_list()).encode())
+        elif SCHEMA[name] == pl.Int64:
+            parts.append(col.fill_null(0).to_numpy().astype("<i8").tobytes())
+        else:
+            values = col.fill_null(0.0).to_numpy().astype("<f8")
+            parts.append(values.tobytes())
+    return b"".join(len(p).to_bytes(8, "little") + p for p in parts)
+
+
+def table_digest(df: pl.DataFrame) -> str:
+    return hashlib.sha256(canonical_bytes(df)).hexdigest()

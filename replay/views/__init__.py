@@ -1,0 +1,1 @@
+"""Per-tracker Rerun views: how a tracker's intermediates are drawn, and the default layout."""

@@ -1,0 +1,84 @@
+"""Rerun view of the gradient-flow tracker (seed 004): every intermediate of a step."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from trackers.base import TrackState
+from trackers.frame import Frame
+
+from replay.views.common import log_estimates, log_scalar, to_uint8
+
+ARROW_STRIDE = 4  # one arrow per 4x4 pixels keeps the field readable
+ARROW_SCALE = 2.0
+
+
+def blueprint(name: str) -> rrb.Blueprint:
+    root = f"trackers/{name}"
+    return rrb.Blueprint(
+        rrb.Horizontal(
+            rrb.Spatial2DView(
+                name="camera + FOV + flow",
+                origin="/",
+                contents=["camera/**", f"{root}/fov", f"{root}/flow_field", f"{root}/estimate", f"{root}/centroid"],
+            ),
+            rrb.Vertical(
+                rrb.Spatial2DView(name="FOV: window, moving pixels", origin=f"{root}/window"),
+                rrb.Spatial2DView(name="FOV: log10 cond(G)", origin=f"{root}/condition"),
+                rrb.Horizontal(
+                    rrb.BarChartView(name="histogram u", origin=f"{root}/histogram/u"),
+                    rrb.BarChartView(name="histogram v", origin=f"{root}/histogram/v"),
+                ),
+            ),
+            rrb.Vertical(
+                rrb.TimeSeriesView(name="velocity raw vs filtered", origin=f"{root}/velocity"),
+                rrb.TimeSeriesView(name="Kalman state", origin=f"{root}/kalman/state"),
+                rrb.TimeSeriesView(name="Kalman sigma", origin=f"{root}/kalman/sigma"),
+            ),
+            column_shares=[2, 1, 1],
+        ),
+        collapse_panels=False,
+    )
+
+
+def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
+    root = f"trackers/{name}"
+    x0, y0, w, h = (float(v) for v in inter.fov_box)
+    rec.log(f"{root}/fov", rr.Boxes2D(array=[[x0, y0, w, h]], array_format=rr.Box2DFormat.XYWH, colors=[(255, 255, 255)]))
+    log_estimates(rec, f"{root}/estimate", states)
+    if np.all(np.isfinite(inter.centroid)):
+        rec.log(f"{root}/centroid", rr.Points2D([inter.centroid], radii=1.5, colors=[(255, 0, 255)]))
+
+    # Flow arrows in full-image coordinates, subsampled, where the flow was accepted.
+    u, v = inter.flow_u, inter.flow_v
+    ys, xs = np.mgrid[0 : u.shape[0] : ARROW_STRIDE, 0 : u.shape[1] : ARROW_STRIDE]
+    us, vs = u[ys, xs], v[ys, xs]
+    keep = np.isfinite(us) & np.isfinite(vs)
+    if keep.any():
+        origins = np.stack([xs[keep] + x0, ys[keep] + y0], axis=1).astype(np.float32)
+        vectors = ARROW_SCALE * np.stack([us[keep], vs[keep]], axis=1).astype(np.float32)
+        moving = inter.moving[ys, xs][keep]
+        colours = np.where(moving[:, None], [[255, 60, 60]], [[80, 200, 255]]).astype(np.uint8)
+        rec.log(f"{root}/flow_field", rr.Arrows2D(origins=origins, vectors=vectors, colors=colours))
+    else:
+        rec.log(f"{root}/flow_field", rr.Clear(recursive=False))
+
+    window = frame.image[int(y0) : int(y0 + h), int(x0) : int(x0 + w)]
+    if window.size:
+        rec.log(f"{root}/window/image", rr.Image(window, color_model="L" if window.ndim == 2 else "BGR"))
+    rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8)))
+    rec.log(f"{root}/condition/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
+
+    rec.log(f"{root}/histogram/u", rr.BarChart(inter.hist_u))
+    rec.log(f"{root}/histogram/v", rr.BarChart(inter.hist_v))
+    for axis, k in (("x", 0), ("y", 1)):
+        log_scalar(rec, f"{root}/velocity/raw_{axis}", inter.raw_velocity[k])
+        log_scalar(rec, f"{root}/velocity/filtered_{axis}", inter.filtered_velocity[k])
+        for j, part in enumerate(("position", "velocity", "acceleration")):
+            log_scalar(rec, f"{root}/kalman/state/{axis}/{part}", inter.kalman_x[k, j])
+            log_scalar(rec, f"{root}/kalman/sigma/{axis}/{part}", np.sqrt(max(inter.kalman_P[k, j, j], 0.0)))
+    log_scalar(rec, f"{root}/moving_pixels", float(inter.moving_pixels))

@@ -1,0 +1,21 @@
+"""Errors a user can cause and act on: each carries one sentence naming the file, topic or line."""
+
+
+class TrackreplayError(Exception):
+    """A user-facing failure; the CLI prints ``str(err)`` and exits with ``exit_code``."""
+
+    exit_code = 2
+
+
+class LogError(TrackreplayError):
+    """A log cannot be read as asked (missing topic, truncated file, undecodable message)."""
+
+
+class TruncatedLogError(LogError):
+    """The log ends before its summary: readable up to the last complete chunk."""
+
+    exit_code = 3
+
+
+class SourceError(TrackreplayError):
+    """An input to ``record`` (video, image folder, CSV, annotation file) is malformed."""

@@ -1,0 +1,27 @@
+"""Protobuf message classes used in logs: Foxglove's well-known schemas and ours."""
+
+from foxglove_schemas_protobuf.CameraCalibration_pb2 import CameraCalibration
+from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
+from foxglove_schemas_protobuf.FrameTransform_pb2 import FrameTransform
+from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
+
+from schemas._gen.GroundTruth_pb2 import GroundTruthFrame, GroundTruthObject
+from schemas._gen.InitAnnotations_pb2 import InitAnnotations, InitRegion
+from schemas._gen.LensTable_pb2 import LensEntry, LensTable
+from schemas._gen.PtzEncoders_pb2 import PtzEncoders
+
+__all__ = [
+    "CameraCalibration",
+    "CompressedImage",
+    "FrameTransform",
+    "GroundTruthFrame",
+    "GroundTruthObject",
+    "InitAnnotations",
+    "InitRegion",
+    "LensEntry",
+    "LensTable",
+    "PtzEncoders",
+    "RawImage",
+]
+
+IMAGE_SCHEMAS = ("foxglove.RawImage", "foxglove.CompressedImage")

@@ -1,0 +1,12 @@
+"""Default topic names of the log contract (ARCHITECTURE.md ★ Log contract)."""
+
+CAMERA_IMAGE = "/camera/image"
+CAMERA_CALIBRATION = "/camera/calibration"
+STEREO_LEFT_IMAGE = "/stereo/left/image"
+STEREO_RIGHT_IMAGE = "/stereo/right/image"
+STEREO_LEFT_CALIBRATION = "/stereo/left/calibration"
+STEREO_RIGHT_CALIBRATION = "/stereo/right/calibration"
+PTZ_ENCODERS = "/ptz/encoders"
+PTZ_LENS_TABLE = "/ptz/lens_table"
+GROUNDTRUTH = "/groundtruth/objects"
+ANNOTATIONS_INIT = "/annotations/init"

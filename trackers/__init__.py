@@ -1,0 +1,1 @@
+"""Tracking algorithms. Pure: no files, no clock, no global randomness."""

@@ -1,0 +1,52 @@
+"""What every tracker exchanges with the replay engine (ARCHITECTURE.md ★ Replay contract)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+
+from trackers.frame import Frame
+
+STATUSES = ("measured", "predicted", "interpolated", "lost")
+
+
+@dataclass(frozen=True)
+class TrackState:
+    """One track's estimate in one frame (a row of the ★ trajectory table)."""
+
+    track_id: int
+    x: float | None = None
+    y: float | None = None
+    w: float | None = None
+    h: float | None = None
+    X: float | None = None
+    Y: float | None = None
+    Z: float | None = None
+    dx: float | None = None
+    dy: float | None = None
+    dz: float | None = None
+    vx: float | None = None
+    vy: float | None = None
+    status: str = "measured"
+
+    def __post_init__(self) -> None:
+        if self.status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, not {self.status!r}")
+
+
+class Tracker(Protocol):
+    """A tracker is built from ``(config, rng)`` and stepped once per frame.
+
+    After each ``step`` its ``intermediates`` hold that frame's inner results as
+    plain numpy data (a frozen dataclass); the engine hashes them into the digest
+    and, when a Rerun recording is on, hands them to the tracker's view.
+    """
+
+    name: ClassVar[str]
+    intermediates: Any
+
+    def __init__(self, config: Any, rng: np.random.Generator) -> None: ...
+
+    def step(self, frame: Frame) -> list[TrackState]: ...

@@ -1,0 +1,37 @@
+"""The immutable frame bundle a tracker receives (ARCHITECTURE.md ★ Replay contract)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from schemas.records import InitRegion, LensTable, PtzReading
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One time step: the (left) image, optional right image, PTZ pose and hints.
+
+    ``image`` is BGR ``uint8`` (H, W, 3) or grey (H, W). ``encoded``/``encoding``
+    keep the source bytes (e.g. JPEG) so viewers can log them without re-encoding.
+    """
+
+    index: int
+    t_ns: int
+    image: np.ndarray
+    right: np.ndarray | None = None
+    ptz: PtzReading | None = None
+    lens: LensTable | None = None
+    hints: tuple[InitRegion, ...] = field(default_factory=tuple)
+    encoded: bytes | None = None
+    encoding: str | None = None
+
+    @property
+    def grey(self) -> np.ndarray:
+        """The image as float32 luminance (cached per frame by the caller if needed)."""
+        import cv2
+
+        if self.image.ndim == 2:
+            return self.image.astype(np.float32)
+        return cv2.cvtColor(self.image, cv2.COLOR_BGR2GRAY).astype(np.float32)
