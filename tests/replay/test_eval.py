@@ -1,0 +1,32 @@
+import numpy as np
+import polars as pl
+import pytest
+
+from replay.eval import evaluate, iou
+from replay.groundtruth import GT_SCHEMA
+from replay.trajectory import state_row, trajectory_table
+from trackers.base import TrackState
+
+
+def _gt(n: int) -> pl.DataFrame:
+    rows = [(f, f, 1, 10.0 + f, 20.0, 10.0, 10.0, None, None, None, 1.0, 0.0, True, None) for f in range(n)]
+    return pl.DataFrame(rows, schema=GT_SCHEMA, orient="row")
+
+
+def test_iou_known_values() -> None:
+    a = np.array([[5.0, 5.0, 10.0, 10.0], [0.0, 0.0, 2.0, 2.0]])
+    b = np.array([[10.0, 5.0, 10.0, 10.0], [10.0, 10.0, 2.0, 2.0]])
+    assert iou(a, b) == pytest.approx([50 / 150, 0.0])
+
+
+def test_metrics_against_known_offsets() -> None:
+    gt = _gt(10)
+    rows = [state_row("flow", f, f, TrackState(1, x=13.0 + f, y=24.0, w=10.0, h=10.0, vx=1.5, vy=0.0)) for f in range(8)]
+    summary, frames = evaluate(trajectory_table(rows), gt)
+    assert summary.gt_frames == 10 and summary.tracked_frames == 8
+    assert summary.centre_error_mean == pytest.approx(5.0)  # a 3-4-5 offset
+    assert summary.precision_at_20px == pytest.approx(0.8)  # two missed frames count as failures
+    assert summary.velocity_rmse_x == pytest.approx(0.5) and summary.velocity_rmse_y == pytest.approx(0.0)
+    expected_iou = (7 * 6) / (200 - 42)
+    assert summary.iou_mean == pytest.approx(expected_iou * 0.8)
+    assert frames.height == 10

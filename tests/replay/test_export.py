@@ -1,0 +1,73 @@
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from replay.export import fill_gaps, read_trajectory, write_trajectory
+from replay.trajectory import COLUMNS, state_row, table_digest, trajectory_table
+from schemas.errors import TrackreplayError
+from trackers.base import TrackState
+
+
+def _table(frames, positions, statuses=None):
+    statuses = statuses or ["measured"] * len(frames)
+    rows = []
+    for f, p, s in zip(frames, positions, statuses):
+        state = TrackState(1, x=p, y=2 * p, w=4.0, h=4.0, status=s) if p is not None else TrackState(1, status=s)
+        rows.append(state_row("flow", f, f * 1000, state))
+    return trajectory_table(rows)
+
+
+def test_linear_fill_of_missing_and_lost_frames() -> None:
+    df = _table([0, 1, 2, 5, 6], [0.0, 1.0, None, 5.0, 6.0], ["measured", "measured", "lost", "measured", "measured"])
+    out = fill_gaps(df, "linear", max_gap=5)
+    assert out["frame"].to_list() == list(range(7))
+    assert out["x"].to_list() == pytest.approx([0, 1, 2, 3, 4, 5, 6])
+    assert out["t_ns"].to_list() == [f * 1000 for f in range(7)]
+    assert out["status"].to_list()[2:5] == ["interpolated"] * 3
+
+
+def test_gap_longer_than_max_stays_lost() -> None:
+    df = _table([0, 1, 6, 7], [0.0, 1.0, 6.0, 7.0])
+    out = fill_gaps(df, "linear", max_gap=3)
+    assert out["status"].to_list()[2:6] == ["lost"] * 4
+    assert out["x"].to_list()[2:6] == [None] * 4
+
+
+def test_cubic_follows_a_parabola_exactly_where_linear_cannot() -> None:
+    frames = [0, 1, 2, 3, 7, 8, 9, 10]
+    xs = [float(f * f) for f in frames]
+    cubic = fill_gaps(_table(frames, xs), "cubic", 5)
+    linear = fill_gaps(_table(frames, xs), "linear", 5)
+    gap = [4, 5, 6]
+    err_cubic = np.abs(np.array(cubic["x"].to_list())[gap] - np.array(gap) ** 2).max()
+    err_linear = np.abs(np.array(linear["x"].to_list())[gap] - np.array(gap) ** 2).max()
+    assert err_cubic < 0.5 < err_linear
+
+
+def test_round_trip_formats(tmp_path: Path) -> None:
+    df = _table([0, 1, 2], [10.0, 11.0, 12.0])
+    for suffix in (".parquet", ".csv"):
+        path = write_trajectory(df, tmp_path / f"t{suffix}")
+        assert table_digest(read_trajectory(path)) == table_digest(df)
+    mot = write_trajectory(df, tmp_path / "t.txt").read_text().splitlines()
+    assert mot[0] == "1,1,8.000,18.000,4.000,4.000,1.000,-1.000,-1.000,-1.000"
+    assert len(mot) == 3
+
+
+def test_schema_is_the_contract() -> None:
+    df = _table([0], [1.0])
+    assert tuple(df.columns) == COLUMNS
+    assert df.schema["frame"] == pl.Int64 and df.schema["x"] == pl.Float64 and df.schema["status"] == pl.String
+
+
+def test_bad_inputs(tmp_path: Path) -> None:
+    with pytest.raises(TrackreplayError, match="unknown trajectory format"):
+        write_trajectory(_table([0], [1.0]), tmp_path / "t.xlsx")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(TrackreplayError, match="lacks trajectory columns"):
+        read_trajectory(bad)
+    with pytest.raises(TrackreplayError, match="interpolation method"):
+        fill_gaps(_table([0], [1.0]), "quadratic")

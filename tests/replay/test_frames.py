@@ -1,0 +1,94 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from recorder.image_codec import image_message
+from recorder.writer import LogWriter
+from replay.frames import BundleReport, FrameTopics, PtzInterpolator, interpolate_ptz, iter_frames
+from replay.reader import LogReader
+from schemas import topics as T
+from schemas.errors import LogError
+from schemas.records import LensEntry, LensTable, PtzReading
+
+MS = 1_000_000
+
+
+def _img(value: int, shape=(8, 10)) -> np.ndarray:
+    return np.full(shape, value, np.uint8)
+
+
+def test_ptz_interpolation_takes_short_way_round() -> None:
+    a, b = PtzReading(0, 179.0, 0.0, 1.0, 2.0), PtzReading(10, -179.0, 10.0, 3.0, 4.0)
+    mid = interpolate_ptz(a, b, 5)
+    assert mid.pan == pytest.approx(180.0) and mid.tilt == pytest.approx(5.0)
+    assert (mid.zoom, mid.focus) == (2.0, 3.0)
+
+
+def test_interpolator_coverage_and_tolerance() -> None:
+    readings = [PtzReading(t, float(t), 0.0, 0.0, 0.0) for t in (10, 20, 30, 100)]
+    ptz = PtzInterpolator(iter(readings), tolerance_ns=15)
+    assert ptz.at(5) is None  # before the first reading
+    assert ptz.at(10).pan == 10.0  # exact reading
+    assert ptz.at(25).pan == pytest.approx(25.0)
+    assert ptz.at(50) is None  # 30 -> 100 is a gap longer than the tolerance
+    assert ptz.at(100).pan == 100.0
+    assert ptz.at(101) is None  # after the last reading
+
+
+def test_stereo_pairs_by_equal_log_time_and_ptz_at_frame_time(tmp_path: Path) -> None:
+    path = tmp_path / "rig.mcap"
+    lens = LensTable(10, 8, (LensEntry(0, 0, 100, 100, 5, 4),))
+    with LogWriter(path) as log:
+        log.write(T.PTZ_LENS_TABLE, lens.to_pb(0), 0)
+        for k in range(0, 60, 5):  # encoders every 5 ms, from 0 to 55 ms
+            log.write(T.PTZ_ENCODERS, PtzReading(k * MS, float(k), 0.0, 1.0, 1.0).to_pb(), k * MS)
+        for k, t in enumerate((0, 20, 40, 70)):
+            log.write(T.STEREO_LEFT_IMAGE, image_message(_img(k), "png", t * MS), t * MS)
+            if k != 2:  # the third left image has no partner
+                log.write(T.STEREO_RIGHT_IMAGE, image_message(_img(100 + k), "png", t * MS), t * MS)
+        log.write(T.STEREO_RIGHT_IMAGE, image_message(_img(9), "png", 50 * MS), 50 * MS)  # lone right
+    reader = LogReader(path)
+    topics = FrameTopics.detect(reader)
+    assert (topics.image, topics.right, topics.ptz) == (T.STEREO_LEFT_IMAGE, T.STEREO_RIGHT_IMAGE, T.PTZ_ENCODERS)
+    report = BundleReport()
+    frames = list(iter_frames(reader, topics, report=report))
+    assert [f.index for f in frames] == [0, 1, 3]
+    assert [int(f.right[0, 0]) for f in frames] == [100, 101, 103]
+    assert frames[1].ptz.pan == pytest.approx(20.0)
+    assert frames[2].ptz is None  # 70 ms is after the last encoder reading
+    assert report.outside_encoder_coverage == [3]
+    assert sorted(report.unpaired) == [(T.STEREO_LEFT_IMAGE, 2), (T.STEREO_RIGHT_IMAGE, 2)]
+    assert frames[0].lens == lens
+
+
+def test_wrong_image_size_names_topic_and_message(tmp_path: Path) -> None:
+    path = tmp_path / "sizes.mcap"
+    with LogWriter(path) as log:
+        log.write(T.CAMERA_IMAGE, image_message(_img(1), "png", 0), 0)
+        log.write(T.CAMERA_IMAGE, image_message(_img(1, (9, 10)), "png", MS), MS)
+    reader = LogReader(path)
+    frames = iter_frames(reader, FrameTopics.detect(reader))
+    assert next(frames).index == 0  # what came before stays readable
+    with pytest.raises(LogError, match=r"topic /camera/image message 1 is 10x9 but earlier images are 10x8"):
+        next(frames)
+
+
+def test_raw_image_with_short_payload_is_reported(tmp_path: Path) -> None:
+    path = tmp_path / "raw.mcap"
+    msg = image_message(_img(3), "raw", 0)
+    msg.data = msg.data[:-5]
+    with LogWriter(path) as log:
+        log.write(T.CAMERA_IMAGE, msg, 0)
+    reader = LogReader(path)
+    with pytest.raises(LogError, match=r"message 0: raw image claims 10x8 mono8 but holds 75 bytes"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+
+def test_hints_attach_to_their_frame(flow_sim1: Path) -> None:
+    reader = LogReader(flow_sim1)
+    frames = iter_frames(reader, FrameTopics.detect(reader))
+    first, second = next(frames), next(frames)
+    assert first.hints[0].label == "target" and first.hints[0].w == 13.0
+    assert second.hints == ()
+    assert first.image.shape == (256, 256) and first.encoding == "png"
