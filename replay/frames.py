@@ -9,6 +9,7 @@ from schemas import topics as T
 from schemas.errors import LogError
 from schemas.records import InitRegion, LensTable, PtzReading
 from trackers.frame import Frame
+from trackers.geometry.ptz import PtzCamera
 
 from replay.decode import decode_image
 from replay.reader import LogMessage, LogReader
@@ -140,6 +141,7 @@ def iter_frames(
             right=right_image,
             ptz=pose,
             lens=lens,
+            camera=PtzCamera.from_reading(pose, lens) if pose is not None and lens is not None else None,
             hints=tuple(hints_by_frame.get(left.index, ())),
             encoded=encoded,
             encoding=encoding,

@@ -7,11 +7,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from schemas.records import InitRegion, LensTable, PtzReading
+from trackers.geometry.ptz import PtzCamera
 
 
 @dataclass(frozen=True, eq=False)
 class Frame:
-    """One time step: the (left) image, optional right image, PTZ pose and hints.
+    """One time step: the (left) image, optional right image, PTZ reading and camera model, hints.
 
     ``image`` is BGR ``uint8`` (H, W, 3) or grey (H, W). ``encoded``/``encoding``
     keep the source bytes (e.g. JPEG) so viewers can log them without re-encoding.
@@ -23,6 +24,7 @@ class Frame:
     right: np.ndarray | None = None
     ptz: PtzReading | None = None
     lens: LensTable | None = None
+    camera: PtzCamera | None = None  # posed from ptz + lens when both exist
     hints: tuple[InitRegion, ...] = field(default_factory=tuple)
     encoded: bytes | None = None
     encoding: str | None = None

@@ -60,6 +60,8 @@ def test_stereo_pairs_by_equal_log_time_and_ptz_at_frame_time(tmp_path: Path) ->
     assert report.outside_encoder_coverage == [3]
     assert sorted(report.unpaired) == [(T.STEREO_LEFT_IMAGE, 2), (T.STEREO_RIGHT_IMAGE, 2)]
     assert frames[0].lens == lens
+    assert frames[1].camera.pan == pytest.approx(20.0) and frames[1].camera.intrinsics.fx == 100
+    assert frames[2].camera is None
 
 
 def test_wrong_image_size_names_topic_and_message(tmp_path: Path) -> None:

@@ -1,0 +1,49 @@
+import numpy as np
+import pytest
+
+from schemas.records import LensEntry, LensTable, PtzReading
+from trackers.geometry.ptz import PtzCamera, intrinsics_at, pan_tilt_towards, rotation_world_from_camera
+
+LENS = LensTable(
+    1280, 720,
+    (LensEntry(0, 0, 1000, 1000, 640, 360), LensEntry(100, 0, 5000, 5000, 640, 360),
+     LensEntry(0, 10, 1100, 1100, 640, 360), LensEntry(100, 10, 5500, 5500, 640, 360)),
+    (0.0, 0.0, 2.0),
+)
+
+
+def test_lens_table_interpolates_zoom_then_focus() -> None:
+    k = intrinsics_at(LENS, 50, 5)
+    assert k.fx == pytest.approx((3000 + 3300) / 2)
+    assert intrinsics_at(LENS, 1000, 0).fx == 5000  # clamps beyond the table
+
+
+def test_rotation_is_orthonormal_and_axes_are_as_documented() -> None:
+    R = rotation_world_from_camera(30.0, -10.0)
+    assert R.T @ R == pytest.approx(np.eye(3))
+    assert np.linalg.det(R) == pytest.approx(1.0)
+    R0 = rotation_world_from_camera(0.0, 0.0)
+    assert R0[:, 2] == pytest.approx([1, 0, 0])  # forward +X
+    assert R0[:, 1] == pytest.approx([0, 0, -1])  # image down = world down
+
+
+def test_project_back_project_round_trip() -> None:
+    cam = PtzCamera.from_reading(PtzReading(0, 25.0, 5.0, 60, 3), LENS)
+    rng = np.random.default_rng(0)
+    pixels = rng.uniform([0, 0], [1280, 720], size=(50, 2))
+    assert cam.project_directions(cam.line_of_sight(pixels)) == pytest.approx(pixels, abs=1e-6)
+
+
+def test_line_of_sight_drawn_into_another_pose() -> None:
+    """A world point seen under one pose lands where that pose's projection says under another."""
+    point = np.array([[80.0, 30.0, 12.0]])
+    a = PtzCamera.from_reading(PtzReading(0, *pan_tilt_towards(point[0] - LENS.camera_position), 0, 0), LENS)
+    b = PtzCamera.from_reading(PtzReading(0, 15.0, 2.0, 40, 0), LENS)
+    assert a.project_points(point)[0] == pytest.approx([640, 360])
+    los = a.line_of_sight(a.project_points(point))
+    assert b.project_directions(los) == pytest.approx(b.project_points(point), abs=1e-6)
+
+
+def test_behind_the_camera_is_nan() -> None:
+    cam = PtzCamera.from_reading(PtzReading(0, 0.0, 0.0, 0, 0), LENS)
+    assert np.isnan(cam.project_directions(np.array([[-1.0, 0.0, 0.0]]))).all()
