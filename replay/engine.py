@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 import zlib
 from dataclasses import dataclass, field
@@ -88,6 +89,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
     report = BundleReport()
     digest = ReplayDigest()
     rows: list[tuple] = []
+    notices: list[str] = []
     total = reader.topics()[topics.image].count
     frames = iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=report)
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
@@ -95,6 +97,10 @@ def replay(req: ReplayRequest) -> ReplayResult:
     try:
         for frame in tqdm(frames, total=total, disable=not req.progress, unit="frame", desc=req.tracker, leave=False):
             states = tracker.step(frame)
+            notice = getattr(tracker.intermediates, "notice", "")
+            if notice and notice not in notices:
+                notices.append(notice)
+                print(f"trackreplay: {req.tracker}: {notice}", file=sys.stderr)
             digest.add_frame(frame.index, (tracker.intermediates, tuple(states)))
             rows.extend(state_row(req.tracker, frame.index, frame.t_ns, s) for s in states)
             if sink is not None:

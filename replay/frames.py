@@ -143,6 +143,7 @@ def iter_frames(
             lens=lens,
             camera=PtzCamera.from_reading(pose, lens) if pose is not None and lens is not None else None,
             hints=tuple(hints_by_frame.get(left.index, ())),
+            all_hints=hints,
             encoded=encoded,
             encoding=encoding,
         )

@@ -25,7 +25,8 @@ class Frame:
     ptz: PtzReading | None = None
     lens: LensTable | None = None
     camera: PtzCamera | None = None  # posed from ptz + lens when both exist
-    hints: tuple[InitRegion, ...] = field(default_factory=tuple)
+    hints: tuple[InitRegion, ...] = field(default_factory=tuple)  # marked on this frame
+    all_hints: tuple[InitRegion, ...] = field(default_factory=tuple)  # every region the log marks
     encoded: bytes | None = None
     encoding: str | None = None
 
