@@ -1,0 +1,128 @@
+"""Add ``/annotations/init`` to an existing log without changing anything else in it."""
+
+from __future__ import annotations
+
+import csv
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+from mcap.reader import make_reader
+from mcap.writer import Writer
+from mcap_protobuf.schema import register_schema
+
+from schemas import messages as m
+from schemas import topics as T
+from schemas.errors import SourceError
+from schemas.records import InitRegion, init_annotations_pb
+
+
+@dataclass(frozen=True)
+class Mark:
+    """A box the user drew: top-left ``(x, y)`` and size, on ``frame``."""
+
+    frame: int
+    x: float
+    y: float
+    w: float
+    h: float
+    label: str = "target"
+
+
+def parse_box(text: str, frame: int, label: str) -> Mark:
+    try:
+        x, y, w, h = (float(v) for v in text.split(","))
+    except ValueError:
+        raise SourceError(f"box {text!r} must be four numbers x,y,w,h (top-left corner, width, height)") from None
+    if w <= 0 or h <= 0:
+        raise SourceError(f"box {text!r} has a non-positive width or height")
+    return Mark(frame, x, y, w, h, label)
+
+
+def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
+    """Rows ``frame,x,y,w,h[,label]``; a header row is allowed."""
+    marks: list[Mark] = []
+    try:
+        with open(path, newline="") as fh:
+            for line_no, row in enumerate(csv.reader(fh), start=1):
+                cells = [c.strip() for c in row]
+                if not cells or not any(cells) or cells[0].startswith("#"):
+                    continue
+                if line_no == 1 and cells[0].lower() == "frame":
+                    continue
+                if len(cells) not in (5, 6):
+                    raise SourceError(f"{path}:{line_no}: expected frame,x,y,w,h[,label], got {len(cells)} columns")
+                try:
+                    frame = int(cells[0])
+                except ValueError:
+                    raise SourceError(f"{path}:{line_no}: frame {cells[0]!r} is not an integer") from None
+                try:
+                    mark = parse_box(",".join(cells[1:5]), frame, cells[5] if len(cells) == 6 else default_label)
+                except SourceError as err:
+                    raise SourceError(f"{path}:{line_no}: {err}") from None
+                marks.append(mark)
+    except FileNotFoundError:
+        raise SourceError(f"{path} does not exist") from None
+    if not marks:
+        raise SourceError(f"{path} holds no marks")
+    return marks
+
+
+def _frame_times(path: Path, image_topic: str) -> list[int]:
+    with open(path, "rb") as fh:
+        return [msg.log_time for _, _, msg in make_reader(fh).iter_messages(topics=[image_topic], log_time_order=True)]
+
+
+def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMERA_IMAGE) -> list[InitRegion]:
+    """Copy ``src`` to ``out`` record for record and add one ``/annotations/init`` message.
+
+    ``out`` may equal ``src``: the new log is written beside it and renamed over it only
+    once complete, so an interruption never damages the original.
+    """
+    from replay.reader import LogReader  # the reader's checks give the clear errors
+
+    reader = LogReader(src)
+    reader.require(image_topic)
+    times = _frame_times(src, image_topic)
+    regions = []
+    for mk in marks:
+        if not 0 <= mk.frame < len(times):
+            raise SourceError(f"{src} has no frame {mk.frame} on {image_topic} (it has {len(times)} frames)")
+        regions.append(InitRegion(mk.frame, times[mk.frame], mk.x + mk.w / 2, mk.y + mk.h / 2, mk.w, mk.h, mk.label))
+    annotation = init_annotations_pb(regions, times[0])
+    fd, tmp_name = tempfile.mkstemp(prefix=".annotate-", suffix=".mcap", dir=Path(out).resolve().parent)
+    tmp = Path(tmp_name)
+    try:
+        with os.fdopen(fd, "wb") as dst, open(src, "rb") as fh:
+            source = make_reader(fh)
+            header = source.get_header()
+            writer = Writer(dst)
+            writer.start(profile=header.profile, library=header.library)
+            schema_ids: dict[int, int] = {}
+            channel_ids: dict[int, int] = {}
+            by_topic: dict[str, int] = {}
+            for schema, channel, msg in source.iter_messages(log_time_order=False):
+                if channel.id not in channel_ids:
+                    if schema is not None and schema.id not in schema_ids:
+                        schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+                    channel_ids[channel.id] = writer.register_channel(
+                        channel.topic, channel.message_encoding, schema_ids[schema.id] if schema else 0, dict(channel.metadata)
+                    )
+                    by_topic.setdefault(channel.topic, channel_ids[channel.id])
+                writer.add_message(channel_ids[channel.id], msg.log_time, msg.data, msg.publish_time, msg.sequence)
+            for att in source.iter_attachments():
+                writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
+            for meta in source.iter_metadata():
+                writer.add_metadata(meta.name, dict(meta.metadata))
+            cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
+            if cid is None:
+                cid = writer.register_channel(T.ANNOTATIONS_INIT, "protobuf", register_schema(writer, m.InitAnnotations))
+            sequence = reader.topics()[T.ANNOTATIONS_INIT].count if T.ANNOTATIONS_INIT in reader.topics() else 0
+            writer.add_message(cid, times[0], annotation.SerializeToString(), times[0], sequence)
+            writer.finish()
+        os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return regions

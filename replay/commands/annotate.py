@@ -1,0 +1,41 @@
+"""`trackreplay annotate LOG --frame N --box x,y,w,h`: mark what to track in any log."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from recorder.annotate import annotate, parse_box, read_marks_csv
+from schemas import topics as T
+from schemas.errors import TrackreplayError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("annotate", help="add /annotations/init (marked boxes) to a log")
+    p.add_argument("log", type=Path)
+    p.add_argument("--frame", type=int, help="frame the --box marks are on")
+    p.add_argument("--box", action="append", default=[], help="x,y,w,h top-left corner and size in pixels (repeatable)")
+    p.add_argument("--from-csv", type=Path, help="marks as rows frame,x,y,w,h[,label]")
+    p.add_argument("--label", default="target", help="label of the marks (e.g. ball; default target)")
+    p.add_argument("--image-topic", default=T.CAMERA_IMAGE)
+    dest = p.add_mutually_exclusive_group(required=True)
+    dest.add_argument("--out", type=Path, help="write the annotated log here")
+    dest.add_argument("--in-place", action="store_true", help="replace LOG atomically once the new log is complete")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    marks = []
+    if args.box:
+        if args.frame is None:
+            raise TrackreplayError("--box needs --frame N")
+        marks.extend(parse_box(b, args.frame, args.label) for b in args.box)
+    if args.from_csv:
+        marks.extend(read_marks_csv(args.from_csv, args.label))
+    if not marks:
+        raise TrackreplayError("nothing to add: give --frame N --box x,y,w,h or --from-csv FILE")
+    out = args.log if args.in_place else args.out
+    regions = annotate(args.log, out, marks, args.image_topic)
+    print(f"wrote {out}: {len(regions)} marked region(s) on frames {sorted({r.frame for r in regions})}")
+    return 0

@@ -1,0 +1,43 @@
+from pathlib import Path
+
+import pytest
+
+from replay.cli import main
+from replay.frames import FrameTopics, read_hints
+from replay.reader import LogReader
+from schemas import topics as T
+
+
+def _payloads(path: Path) -> list[tuple]:
+    reader = LogReader(path)
+    topics = [t for t in reader.topics() if t != T.ANNOTATIONS_INIT]
+    return [(m.topic, m.log_time, m.sequence, m.data) for m in reader.messages(topics)]
+
+
+def test_annotate_adds_regions_and_changes_nothing_else(short_sim: Path, tmp_path: Path) -> None:
+    out = tmp_path / "marked.mcap"
+    marks = tmp_path / "marks.csv"
+    marks.write_text("frame,x,y,w,h,label\n3,10,20,6,8,ball\n")
+    assert main(["annotate", str(short_sim), "--frame", "1", "--box", "100,110,13,13", "--box", "5,5,4,4",
+                 "--label", "ball", "--from-csv", str(marks), "--out", str(out)]) == 0
+    regions = read_hints(LogReader(out), T.ANNOTATIONS_INIT)
+    added = [r for r in regions if r.label == "ball"]
+    assert [(r.frame, r.x, r.y, r.w, r.h) for r in added] == [(1, 106.5, 116.5, 13, 13), (1, 7.0, 7.0, 4, 4), (3, 13.0, 24.0, 6, 8)]
+    assert added[0].t_ns == [m.log_time for m in LogReader(out).messages([T.CAMERA_IMAGE])][1]
+    assert len(regions) == len(added) + 1  # the scene's own target mark is kept
+    assert _payloads(out) == _payloads(short_sim)
+
+
+def test_in_place_is_atomic_and_bad_marks_are_named(short_sim: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    log = tmp_path / "log.mcap"
+    log.write_bytes(short_sim.read_bytes())
+    before = log.read_bytes()
+    assert main(["annotate", str(log), "--frame", "99", "--box", "1,1,2,2", "--in-place"]) == 2
+    assert "has no frame 99 on /camera/image (it has 12 frames)" in capsys.readouterr().err
+    assert log.read_bytes() == before and list(tmp_path.glob(".annotate-*")) == []
+    bad = tmp_path / "bad.csv"
+    bad.write_text("frame,x,y,w,h\n0,1,2,3\n")
+    assert main(["annotate", str(log), "--from-csv", str(bad), "--in-place"]) == 2
+    assert "bad.csv:2: expected frame,x,y,w,h[,label], got 4 columns" in capsys.readouterr().err
+    assert main(["annotate", str(log), "--frame", "0", "--box", "1,1,2,2", "--in-place"]) == 0
+    assert len(read_hints(LogReader(log), T.ANNOTATIONS_INIT)) == 2
