@@ -19,13 +19,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="verb", required=True, metavar="VERB")
     for name in VERBS:
-        try:
-            module = importlib.import_module(f"replay.commands.{name}")
-        except ModuleNotFoundError as err:
-            if err.name != f"replay.commands.{name}":
-                raise
-            continue
-        module.add_parser(sub)
+        importlib.import_module(f"replay.commands.{name}").add_parser(sub)
     return parser
 
 

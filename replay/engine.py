@@ -77,6 +77,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
     cv2.setRNGSeed(req.seed)
     reader = LogReader(req.log)
     topics = FrameTopics.detect(reader, req.image_topic)
+    reader.require(topics.image)
     t0, _ = reader.time_range()
     start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
     end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))

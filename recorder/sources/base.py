@@ -1,0 +1,109 @@
+"""What every source yields, and the small helpers they share."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from schemas.errors import SourceError
+
+JPEG_MAGIC = b"\xff\xd8\xff"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@dataclass(frozen=True)
+class ImageFrame:
+    """One image from a source.
+
+    ``pixels`` is the decoded uint8 image (BGR or grey). ``data``/``fmt`` hold the file's own
+    JPEG or PNG bytes when they are to be logged unchanged; otherwise both are None.
+    """
+
+    index: int
+    t_ns: int
+    where: str  # names the file or the video frame in error messages
+    pixels: np.ndarray
+    data: bytes | None = None
+    fmt: str | None = None
+
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height)."""
+        return int(self.pixels.shape[1]), int(self.pixels.shape[0])
+
+
+@dataclass(frozen=True)
+class FrameClock:
+    """Capture time of frame ``i``: ``timestamps[i]`` when given, else ``t0_ns + i / fps``."""
+
+    fps: float | None = None
+    t0_ns: int = 0
+    timestamps: Sequence[int] | None = None
+    timestamps_path: str = ""
+
+    def __post_init__(self) -> None:
+        if self.timestamps is None and (self.fps is None or not self.fps > 0):
+            raise SourceError("frame times need a positive --fps or a --timestamps file")
+        if self.t0_ns < 0:
+            raise SourceError(f"the first frame time must not be negative, not {self.t0_ns} ns")
+
+    def t_ns(self, index: int) -> int:
+        if self.timestamps is not None:
+            if index >= len(self.timestamps):
+                raise SourceError(
+                    f"{self.timestamps_path} has {len(self.timestamps)} timestamps but the source has more frames"
+                )
+            return int(self.timestamps[index])
+        return self.t0_ns + round(index * 1_000_000_000 / self.fps)
+
+
+def natural_key(path: Path) -> tuple:
+    """Sort key putting ``frame2`` before ``frame10`` (case-insensitive)."""
+    return tuple(int(part) if part.isdigit() else part for part in re.split(r"(\d+)", path.name.lower()))
+
+
+def require_file(path: str | Path, what: str) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise SourceError(f"{what} {path} does not exist or is not a file")
+    return path
+
+
+def encoded_format(data: bytes) -> str | None:
+    """``"jpeg"``/``"png"`` judged by the bytes themselves, else None."""
+    if data.startswith(JPEG_MAGIC):
+        return "jpeg"
+    if data.startswith(PNG_MAGIC):
+        return "png"
+    return None
+
+
+def read_timestamps(path: str | Path) -> list[int]:
+    """A timestamps file: one integer ``t_ns`` per line, strictly increasing.
+
+    Blank lines and lines starting with ``#`` are ignored. Line ``k`` (counting only data
+    lines) is the time of frame ``k`` in source order.
+    """
+    path = require_file(path, "timestamps file")
+    out: list[int] = []
+    with open(path, encoding="utf-8") as fh:
+        for lineno, line in enumerate(fh, 1):
+            text = line.strip()
+            if not text or text.startswith("#"):
+                continue
+            try:
+                t = int(text)
+            except ValueError:
+                raise SourceError(f"{path}:{lineno}: {text!r} is not an integer t_ns") from None
+            if t < 0:
+                raise SourceError(f"{path}:{lineno}: t_ns {t} is negative (log times are unsigned)")
+            if out and t <= out[-1]:
+                raise SourceError(f"{path}:{lineno}: t_ns {t} is not after the previous line's {out[-1]}")
+            out.append(t)
+    if not out:
+        raise SourceError(f"timestamps file {path} holds no timestamps")
+    return out

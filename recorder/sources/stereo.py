@@ -1,0 +1,226 @@
+"""Stereo pairs (two videos or two image folders) and camera calibration files.
+
+Calibration file: JSON (``.json``) or OpenCV FileStorage (``.yaml``/``.yml``/``.xml``) with
+
+- ``width``, ``height`` (or ``image_width``, ``image_height``): image size in pixels;
+- ``K`` (or ``camera_matrix``): 3x3 intrinsics, nested or flat row-major;
+- ``D`` (or ``distortion_coefficients``): optional, default none; ``distortion_model`` optional
+  (default ``plumb_bob``, or ``rational_polynomial`` for 8 coefficients);
+- ``R`` (3x3, default identity) and ``P`` (3x4, default ``[K | 0]``): optional;
+- stereo only: ``baseline_m`` (metres, the right camera ``baseline_m`` to the right of the left),
+  or the right camera's own ``right_P``; ``right_K``/``right_D``/``right_R`` optional (default: the
+  left's). The right ``P`` defaults to ``[right_K | (-fx * baseline_m, 0, 0)]``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from recorder.sources.base import FrameClock, ImageFrame, require_file
+from recorder.sources.images import check_count, list_images, read_image_files
+from recorder.sources.video import read_video
+from schemas import messages as m
+from schemas.errors import SourceError
+from schemas.records import timestamp
+
+_ALIASES = {
+    "width": ("width", "image_width"),
+    "height": ("height", "image_height"),
+    "K": ("K", "camera_matrix"),
+    "D": ("D", "distortion_coefficients"),
+}
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """One camera's calibration, flattened as ``foxglove.CameraCalibration`` wants it."""
+
+    width: int
+    height: int
+    K: tuple[float, ...]  # 9, row-major
+    D: tuple[float, ...]
+    R: tuple[float, ...]  # 9
+    P: tuple[float, ...]  # 12
+    distortion_model: str = "plumb_bob"
+
+    def to_pb(self, t_ns: int, frame_id: str) -> m.CameraCalibration:
+        return m.CameraCalibration(
+            timestamp=timestamp(t_ns), frame_id=frame_id, width=self.width, height=self.height,
+            distortion_model=self.distortion_model, D=list(self.D), K=list(self.K), R=list(self.R), P=list(self.P),
+        )
+
+
+@dataclass(frozen=True)
+class Calibration:
+    left: CameraModel  # the mono camera, or the left of a pair
+    right: CameraModel | None = None
+
+    @property
+    def baseline_m(self) -> float | None:
+        if self.right is None or self.right.P[0] == 0:
+            return None
+        return -self.right.P[3] / self.right.P[0]
+
+
+def _load_json(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as err:
+        raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None
+    if not isinstance(data, dict):
+        raise SourceError(f"calibration {path} must hold a JSON object")
+    return data
+
+
+def _load_opencv(path: Path) -> dict[str, Any]:
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    if not fs.isOpened():
+        raise SourceError(f"calibration {path} cannot be read as OpenCV YAML/XML")
+    try:
+        out: dict[str, Any] = {}
+        root = fs.root()
+        for key in root.keys():
+            node = root.getNode(key)
+            if node.isMap() and not node.empty() and node.getNode("data").isSeq():
+                out[key] = node.mat().tolist()  # an opencv-matrix
+            elif node.isSeq():
+                out[key] = [node.at(i).real() for i in range(node.size())]
+            elif node.isReal() or node.isInt():
+                out[key] = node.real()
+            elif node.isString():
+                out[key] = node.string()
+        return out
+    finally:
+        fs.release()
+
+
+def _get(data: dict[str, Any], key: str, path: Path, default: Any = None, required: bool = False) -> Any:
+    for name in _ALIASES.get(key, (key,)):
+        if name in data:
+            return data[name]
+    if required:
+        raise SourceError(f"calibration {path} has no {key!r}")
+    return default
+
+
+def _floats(value: Any, n: int, key: str, path: Path) -> tuple[float, ...]:
+    try:
+        arr = np.asarray(value, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise SourceError(f"calibration {path}: {key} is not a list of numbers") from None
+    if n and arr.size != n:
+        raise SourceError(f"calibration {path}: {key} has {arr.size} numbers, expected {n}")
+    if not np.all(np.isfinite(arr)):
+        raise SourceError(f"calibration {path}: {key} holds a non-finite number")
+    return tuple(float(v) for v in arr)
+
+
+def _camera(data: dict[str, Any], path: Path, prefix: str, fallback: CameraModel | None, baseline: float | None) -> CameraModel:
+    def get(key: str, default: Any = None, required: bool = False) -> Any:
+        return _get(data, prefix + key, path, default, required)
+
+    if fallback is None:
+        width, height = get("width", required=True), get("height", required=True)
+        try:
+            width, height = int(width), int(height)
+        except (TypeError, ValueError):
+            raise SourceError(f"calibration {path}: width and height must be integers") from None
+        if width <= 0 or height <= 0:
+            raise SourceError(f"calibration {path}: width and height must be positive")
+    else:
+        width, height = fallback.width, fallback.height
+    k_raw = get("K")
+    K = _floats(k_raw, 9, prefix + "K", path) if k_raw is not None else (fallback.K if fallback else None)
+    if K is None:
+        raise SourceError(f"calibration {path} has no 'K'")
+    if K[0] <= 0 or K[4] <= 0:
+        raise SourceError(f"calibration {path}: {prefix}K must have positive fx and fy")
+    d_raw = get("D")
+    D = _floats(d_raw, 0, prefix + "D", path) if d_raw is not None else (fallback.D if fallback else ())
+    r_raw = get("R")
+    R = _floats(r_raw, 9, prefix + "R", path) if r_raw is not None else (fallback.R if fallback else (1.0, 0, 0, 0, 1.0, 0, 0, 0, 1.0))
+    p_raw = get("P")
+    if p_raw is not None:
+        P = _floats(p_raw, 12, prefix + "P", path)
+    else:
+        tx = -K[0] * baseline if baseline is not None else 0.0
+        P = (K[0], K[1], K[2], tx, K[3], K[4], K[5], 0.0, K[6], K[7], K[8], 0.0)
+    model = get("distortion_model") or ("rational_polynomial" if len(D) == 8 else "plumb_bob")
+    return CameraModel(width, height, K, D, tuple(float(v) for v in R), P, str(model))
+
+
+def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
+    """Read a calibration file (format in this module's docstring)."""
+    path = require_file(path, "calibration")
+    data = _load_opencv(path) if path.suffix.lower() in (".yaml", ".yml", ".xml") else _load_json(path)
+    left = _camera(data, path, "", None, None)
+    if not stereo:
+        return Calibration(left)
+    baseline = data.get("baseline_m")
+    if baseline is None and "right_P" not in data:
+        raise SourceError(f"calibration {path} needs 'baseline_m' or 'right_P' for a stereo pair")
+    if baseline is not None:
+        try:
+            baseline = float(baseline)
+        except (TypeError, ValueError):
+            raise SourceError(f"calibration {path}: baseline_m is not a number") from None
+        if not baseline > 0:
+            raise SourceError(f"calibration {path}: baseline_m must be positive")
+    return Calibration(left, _camera(data, path, "right_", left, baseline))
+
+
+@dataclass(frozen=True)
+class StereoSource:
+    """Two videos or two image folders, checked for equal counts where that is known up front."""
+
+    left: Path
+    right: Path
+
+    @property
+    def is_folders(self) -> bool:
+        return self.left.is_dir()
+
+    def check(self, clock: FrameClock) -> int | None:
+        """Validate before recording; the pair count when known."""
+        if self.left.is_dir() != self.right.is_dir():
+            raise SourceError(f"stereo inputs {self.left} and {self.right} must both be folders or both be videos")
+        if not self.is_folders:
+            require_file(self.left, "video")
+            require_file(self.right, "video")
+            return None
+        lf, rf = list_images(self.left), list_images(self.right)
+        if len(lf) != len(rf):
+            raise SourceError(f"stereo folders differ in length: {self.left} has {len(lf)} images, {self.right} has {len(rf)}")
+        check_count(lf, clock, self.left)
+        return len(lf)
+
+    def pairs(self, clock: FrameClock) -> Iterator[tuple[ImageFrame, ImageFrame]]:
+        if self.is_folders:
+            left, right = read_image_files(list_images(self.left), clock), read_image_files(list_images(self.right), clock)
+        else:
+            left, right = read_video(self.left, clock), read_video(self.right, clock)
+        count = 0
+        for lf in left:
+            rf = next(right, None)
+            if rf is None:
+                raise SourceError(f"stereo videos differ in length: {self.right} ends after {count} frames, {self.left} goes on")
+            if lf.size != rf.size:
+                raise SourceError(f"{rf.where} is {rf.size[0]}x{rf.size[1]} but {lf.where} is {lf.size[0]}x{lf.size[1]}")
+            count += 1
+            yield lf, rf
+        if next(right, None) is not None:
+            raise SourceError(f"stereo videos differ in length: {self.left} ends after {count} frames, {self.right} goes on")
+
+
+def read_stereo(left: str | Path, right: str | Path, clock: FrameClock) -> Iterator[tuple[ImageFrame, ImageFrame]]:
+    """(left, right) frame pairs with equal ``t_ns``."""
+    source = StereoSource(Path(left), Path(right))
+    source.check(clock)
+    yield from source.pairs(clock)

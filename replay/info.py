@@ -1,0 +1,217 @@
+"""What a log holds: topics, counts, rates, time gaps, stereo pairing, encoder coverage.
+
+Streams the file once without decoding any payload (only log times are kept, for image and
+encoder topics), so it works on truncated logs too: it reports what is readable and flags
+``truncated``.
+"""
+
+from __future__ import annotations
+
+from array import array
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mcap.records import Attachment, Channel, Message, Metadata, Schema
+
+from recorder.recover import RecordStream, truncation_message
+from schemas.errors import LogError, TruncatedLogError
+from schemas.messages import IMAGE_SCHEMAS
+
+ENCODER_SCHEMA = "trackreplay.PtzEncoders"
+GAP_FACTOR = 1.5  # an interval longer than this times the median is a gap
+ENCODER_TOLERANCE_FACTOR = 3.0  # encoder readings further apart than this times the median leave a hole
+LIST_LIMIT = 10  # items listed per problem in the text format
+
+
+def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
+    """Everything ``info`` reports, as JSON-ready data.
+
+    A truncated or damaged log raises ``TruncatedLogError`` unless ``partial_ok``, in which case
+    the result covers the readable part and has ``truncated: True`` and ``error``.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"{path} does not exist or is not a file")
+    schemas: dict[int, str] = {}
+    channels: dict[int, Channel] = {}
+    counts: dict[int, int] = {}
+    first: dict[int, int] = {}
+    last: dict[int, int] = {}
+    times: dict[int, array] = {}
+    attachments: list[str] = []
+    metadata: list[str] = []
+    with open(path, "rb") as fh:
+        stream = RecordStream(fh, str(path))
+        for record in stream:
+            if isinstance(record, Message):
+                cid = record.channel_id
+                t = record.log_time
+                if cid in counts:
+                    counts[cid] += 1
+                    first[cid] = min(first[cid], t)
+                    last[cid] = max(last[cid], t)
+                else:
+                    counts[cid], first[cid], last[cid] = 1, t, t
+                if cid in times:
+                    times[cid].append(t)
+            elif isinstance(record, Schema):
+                schemas.setdefault(record.id, record.name)
+            elif isinstance(record, Channel) and record.id not in channels:
+                channels[record.id] = record
+                if schemas.get(record.schema_id) in (*IMAGE_SCHEMAS, ENCODER_SCHEMA):
+                    times[record.id] = array("q")
+            elif isinstance(record, Attachment):
+                attachments.append(record.name)
+            elif isinstance(record, Metadata):
+                metadata.append(record.name)
+    truncated = not stream.complete or stream.error is not None
+    if truncated and not partial_ok:
+        raise TruncatedLogError(truncation_message(path))
+
+    topics: dict[str, dict[str, Any]] = {}
+    topic_times: dict[str, list[np.ndarray]] = {}
+    for cid in sorted(channels):
+        ch = channels[cid]
+        entry = topics.setdefault(
+            ch.topic, {"topic": ch.topic, "schema": schemas.get(ch.schema_id, ""), "encoding": ch.message_encoding,
+                       "count": 0, "first_ns": None, "last_ns": None},
+        )
+        n = counts.get(cid, 0)
+        if n:
+            entry["count"] += n
+            entry["first_ns"] = first[cid] if entry["first_ns"] is None else min(entry["first_ns"], first[cid])
+            entry["last_ns"] = last[cid] if entry["last_ns"] is None else max(entry["last_ns"], last[cid])
+        if cid in times:
+            topic_times.setdefault(ch.topic, []).append(np.frombuffer(times[cid], dtype=np.int64))
+    for entry in topics.values():
+        span = (entry["last_ns"] or 0) - (entry["first_ns"] or 0)
+        entry["rate_hz"] = (entry["count"] - 1) / (span / 1e9) if entry["count"] > 1 and span > 0 else None
+    sorted_times = {t: np.sort(np.concatenate(parts)) for t, parts in topic_times.items()}
+    image_topics = [t for t, e in topics.items() if e["schema"] in IMAGE_SCHEMAS]
+    encoder_topics = [t for t, e in topics.items() if e["schema"] == ENCODER_SCHEMA]
+
+    starts = [e["first_ns"] for e in topics.values() if e["first_ns"] is not None]
+    ends = [e["last_ns"] for e in topics.values() if e["last_ns"] is not None]
+    start, end = (min(starts), max(ends)) if starts else (None, None)
+    return {
+        "path": str(path),
+        "truncated": truncated,
+        "error": stream.error if truncated else None,
+        "library": stream.header.library if stream.header else None,
+        "messages": sum(counts.values()),
+        "start_ns": start,
+        "end_ns": end,
+        "duration_s": (end - start) / 1e9 if start is not None else None,
+        "topics": sorted(topics.values(), key=lambda e: e["topic"]),
+        "gaps": {t: time_gaps(sorted_times[t]) for t in image_topics},
+        "stereo": stereo_pairing(sorted_times, image_topics),
+        "encoder_coverage": [
+            encoder_coverage(sorted_times[img], sorted_times[enc], img, enc)
+            for enc in encoder_topics
+            for img in image_topics
+            if "/right/" not in img  # a right image shares its left partner's time
+        ],
+        "attachments": attachments,
+        "metadata": metadata,
+    }
+
+
+def time_gaps(t: np.ndarray, factor: float = GAP_FACTOR) -> dict[str, Any]:
+    """Intervals longer than ``factor`` x the median interval; ``after`` is the index of the frame before the gap."""
+    if t.size < 3:
+        return {"median_interval_ns": int(np.diff(t)[0]) if t.size == 2 else None, "gaps": []}
+    dt = np.diff(t)
+    median = float(np.median(dt))
+    idx = np.flatnonzero(dt > factor * median)
+    gaps = [{"after": int(i), "from_ns": int(t[i]), "to_ns": int(t[i + 1]), "interval_ns": int(dt[i])} for i in idx]
+    return {"median_interval_ns": int(round(median)), "gaps": gaps}
+
+
+def stereo_pairing(times: dict[str, np.ndarray], image_topics: list[str]) -> list[dict[str, Any]]:
+    """For each ``.../left/...`` image topic with a ``.../right/...`` partner: times without an equal partner."""
+    out = []
+    for left in image_topics:
+        right = left.replace("/left/", "/right/")
+        if "/left/" not in left or right not in times:
+            continue
+        lt, rt = times[left], times[right]
+        out.append({
+            "left": left,
+            "right": right,
+            "pairs": int(np.intersect1d(lt, rt).size),
+            "left_unpaired_ns": [int(v) for v in np.setdiff1d(lt, rt)],
+            "right_unpaired_ns": [int(v) for v in np.setdiff1d(rt, lt)],
+        })
+    return out
+
+
+def encoder_coverage(frames: np.ndarray, enc: np.ndarray, image_topic: str, encoder_topic: str,
+                     factor: float = ENCODER_TOLERANCE_FACTOR) -> dict[str, Any]:
+    """Frames outside [first, last] reading, and frames whose bracketing readings are too far apart."""
+    result: dict[str, Any] = {"image_topic": image_topic, "encoder_topic": encoder_topic,
+                              "tolerance_ns": None, "outside": [], "sparse": []}
+    if enc.size == 0 or frames.size == 0:
+        result["outside"] = list(range(frames.size))
+        return result
+    outside = (frames < enc[0]) | (frames > enc[-1])
+    result["outside"] = [int(i) for i in np.flatnonzero(outside)]
+    if enc.size < 2:
+        return result
+    tol = factor * float(np.median(np.diff(enc)))
+    result["tolerance_ns"] = int(round(tol))
+    hi = np.clip(np.searchsorted(enc, frames, side="left"), 1, enc.size - 1)
+    exact = enc[np.clip(np.searchsorted(enc, frames), 0, enc.size - 1)] == frames
+    span = enc[hi] - enc[hi - 1]
+    sparse = ~outside & ~exact & (span > tol)
+    result["sparse"] = [{"frame": int(i), "t_ns": int(frames[i]), "readings_apart_ns": int(span[i])} for i in np.flatnonzero(sparse)]
+    return result
+
+
+def _ns(t: int | None) -> str:
+    return "-" if t is None else f"{t / 1e9:.6f} s"
+
+
+def _listed(items: list, fmt) -> list[str]:
+    lines = [f"      {fmt(i)}" for i in items[:LIST_LIMIT]]
+    if len(items) > LIST_LIMIT:
+        lines.append(f"      ... and {len(items) - LIST_LIMIT} more")
+    return lines
+
+
+def format_info(info: dict[str, Any]) -> str:
+    """A human-readable report of ``log_info``'s result."""
+    lines = [f"{info['path']}" + ("  [TRUNCATED: showing the readable part]" if info["truncated"] else "")]
+    dur = info["duration_s"]
+    lines.append(f"  start {_ns(info['start_ns'])}, end {_ns(info['end_ns'])}, duration "
+                 f"{'-' if dur is None else f'{dur:.3f} s'}, {info['messages']} messages")
+    width = max((len(e["topic"]) for e in info["topics"]), default=5)
+    lines.append("  topics:")
+    for e in info["topics"]:
+        rate = "-" if e["rate_hz"] is None else f"{e['rate_hz']:.2f} Hz"
+        lines.append(f"    {e['topic']:<{width}}  {e['schema']:<28} {e['count']:>7}  {rate}")
+    for topic, g in info["gaps"].items():
+        if g["gaps"]:
+            lines.append(f"  time gaps on {topic} (> {GAP_FACTOR}x median {g['median_interval_ns'] / 1e6:.2f} ms): {len(g['gaps'])}")
+            lines += _listed(g["gaps"], lambda x: f"after frame {x['after']}: {_ns(x['from_ns'])} -> {_ns(x['to_ns'])} ({x['interval_ns'] / 1e6:.2f} ms)")
+    for s in info["stereo"]:
+        n_l, n_r = len(s["left_unpaired_ns"]), len(s["right_unpaired_ns"])
+        if n_l or n_r:
+            lines.append(f"  stereo pairing: {s['pairs']} pairs; {n_l} {s['left']} and {n_r} {s['right']} images without a partner of equal log_time")
+            lines += _listed([("left", t) for t in s["left_unpaired_ns"]] + [("right", t) for t in s["right_unpaired_ns"]],
+                             lambda x: f"{x[0]} at {_ns(x[1])}")
+    for c in info["encoder_coverage"]:
+        if c["outside"]:
+            lines.append(f"  {len(c['outside'])} frame(s) of {c['image_topic']} outside the {c['encoder_topic']} readings' time range")
+            lines += _listed(c["outside"], lambda i: f"frame {i}")
+        if c["sparse"]:
+            lines.append(f"  {len(c['sparse'])} frame(s) of {c['image_topic']} between {c['encoder_topic']} readings more than "
+                         f"{c['tolerance_ns'] / 1e6:.2f} ms apart")
+            lines += _listed(c["sparse"], lambda x: f"frame {x['frame']} at {_ns(x['t_ns'])}: readings {x['readings_apart_ns'] / 1e6:.2f} ms apart")
+    if info["attachments"]:
+        lines.append(f"  attachments: {', '.join(info['attachments'])}")
+    if info["metadata"]:
+        lines.append(f"  metadata: {', '.join(info['metadata'])}")
+    if info["truncated"]:
+        lines.append(f"  stopped reading: {info['error']}")
+    return "\n".join(lines)

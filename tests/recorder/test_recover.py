@@ -1,0 +1,133 @@
+"""Salvaging truncated and damaged logs."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import pytest
+from mcap.reader import make_reader
+from mcap.records import Chunk, Message
+from mcap.stream_reader import StreamReader, breakup_chunk
+
+from recorder.image_codec import image_message
+from recorder.recover import recover
+from recorder.writer import LogWriter
+from replay.commands import recover as recover_cmd
+from schemas.errors import LogError
+from schemas.records import PtzReading
+
+
+@pytest.fixture
+def intact(tmp_path):
+    """60 messages on two topics in chunks of 7, plus metadata and an attachment."""
+    path = tmp_path / "intact.mcap"
+    rng = np.random.default_rng(0)
+    with LogWriter(path, flush_every=7) as log:
+        log.add_metadata("source", {"camera": "test"})
+        for i in range(30):
+            t = i * 10_000_000
+            log.write("/camera/image", image_message(rng.integers(0, 255, (24, 32, 3), dtype=np.uint8), "png", t), t)
+            log.write("/ptz/encoders", PtzReading(t, i, 0, 1, 2).to_pb(), t)
+        log.add_attachment("lens.csv", b"0,0,1,1,0,0\n", "text/csv")
+    return path
+
+
+def messages_of(path):
+    with open(path, "rb") as fh:
+        reader = make_reader(fh)
+        assert reader.get_summary() is not None
+        return [(ch.topic, schema.name, m.log_time, m.sequence, m.data) for schema, ch, m in reader.iter_messages(log_time_order=False)]
+
+
+def complete_chunk_counts(path):
+    """(end offset, message count) of each chunk, from the intact file's chunk index."""
+    with open(path, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+        out = []
+        for ci in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset):
+            fh.seek(ci.chunk_start_offset)
+            chunk = next(StreamReader(fh, skip_magic=True, emit_chunks=True).records)
+            assert isinstance(chunk, Chunk)
+            out.append((ci.chunk_start_offset + ci.chunk_length, sum(isinstance(r, Message) for r in breakup_chunk(chunk))))
+        return out
+
+
+def test_intact_log_is_copied_completely(intact, tmp_path):
+    report = recover(intact, tmp_path / "copy.mcap")
+    assert report.complete and report.error is None
+    assert report.messages_saved == 60 and report.attachments_saved == 1 and report.metadata_saved == 1
+    assert messages_of(tmp_path / "copy.mcap") == messages_of(intact)
+    with open(tmp_path / "copy.mcap", "rb") as fh:
+        reader = make_reader(fh)
+        assert [a.name for a in reader.iter_attachments()] == ["lens.csv"]
+    with open(tmp_path / "copy.mcap", "rb") as fh:
+        assert [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()] == [("source", {"camera": "test"})]
+
+
+def test_truncated_copies_keep_every_complete_chunk(intact, tmp_path):
+    data = intact.read_bytes()
+    chunks = complete_chunk_counts(intact)
+    assert len(chunks) >= 8
+    original = messages_of(intact)
+    mid_first = (chunks[0][0] + 40)
+    cuts = [20, mid_first, chunks[2][0], chunks[2][0] + 3, (chunks[4][0] + chunks[5][0]) // 2, len(data) - 30, len(data) - 1]
+    for cut in cuts:
+        broken, out = tmp_path / f"cut{cut}.mcap", tmp_path / f"fixed{cut}.mcap"
+        broken.write_bytes(data[:cut])
+        report = recover(broken, out)
+        expected = sum(n for end, n in chunks if end <= cut)
+        assert not report.complete and report.error, cut
+        assert report.messages_saved == expected, cut
+        assert messages_of(out) == original[:expected], cut
+
+
+def test_not_mcap_writes_nothing(tmp_path):
+    junk = tmp_path / "junk.mcap"
+    junk.write_bytes(b"PK\x03\x04 definitely a zip" * 4)
+    with pytest.raises(LogError, match=r"junk\.mcap is not an MCAP file"):
+        recover(junk, tmp_path / "out.mcap")
+    assert not (tmp_path / "out.mcap").exists()
+    (tmp_path / "empty.mcap").write_bytes(b"")
+    with pytest.raises(LogError, match=r"empty\.mcap is not an MCAP file"):
+        recover(tmp_path / "empty.mcap", tmp_path / "out.mcap")
+    with pytest.raises(LogError, match=r"gone\.mcap does not exist"):
+        recover(tmp_path / "gone.mcap", tmp_path / "out.mcap")
+
+
+def test_recover_refuses_to_overwrite_its_input(intact):
+    with pytest.raises(LogError, match="new output path"):
+        recover(intact, intact)
+
+
+def test_damaged_chunk_stops_salvage_there(intact, tmp_path):
+    chunks = complete_chunk_counts(intact)
+    data = bytearray(intact.read_bytes())
+    pos = (chunks[2][0] + chunks[3][0]) // 2  # inside the fourth chunk
+    data[pos:pos + 8] = b"\x00" * 8
+    (tmp_path / "bad.mcap").write_bytes(bytes(data))
+    report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
+    assert not report.complete and "damaged record" in report.error
+    assert report.messages_saved == sum(n for _, n in chunks[:3])
+
+
+def run_cli(*argv):
+    parser = argparse.ArgumentParser()
+    recover_cmd.add_parser(parser.add_subparsers())
+    args = parser.parse_args(["recover", *map(str, argv)])
+    return args.func(args)
+
+
+def test_cli_exit_codes(intact, tmp_path, capsys):
+    assert run_cli(intact, tmp_path / "a.mcap") == 0
+    assert "was complete" in capsys.readouterr().out
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(intact.read_bytes()[:-100])
+    assert run_cli(cut, tmp_path / "b.mcap") == 1
+    assert "saved 60 messages" in capsys.readouterr().out
+    junk = tmp_path / "junk.mcap"
+    junk.write_text("hello")
+    from replay.cli import main
+
+    assert main(["recover", str(junk), str(tmp_path / "c.mcap")]) == 2
+    assert "trackreplay: error:" in capsys.readouterr().err

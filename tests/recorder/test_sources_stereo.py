@@ -1,0 +1,100 @@
+"""Stereo pairs and calibration files."""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+
+from recorder.record import record
+from recorder.sources.stereo import load_calibration
+from schemas.errors import SourceError
+
+K = [[100.0, 0.0, 32.0], [0.0, 110.0, 24.0], [0.0, 0.0, 1.0]]
+
+
+def write_json(path, **extra):
+    data = {"width": 64, "height": 48, "K": K, "D": [0.1, -0.01, 0.0, 0.0, 0.0], **extra}
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_stereo_folders_same_time_and_calibration(tmp_path, make_images, log_messages):
+    left, right = make_images(tmp_path / "L", 4), make_images(tmp_path / "R", 4, ext="png")
+    calib = write_json(tmp_path / "calib.json", baseline_m=0.12)
+    report = record(tmp_path / "out.mcap", stereo=(left, right), calibration=calib, fps=10, quiet=True)
+    assert report.frames == 4
+    msgs = log_messages(tmp_path / "out.mcap")
+    lt = [m.log_time for m in msgs if m.topic == "/stereo/left/image"]
+    rt = [m.log_time for m in msgs if m.topic == "/stereo/right/image"]
+    assert lt == rt == [i * 100_000_000 for i in range(4)]
+    cal = {m.topic: m.pb for m in msgs if m.schema == "foxglove.CameraCalibration"}
+    assert set(cal) == {"/stereo/left/calibration", "/stereo/right/calibration"}
+    lc, rc = cal["/stereo/left/calibration"], cal["/stereo/right/calibration"]
+    assert (lc.width, lc.height) == (64, 48) and list(lc.K) == sum(K, [])
+    assert lc.P[3] == 0.0 and rc.P[3] == pytest.approx(-100.0 * 0.12)
+    assert list(rc.D) == pytest.approx([0.1, -0.01, 0, 0, 0]) and lc.distortion_model == "plumb_bob"
+    assert all(m.log_time == 0 for m in msgs if m.schema == "foxglove.CameraCalibration")
+
+
+def test_stereo_videos(tmp_path, make_video, log_messages):
+    left, right = make_video(tmp_path / "l.avi", 3, fps=5), make_video(tmp_path / "r.avi", 3, fps=5)
+    record(tmp_path / "out.mcap", stereo=(left, right), encoding="png", quiet=True)
+    msgs = log_messages(tmp_path / "out.mcap")
+    assert [m.log_time for m in msgs if m.topic.endswith("left/image")] == [0, 200_000_000, 400_000_000]
+    assert sum(m.topic.endswith("right/image") for m in msgs) == 3
+
+
+def test_mono_calibration_from_opencv_yaml(tmp_path, make_images, log_messages):
+    path = tmp_path / "cam.yaml"
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_WRITE)
+    fs.write("image_width", 64)
+    fs.write("image_height", 48)
+    fs.write("camera_matrix", np.array(K))
+    fs.write("distortion_coefficients", np.zeros((1, 5)))
+    fs.release()
+    folder = make_images(tmp_path / "img", 2)
+    record(tmp_path / "out.mcap", images=folder, fps=10, calibration=path, quiet=True)
+    cal = [m for m in log_messages(tmp_path / "out.mcap") if m.topic == "/camera/calibration"]
+    assert len(cal) == 1 and list(cal[0].pb.K) == sum(K, []) and list(cal[0].pb.P)[:3] == [100.0, 0.0, 32.0]
+
+
+def test_right_projection_given_directly(tmp_path):
+    p = [100.0, 0, 32, -15.0, 0, 110, 24, 0, 0, 0, 1, 0]
+    calib = load_calibration(write_json(tmp_path / "c.json", right_P=p), stereo=True)
+    assert calib.baseline_m == pytest.approx(0.15)
+
+
+def test_unequal_stereo_counts(tmp_path, make_images, make_video):
+    left, right = make_images(tmp_path / "L", 4), make_images(tmp_path / "R", 3)
+    with pytest.raises(SourceError, match=r"L has 4 images, .*R has 3"):
+        record(tmp_path / "out.mcap", stereo=(left, right), fps=10, quiet=True)
+    lv, rv = make_video(tmp_path / "l.avi", 4), make_video(tmp_path / "r.avi", 3)
+    for pair in ((lv, rv), (rv, lv)):
+        with pytest.raises(SourceError, match=r"r\.avi ends after 3 frames, .*l\.avi goes on"):
+            record(tmp_path / "out.mcap", stereo=pair, quiet=True)
+    assert not (tmp_path / "out.mcap").exists()
+
+
+@pytest.mark.parametrize("extra, match", [
+    ({}, "needs 'baseline_m' or 'right_P'"),
+    ({"baseline_m": -1}, "baseline_m must be positive"),
+    ({"baseline_m": 0.1, "K": [1, 2, 3]}, "K has 3 numbers, expected 9"),
+])
+def test_bad_stereo_calibration(tmp_path, make_images, extra, match):
+    left, right = make_images(tmp_path / "L", 2), make_images(tmp_path / "R", 2)
+    calib = write_json(tmp_path / "calib.json", **extra)
+    with pytest.raises(SourceError, match=match):
+        record(tmp_path / "out.mcap", stereo=(left, right), calibration=calib, fps=10, quiet=True)
+
+
+def test_calibration_size_must_match_images(tmp_path, make_images):
+    folder = make_images(tmp_path / "img", 2, size=(32, 24))
+    with pytest.raises(SourceError, match=r"calibration is for 64x48 images but .*frame0\.jpg is 32x24"):
+        record(tmp_path / "out.mcap", images=folder, fps=10, calibration=write_json(tmp_path / "c.json"), quiet=True)
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"width": 64,\n "height": }')
+    with pytest.raises(SourceError, match=r"bad\.json:2: not valid JSON"):
+        record(tmp_path / "out.mcap", images=folder, fps=10, calibration=bad, quiet=True)

@@ -1,0 +1,69 @@
+"""The `trackreplay` command end to end, in-process (fast) and as a real subprocess."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import polars as pl
+import pytest
+
+from replay.cli import main
+
+
+def test_replay_export_eval_chain(short_sim: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    traj, summary, metrics = tmp_path / "t.parquet", tmp_path / "s.json", tmp_path / "m.json"
+    assert main(["replay", str(short_sim), "--tracker", "flow", "--export", str(traj), "--summary", str(summary), "--quiet"]) == 0
+    s = json.loads(summary.read_text())
+    assert s["frames"] == 12 and s["tracker"] == "flow" and s["seed"] == 0 and len(s["digest"]) == 64
+    assert main(["replay", str(short_sim), "--expect-digest", s["digest"], "--quiet"]) == 0
+    assert main(["eval", str(traj), str(short_sim), "--json", str(metrics)]) == 0
+    m = json.loads(metrics.read_text())
+    assert m["gt_frames"] == 12 and m["tracked_frames"] == 12
+    out = capsys.readouterr().out
+    assert "centre error" in out
+    csv = tmp_path / "t.csv"
+    assert main(["export", str(traj), str(csv), "--interpolate", "cubic"]) == 0
+    assert pl.read_csv(csv).height == 12
+
+
+def test_digest_mismatch_fails_clearly(short_sim: Path, capsys: pytest.CaptureFixture) -> None:
+    code = main(["replay", str(short_sim), "--expect-digest", "00" * 32, "--quiet"])
+    assert code == 4
+    assert "digest mismatch for" in capsys.readouterr().err
+
+
+def test_start_end_select_a_time_range(short_sim: Path, tmp_path: Path) -> None:
+    traj = tmp_path / "part.parquet"
+    assert main(["replay", str(short_sim), "--start", "0.1", "--end", "0.25", "--export", str(traj), "--interpolate", "none", "--quiet"]) == 0
+    frames = pl.read_parquet(traj)["frame"].to_list()
+    assert frames == [3, 4, 5, 6, 7]  # 30 fps: 0.1 s <= t < 0.25 s
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["replay", "missing.mcap"], "missing.mcap does not exist"),
+        (["replay", "{log}", "--image-topic", "/nope"], "has no topic /nope; topics present:"),
+        (["replay", "{log}", "--config", "{cfg}"], "unknown FlowConfig key(s) bogus"),
+        (["eval", "{traj}", "{log}"], "does not exist"),
+    ],
+)
+def test_user_errors_are_one_sentence(argv, message, short_sim: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    cfg = tmp_path / "c.toml"
+    cfg.write_text("bogus = 1\n")
+    args = [a.format(log=short_sim, cfg=cfg, traj=tmp_path / "none.parquet") for a in argv]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("trackreplay: error: ") and message in err and "\n" not in err
+
+
+def test_console_entry_point_runs_demo(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "replay.cli", "demo", "--out", str(tmp_path / "demo")],
+        capture_output=True, text=True, timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    for name in ("flow-sim1.mcap", "flow-sim1-flow.rrd", "trajectory.parquet", "summary.json"):
+        assert (tmp_path / "demo" / name).stat().st_size > 0
+    assert "velocity RMSE" in proc.stdout
