@@ -22,3 +22,9 @@ def short_sim(tmp_path_factory: pytest.TempPathFactory) -> Path:
     path = tmp_path_factory.mktemp("logs") / "short.mcap"
     write_flow_sim(path, FlowSimConfig(scene="flow-sim1", frames=12))
     return path
+
+
+@pytest.fixture(scope="session")
+def tracker_logs(short_sim: Path) -> dict[str, Path]:
+    """A short synthetic log per registered tracker."""
+    return {"flow": short_sim}

@@ -9,6 +9,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from trackers.base import TrackState
+from trackers.flow.fov import crop
 from trackers.frame import Frame
 
 from replay.views.common import log_estimates, log_scalar, to_uint8
@@ -67,9 +68,9 @@ def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequenc
     else:
         rec.log(f"{root}/flow_field", rr.Clear(recursive=False))
 
-    window = frame.image[int(y0) : int(y0 + h), int(x0) : int(x0 + w)]
-    if window.size:
-        rec.log(f"{root}/window/image", rr.Image(window, color_model="L" if window.ndim == 2 else "BGR"))
+    size = int(w)
+    window = crop(frame.image, (int(x0) + size // 2, int(y0) + size // 2), size)  # edge-replicated like the tracker's
+    rec.log(f"{root}/window/image", rr.Image(window, color_model="L" if window.ndim == 2 else "BGR"))
     rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8)))
     rec.log(f"{root}/condition/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
 
