@@ -17,6 +17,7 @@ from tqdm import tqdm
 from replay import registry
 from replay.digest import ReplayDigest
 from replay.frames import BundleReport, FrameTopics, iter_frames
+from replay.prefetch import prefetch
 from replay.reader import LogReader
 from replay.trajectory import state_row, trajectory_table
 
@@ -38,6 +39,7 @@ class ReplayRequest:
     image_topic: str | None = None
     progress: bool = False
     opencv_threads: int = 1
+    prefetch: int = 4  # frames decoded ahead in a reader thread; 0 = read in the loop
 
 
 @dataclass(frozen=True)
@@ -92,7 +94,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
     rows: list[tuple] = []
     notices: list[str] = []
     total = reader.topics()[topics.image].count
-    frames = iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=report)
+    frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=report), req.prefetch)
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
     started = time.perf_counter()
     try:
@@ -106,7 +108,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
             rows.extend(state_row(req.tracker, frame.index, frame.t_ns, s) for s in states)
             if sink is not None:
                 sink.begin_frame(frame)
-                entry.view.log(sink.rec, req.tracker, frame, tracker.intermediates, states)
+                entry.view.log(sink.logger, req.tracker, frame, tracker.intermediates, states)
     finally:
         if sink is not None:
             sink.close()

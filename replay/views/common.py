@@ -9,10 +9,12 @@ import rerun as rr
 
 from trackers.base import TrackState
 
+from replay.rerun_sink import FrameLogger
+
 STATUS_COLOURS = {"measured": (0, 220, 0), "predicted": (255, 170, 0), "interpolated": (0, 160, 255), "lost": (255, 0, 0)}
 
 
-def log_estimates(rec: rr.RecordingStream, path: str, states: Sequence[TrackState]) -> None:
+def log_estimates(rec: FrameLogger, path: str, states: Sequence[TrackState]) -> None:
     """Boxes (centre/size) coloured by status, labelled with the track id."""
     boxed = [s for s in states if s.x is not None and s.y is not None]
     if not boxed:
@@ -31,10 +33,10 @@ def log_estimates(rec: rr.RecordingStream, path: str, states: Sequence[TrackStat
     )
 
 
-def log_scalar(rec: rr.RecordingStream, path: str, value: float) -> None:
+def log_scalar(rec: FrameLogger, path: str, value: float) -> None:
     """A time-series point; NaN (no value this frame) is skipped rather than drawn."""
     if np.isfinite(value):
-        rec.log(path, rr.Scalars(float(value)))
+        rec.scalar(path, float(value))
 
 
 def to_uint8(values: np.ndarray, lo: float, hi: float) -> np.ndarray:

@@ -9,9 +9,9 @@ import rerun as rr
 import rerun.blueprint as rrb
 
 from trackers.base import TrackState
-from trackers.flow.fov import crop
 from trackers.frame import Frame
 
+from replay.rerun_sink import FrameLogger
 from replay.views.common import log_estimates, log_scalar, to_uint8
 
 ARROW_STRIDE = 4  # one arrow per 4x4 pixels keeps the field readable
@@ -25,11 +25,12 @@ def blueprint(name: str) -> rrb.Blueprint:
             rrb.Spatial2DView(
                 name="camera + FOV + flow",
                 origin="/",
-                contents=["camera/**", f"{root}/fov", f"{root}/flow_field", f"{root}/estimate", f"{root}/centroid"],
+                contents=["camera/**", f"{root}/fov", f"{root}/flow_field", f"{root}/estimate", f"{root}/centroid",
+                          f"{root}/window/moving"],
             ),
             rrb.Vertical(
-                rrb.Spatial2DView(name="FOV: window, moving pixels", origin=f"{root}/window"),
-                rrb.Spatial2DView(name="FOV: log10 cond(G)", origin=f"{root}/condition"),
+                rrb.Spatial2DView(name="FOV: log10 cond(G) (white = rejected side)", origin=f"{root}/window",
+                                  contents=[f"{root}/window/log10_cond"]),
                 rrb.Horizontal(
                     rrb.BarChartView(name="histogram u", origin=f"{root}/histogram/u"),
                     rrb.BarChartView(name="histogram v", origin=f"{root}/histogram/v"),
@@ -46,7 +47,7 @@ def blueprint(name: str) -> rrb.Blueprint:
     )
 
 
-def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
+def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
     root = f"trackers/{name}"
     x0, y0, w, h = (float(v) for v in inter.fov_box)
     rec.log(f"{root}/fov", rr.Boxes2D(array=[[x0, y0, w, h]], array_format=rr.Box2DFormat.XYWH, colors=[(255, 255, 255)]))
@@ -68,11 +69,10 @@ def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequenc
     else:
         rec.log(f"{root}/flow_field", rr.Clear(recursive=False))
 
-    size = int(w)
-    window = crop(frame.image, (int(x0) + size // 2, int(y0) + size // 2), size)  # edge-replicated like the tracker's
-    rec.log(f"{root}/window/image", rr.Image(window, color_model="L" if window.ndim == 2 else "BGR"))
-    rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8)))
-    rec.log(f"{root}/condition/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
+    # FOV-space rasters sit at the window's place in the camera image, so they overlay it.
+    rec.log(f"{root}/window", rr.Transform3D(translation=[x0, y0, 0.0]))
+    rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8), opacity=0.5))
+    rec.log(f"{root}/window/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
 
     rec.log(f"{root}/histogram/u", rr.BarChart(inter.hist_u))
     rec.log(f"{root}/histogram/v", rr.BarChart(inter.hist_v))

@@ -1,0 +1,62 @@
+"""Read and decode ahead in one background thread while the tracker works on the current frame.
+
+Order is untouched (one producer, one FIFO), so results do not change; image decoding releases
+the GIL, so on two cores reading overlaps tracking.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+from collections.abc import Iterator
+from typing import TypeVar
+
+T = TypeVar("T")
+_END = object()
+
+
+class _Failure:
+    def __init__(self, err: BaseException) -> None:
+        self.err = err
+
+
+def prefetch(items: Iterator[T], depth: int = 4) -> Iterator[T]:
+    """Yield ``items`` in order, produced up to ``depth`` ahead by a worker thread.
+
+    An exception in the producer is re-raised in the consumer at the position it happened,
+    after every item produced before it.
+    """
+    if depth <= 0:
+        yield from items
+        return
+    buffer: queue.Queue = queue.Queue(maxsize=depth)
+    stop = threading.Event()
+
+    def produce() -> None:
+        try:
+            for item in items:
+                while not stop.is_set():
+                    try:
+                        buffer.put(item, timeout=0.1)
+                        break
+                    except queue.Full:
+                        continue
+                if stop.is_set():
+                    return
+            buffer.put(_END)
+        except BaseException as err:  # handed to the consumer, raised there
+            buffer.put(_Failure(err))
+
+    worker = threading.Thread(target=produce, name="trackreplay-prefetch", daemon=True)
+    worker.start()
+    try:
+        while True:
+            item = buffer.get()
+            if item is _END:
+                return
+            if isinstance(item, _Failure):
+                raise item.err
+            yield item
+    finally:
+        stop.set()
+        worker.join(timeout=5)
