@@ -14,11 +14,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,10 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
 from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from replay.decode import decode_image  # noqa: E402
-from replay.engine import ReplayRequest, replay  # noqa: E402
-from replay.reader import LogReader  # noqa: E402
-from schemas import topics as T  # noqa: E402
+from replay.bench import time_replay  # noqa: E402
 
 PEAK_RSS = """
 import resource, sys, tracemalloc
@@ -45,25 +40,6 @@ sys.path.insert(0, {root!r})
 import replay.engine, replay.registry, trackers.flow.tracker, polars, cv2
 print(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 """
-
-
-def read_decode(log: Path) -> int:
-    reader = LogReader(log)
-    n = 0
-    for item in reader.messages([T.CAMERA_IMAGE]):
-        decode_image(item.decode(), item.schema, "bench")
-        n += 1
-    return n
-
-
-def timed(fn, repeats: int) -> float:
-    fn()  # warm-up: imports, caches, first-call costs
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
 
 
 def peak_memory_kib(code: str) -> tuple[int, int]:
@@ -87,19 +63,11 @@ def main() -> int:
         write_flow_sim(big, FlowSimConfig(scene="flow-sim1", frames=args.frames, size=720, encoding="jpeg"))
         throughput, rerun_cost = {}, {}
         for name, log in (("256x256 png", base), ("720x720 jpeg", big)):
-            n = read_decode(log)
-            t_decode = timed(lambda: read_decode(log), args.repeats)
-            t_replay = timed(lambda: replay(ReplayRequest(log=log, tracker="flow")), args.repeats)
-            throughput[name] = {
-                "frames": n,
-                "read_decode_fps": n / t_decode,
-                "replay_flow_fps": n / t_replay,
-                "ratio": t_decode / t_replay,
-            }
-            rrd = Path(tmp) / "out.rrd"
-            t_rerun = timed(lambda: replay(ReplayRequest(log=log, tracker="flow", rrd=rrd)), args.repeats)
-            rerun_cost[name] = {"replay_s": t_replay, "replay_with_rrd_s": t_rerun, "rrd_bytes": rrd.stat().st_size,
-                                "ratio": t_rerun / t_replay}
+            t = time_replay(log, "flow", args.repeats)
+            throughput[name] = {"frames": t.frames, "read_decode_fps": t.frames / t.read_decode_s,
+                                "replay_flow_fps": t.frames / t.replay_s, "ratio": t.throughput_ratio}
+            rerun_cost[name] = {"replay_s": t.replay_s, "replay_with_rrd_s": t.replay_rrd_s, "rrd_bytes": t.rrd_bytes,
+                                "ratio": t.rerun_ratio}
         rss_imports, _ = peak_memory_kib(IMPORTS_RSS.format(root=str(ROOT)))
         rss_base, traced_base = peak_memory_kib(PEAK_RSS.format(root=str(ROOT), log=str(base)))
         rss_long, traced_long = peak_memory_kib(PEAK_RSS.format(root=str(ROOT), log=str(long)))

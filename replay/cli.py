@@ -9,7 +9,7 @@ import sys
 from schemas.errors import TrackreplayError
 
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
-VERBS = ("record", "synth", "info", "recover", "annotate", "replay_cmd", "export", "eval_cmd", "overlay", "demo")
+VERBS = ("record", "synth", "info", "recover", "annotate", "replay_cmd", "export", "eval_cmd", "overlay", "bench", "demo")
 
 
 def build_parser() -> argparse.ArgumentParser:

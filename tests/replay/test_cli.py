@@ -67,3 +67,11 @@ def test_console_entry_point_runs_demo(tmp_path: Path) -> None:
     for name in ("flow-sim1.mcap", "flow-sim1-flow.rrd", "trajectory.parquet", "summary.json"):
         assert (tmp_path / "demo" / name).stat().st_size > 0
     assert "velocity RMSE" in proc.stdout
+
+
+def test_bench_reports_both_ratios(short_sim: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "b.json"
+    assert main(["bench", str(short_sim), "--repeats", "1", "--json", str(out)]) == 0
+    b = json.loads(out.read_text())
+    assert b["frames"] == 12 and b["throughput_ratio"] > 0 and b["rerun_ratio"] > 0 and b["rrd_bytes"] > 0
+    assert "cost ratio" in capsys.readouterr().out
