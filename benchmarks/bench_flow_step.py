@@ -15,9 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
 import sys
-import time
 from pathlib import Path
 
 import cv2
@@ -27,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
+from replay.bench import median_seconds  # noqa: E402
 from trackers.flow.config import FlowConfig  # noqa: E402
 from trackers.flow.refine import online_step  # noqa: E402
 from trackers.flow.velocity import histogram_edges, object_velocity  # noqa: E402
@@ -51,16 +50,6 @@ def scene(size: int, shift: tuple[int, int], seed: int = 0) -> tuple[np.ndarray,
     return frames[0], frames[1]
 
 
-def timed(fn, repeats: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
 def bench_window(size: int, repeats: int) -> list[dict]:
     a8, b8 = scene(size, (2, 1))
     a, b = a8.astype(np.float32), b8.astype(np.float32)
@@ -81,14 +70,14 @@ def bench_window(size: int, repeats: int) -> list[dict]:
     def lk(points: np.ndarray, win: int, levels: int):
         return lambda: cv2.calcOpticalFlowPyrLK(a8, b8, points, None, winSize=(win, win), maxLevel=levels, criteria=LK_CRITERIA)
 
-    t_ours = timed(ours, repeats)
+    t_ours = median_seconds(ours, repeats)
     rows = [{"window": size, "method": "ours: online_step + eq. 11 (5x5 LS, dense)", "points": size * size, "median_ms": t_ours * 1e3}]
     for name, points, win, levels in (
         ("LK 21x21, 3 levels, every pixel", every, 21, 3),
         ("LK 21x21, 3 levels, grid every 4 px", grid, 21, 3),
         ("LK 5x5, no pyramid, every pixel", every, 5, 0),
     ):
-        t = timed(lk(points, win, levels), repeats)
+        t = median_seconds(lk(points, win, levels), repeats)
         rows.append({"window": size, "method": name, "points": int(points.shape[0]), "median_ms": t * 1e3})
     for row in rows:
         row["ours_over_this"] = t_ours * 1e3 / row["median_ms"]
