@@ -16,7 +16,7 @@ from tqdm import tqdm
 
 from replay import registry
 from replay.digest import ReplayDigest
-from replay.frames import BundleReport, FrameTopics, iter_frames
+from replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
 from replay.prefetch import prefetch
 from replay.reader import LogReader
 from replay.trajectory import state_row, trajectory_table
@@ -84,6 +84,8 @@ def replay(req: ReplayRequest) -> ReplayResult:
     start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
     end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
     tracker = entry.tracker_cls(config, tracker_rng(req.seed, req.tracker))
+    if hasattr(tracker, "prepare"):  # trackers that learn from every marked frame up front
+        tracker.prepare(marked_images(reader, topics))
     sink = None
     if req.rrd is not None:
         from replay.rerun_sink import RerunSink

@@ -94,6 +94,29 @@ def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
     return tuple(regions)
 
 
+def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
+    """``(image, regions)`` for every frame the log's init annotations mark, in frame order.
+
+    Only those images are decoded; trackers that learn from the marks (the golf LUTs) get them
+    all before the first step, wherever the marked frames are in the log.
+    """
+    hints = read_hints(reader, topics.hints)
+    by_frame: dict[int, list[InitRegion]] = {}
+    for region in hints:
+        by_frame.setdefault(region.frame, []).append(region)
+    out = []
+    if not by_frame:
+        return out
+    last = max(by_frame)
+    for item in reader.messages([topics.image]):
+        if item.index in by_frame:
+            where = f"{reader.path}: topic {item.topic} message {item.index}"
+            out.append((decode_image(item.decode(), item.schema, where)[0], tuple(by_frame[item.index])))
+        if item.index >= last:
+            break
+    return out
+
+
 def iter_frames(
     reader: LogReader,
     topics: FrameTopics,

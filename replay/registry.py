@@ -24,7 +24,15 @@ def _flow() -> TrackerEntry:
     return TrackerEntry("flow", FlowConfig, FlowTracker, view)
 
 
-_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow}
+def _golf() -> TrackerEntry:
+    from replay.views import golf as view
+    from trackers.golf.config import GolfConfig
+    from trackers.golf.tracker import GolfTracker
+
+    return TrackerEntry("golf", GolfConfig, GolfTracker, view)
+
+
+_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf}
 NAMES = tuple(_ENTRIES)
 
 

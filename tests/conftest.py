@@ -25,6 +25,22 @@ def short_sim(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
-def tracker_logs(short_sim: Path) -> dict[str, Path]:
+def golf_short(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Three seconds of a small synthetic tee shot (640x360) with encoders and marked balls."""
+    from recorder.synth.golf.flight import Launch
+    from recorder.synth.golf.operator import OperatorConfig
+    from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
+
+    path = tmp_path_factory.mktemp("logs") / "golf-short.mcap"
+    write_golf_teeshot(path, GolfSceneConfig(
+        width=640, height=360, seed=3, duration=3.0,
+        launch=Launch(speed=32.0, elevation=24.0, azimuth=0.0, backspin_rpm=7000.0),
+        operator=OperatorConfig(size_tee_px=20.0, size_launch_px=7.0, size_landing_px=14.0, size_ground_px=16.0),
+    ))
+    return path
+
+
+@pytest.fixture(scope="session")
+def tracker_logs(short_sim: Path, golf_short: Path) -> dict[str, Path]:
     """A short synthetic log per registered tracker."""
-    return {"flow": short_sim}
+    return {"flow": short_sim, "golf": golf_short}

@@ -19,6 +19,7 @@ import rerun.blueprint as rrb
 from trackers.base import TrackState
 from trackers.frame import Frame
 
+from replay.rerun_sink import FrameLogger
 from replay.views.common import log_estimates, log_scalar
 
 ACCEPTED = (40, 230, 40)
@@ -33,8 +34,8 @@ def blueprint(name: str) -> rrb.Blueprint:
             rrb.Spatial2DView(
                 name="camera + search region + particles",
                 origin="/",
-                contents=["camera/**", f"{root}/search_region", f"{root}/blobs", f"{root}/particles",
-                          f"{root}/estimate", f"{root}/trail", f"{root}/landing", f"{root}/reinit"],
+                contents=["camera/**", f"{root}/search_region", f"{root}/region/silhouette", f"{root}/blobs",
+                          f"{root}/particles", f"{root}/estimate", f"{root}/trail", f"{root}/landing", f"{root}/reinit"],
             ),
             rrb.Vertical(
                 rrb.Spatial2DView(name="I_s + silhouette I_c", origin=f"{root}/region"),
@@ -59,7 +60,7 @@ def _weight_colours(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return colours, (0.8 + 2.2 * rel).astype(np.float32)
 
 
-def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
+def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
     root = f"trackers/{name}"
     if inter is None or inter.mode == "idle":
         for part in ("search_region", "blobs", "particles", "trail", "landing", "reinit", "region"):
@@ -108,14 +109,16 @@ def log(rec: rr.RecordingStream, name: str, frame: Frame, inter, states: Sequenc
     scores = ", ".join(f"{n} {s:.2f}" for n, s in zip(inter.lut_names, inter.lut_scores) if np.isfinite(s))
     rec.log(f"{root}/events", rr.TextLog(f"LUT {inter.lut_name or '-'} ({scores})", level=rr.TextLogLevel.DEBUG))
 
-    # Region view: the crop and its silhouette, in region pixels.
+    # The search region's crop and its silhouette, placed at the region's offset (so the silhouette
+    # also overlays the camera view) and shown alone in the region view.
     ox, oy = (int(v) for v in inter.silhouette_offset)
     sh, sw = inter.silhouette.shape[:2]
     crop = frame.image[oy : oy + sh, ox : ox + sw]
     if crop.size:
+        rec.log(f"{root}/region", rr.Transform3D(translation=[float(ox), float(oy), 0.0]))
+        rec.log(f"{root}/region", rr.AnnotationContext([(0, "background", (0, 0, 0, 0)), (BALL_CLASS, "ball", (255, 0, 255, 200))]))
         rec.log(f"{root}/region/image", rr.Image(crop, color_model="L" if crop.ndim == 2 else "BGR"))
-        rec.log(f"{root}/region", rr.AnnotationContext([(0, "background", (0, 0, 0, 0)), (BALL_CLASS, "ball", (255, 0, 255, 160))]))
-        rec.log(f"{root}/region/silhouette", rr.SegmentationImage(inter.silhouette * np.uint8(BALL_CLASS)))
+        rec.log(f"{root}/region/silhouette", rr.SegmentationImage(inter.silhouette * np.uint8(BALL_CLASS), opacity=0.6))
         if len(blobs):
             rec.log(f"{root}/region/blobs", rr.Points2D(blobs[:, :2] - [ox, oy], radii=1.5,
                                                         colors=[ACCEPTED if b[4] > 0 else REJECTED for b in blobs]))

@@ -17,9 +17,22 @@ sys.path.insert(0, str(HERE.parents[1]))
 from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
 from replay.engine import ReplayRequest, replay  # noqa: E402
 
+def _golf(path: Path) -> None:
+    from recorder.synth.golf.flight import Launch
+    from recorder.synth.golf.operator import OperatorConfig
+    from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
+
+    write_golf_teeshot(path, GolfSceneConfig(
+        width=640, height=360, seed=3, duration=2.0, jpeg_quality=80,
+        launch=Launch(speed=32.0, elevation=24.0, azimuth=0.0, backspin_rpm=7000.0),
+        operator=OperatorConfig(size_tee_px=20.0, size_launch_px=7.0, size_landing_px=14.0, size_ground_px=16.0),
+    ))
+
+
 GOLDEN = {
     # tracker: (log file, how it is made)
     "flow": ("flow-sim1-24f.mcap", lambda p: write_flow_sim(p, FlowSimConfig(scene="flow-sim1", frames=24))),
+    "golf": ("golf-teeshot-640x360.mcap", _golf),
 }
 
 

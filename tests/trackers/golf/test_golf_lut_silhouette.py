@@ -1,0 +1,77 @@
+import numpy as np
+import pytest
+
+from schemas.records import InitRegion
+from trackers.golf.config import GolfConfig
+from trackers.golf.lut import build_luts, region_samples
+from trackers.golf.silhouette import crop_ycc, silhouette
+
+
+def disc_mask(shape, centre, radius):
+    ys, xs = np.mgrid[0 : shape[0], 0 : shape[1]]
+    return (xs - centre[0]) ** 2 + (ys - centre[1]) ** 2 <= radius**2
+
+
+@pytest.fixture(scope="module")
+def marked(backdrop, draw_ball):
+    img = backdrop()
+    img = draw_ball(img, (400.0, 150.0), 6.0)  # over sky
+    img = draw_ball(img, (900.0, 560.0), 6.0)  # over grass
+    regions = (InitRegion(0, 0, 400.0, 150.0, 14, 14, "ball"), InitRegion(0, 0, 900.0, 560.0, 14, 14, "ball"))
+    return img, regions
+
+
+def test_unlabelled_boxes_are_sorted_into_sky_and_ground(marked):
+    img, regions = marked
+    cfg = GolfConfig()
+    assert region_samples(img, regions[0], cfg).name == "sky"
+    assert region_samples(img, regions[1], cfg).name == "ground"
+    luts = build_luts([(img, regions)], cfg)
+    assert luts.names == ("sky", "ground")
+    assert luts.luts["sky"].table.shape == (256, 256, 256) and luts.luts["sky"].table.dtype == bool
+
+
+@pytest.mark.parametrize("where, name", [((640.0, 200.0), "sky"), ((300.0, 600.0), "ground")])
+def test_silhouette_of_a_new_ball_in_the_search_region(marked, where, name, backdrop, draw_ball):
+    """A ball at a place the LUT never saw is segmented; the background around it is not."""
+    img, regions = marked
+    luts = build_luts([(img, regions)], GolfConfig())
+    frame = draw_ball(backdrop(seed=7), where, 5.0)
+    box = np.array([where[0] - 40, where[1] - 30, 80, 60])
+    ycc, offset = crop_ycc(frame, box)
+    assert offset == (int(where[0] - 40), int(where[1] - 30))
+    chosen, scores = luts.choose(ycc[..., 0], "")
+    assert chosen == name
+    mask = silhouette(ycc, luts.luts[chosen])
+    assert mask.dtype == np.uint8 and mask.shape == (60, 80)
+    truth = disc_mask(mask.shape, (where[0] - offset[0], where[1] - offset[1]), 4.0)  # the disc's solid core
+    assert mask[truth].mean() > 0.95
+    far = ~disc_mask(mask.shape, (where[0] - offset[0], where[1] - offset[1]), 7.0)
+    assert mask[far].mean() < 0.002
+
+
+def test_switch_follows_the_region_with_hysteresis(marked, backdrop):
+    img, regions = marked
+    cfg = GolfConfig()
+    luts = build_luts([(img, regions)], cfg)
+    frame = backdrop(seed=3)
+    ycc, _ = crop_ycc(frame, np.array([600, 250, 80, 80]))  # all sky
+    assert luts.choose(ycc[..., 0], "ground")[0] == "sky"
+    ycc, _ = crop_ycc(frame, np.array([600, 420, 80, 80]))  # all grass
+    assert luts.choose(ycc[..., 0], "sky")[0] == "ground"
+    # Slide a box over the horizon: where the two scores are within the margin, the current LUT stays.
+    close = 0
+    for top in range(300, 361):
+        ycc, _ = crop_ycc(frame, np.array([600, top, 80, 80]))
+        _, scores = luts.choose(ycc[..., 0], "")
+        if abs(scores[0] - scores[1]) < cfg.lut_switch_margin:
+            close += 1
+            assert luts.choose(ycc[..., 0], "sky")[0] == "sky"
+            assert luts.choose(ycc[..., 0], "ground")[0] == "ground"
+    assert close > 0
+
+
+def test_labels_override_the_colour_guess(marked):
+    img, regions = marked
+    relabelled = (InitRegion(0, 0, 400.0, 150.0, 14, 14, "ball ground"),)
+    assert region_samples(img, relabelled[0], GolfConfig()).name == "ground"

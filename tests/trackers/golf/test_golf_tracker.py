@@ -1,0 +1,103 @@
+"""GolfTracker end to end on small synthetic sequences (no log files): image mode, PTZ mode, determinism."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from replay.digest import ReplayDigest
+from trackers.frame import Frame
+from trackers.golf import GolfConfig, GolfTracker
+from trackers.golf.tracker import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
+
+BIG = 0.4  # m, the ball of the PTZ sequence (see conftest)
+
+
+def run(tracker, frames):
+    out = []
+    for f in frames:
+        out.append((tracker.step(f), tracker.intermediates))
+    return out
+
+
+def test_image_mode_tracks_and_says_so_once(image_sequence):
+    track, frames = image_sequence()
+    results = run(GolfTracker(GolfConfig(), np.random.default_rng(0)), frames)
+    notices = [inter.notice for _, inter in results if inter.notice]
+    assert notices == [NO_ENCODER_NOTICE]
+    assert results[0][1].notice == NO_ENCODER_NOTICE
+    errors, measured = [], 0
+    for k, (states, inter) in enumerate(results):
+        (s,) = states
+        assert inter.mode == "image"
+        assert s.dx is None and s.X is None  # no lines of sight without a camera pose
+        if s.status == "measured":
+            measured += 1
+            errors.append(math.hypot(s.x - track[k, 0], s.y - track[k, 1]))
+    assert measured >= 0.9 * len(frames)
+    assert np.median(errors) < 0.5 and max(errors) < 2.0
+    assert {inter.lut_name for _, inter in results} == {"sky", "ground"}  # switched on the way up
+
+
+def test_nothing_marked_nothing_tracked(backdrop, draw_ball):
+    frame = Frame(0, 0, draw_ball(backdrop(), (300, 300), 5.0))
+    tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
+    assert tracker.step(frame) == []
+    assert NO_HINTS_NOTICE in tracker.intermediates.notice
+    assert tracker.step(dataclasses.replace(frame, index=1)) == []
+    assert tracker.intermediates.notice == ""
+
+
+def digest_of(results) -> str:
+    d = ReplayDigest()
+    for k, (states, inter) in enumerate(results):
+        d.add_frame(k, (inter, tuple(states)))
+    return d._h.hexdigest()
+
+
+def test_same_inputs_and_seed_give_identical_intermediates(image_sequence):
+    _, frames = image_sequence(n=25)
+    a = run(GolfTracker(GolfConfig(), np.random.default_rng(7)), frames)
+    b = run(GolfTracker(GolfConfig(), np.random.default_rng(7)), frames)
+    c = run(GolfTracker(GolfConfig(), np.random.default_rng(8)), frames)
+    assert digest_of(a) == digest_of(b)
+    assert digest_of(a) != digest_of(c)
+    assert np.array_equal(a[-1][1].particles, b[-1][1].particles)
+
+
+def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
+    world, uv, landing, frames = ptz_sequence()
+    cfg = GolfConfig(ball_diameter_m=BIG, drag_k=0.0)
+    tracker = GolfTracker(cfg, np.random.default_rng(0))
+    tracker.prepare([(frames[r.frame].image, [r]) for r in frames[0].all_hints])
+    results = run(tracker, frames)
+    assert all(inter.notice == "" for _, inter in results)
+    events = [k for k, (_, inter) in enumerate(results) if inter.reinit == "ekf_landing"]
+    assert len(events) >= 1 and abs(events[0] - landing) <= 2
+    measured = [k for k, (states, _) in enumerate(results) if states[0].status == "measured"]
+    assert len(measured) >= 0.9 * len(frames)
+    assert any(k > events[0] for k in measured[:]) and set(range(events[0] + 1, events[0] + 4)) & set(measured)
+    cam = frames[0].camera
+    for k in measured:
+        s = results[k][0][0]
+        los = np.array([s.dx, s.dy, s.dz])
+        assert np.linalg.norm(los) == pytest.approx(1.0)
+        assert los == pytest.approx(cam.line_of_sight(np.array([[s.x, s.y]]))[0])
+    # Late in the flight the EKF knows where the ball is to a few per cent of the range.
+    k = events[0] - 5
+    s = results[k][0][0]
+    rng = np.linalg.norm(world[k] - cam.position)
+    assert np.linalg.norm(np.array([s.X, s.Y, s.Z]) - world[k]) < 0.08 * rng
+
+
+def test_config_loads_from_a_dict_and_rejects_nonsense():
+    from schemas.errors import TrackreplayError
+    from trackers.config_io import config_from_dict
+
+    cfg = config_from_dict(GolfConfig, {"n_particles": 500, "sigma_px": 4.0, "lost_search": "stay"})
+    assert cfg.n_particles == 500 and cfg.lost_search == "stay"
+    with pytest.raises(TrackreplayError, match="lost_search"):
+        config_from_dict(GolfConfig, {"lost_search": "everywhere"})
+    with pytest.raises(TrackreplayError, match="unknown"):
+        config_from_dict(GolfConfig, {"particles": 10})
