@@ -68,6 +68,7 @@ class GolfConfig:
     photometric_area: bool = True  # range from the light the ball adds, not its silhouette's pixel count
     ekf_range_rel_sigma: float = 0.1  # relative range error from the area, plus blob-size term
     ekf_init_velocity_sigma: float = 40.0  # m/s
+    landing_reinit: bool = True  # paper §2.3; False = never re-initialise at a predicted landing (for comparison)
     landing_arm_height_m: float = 2.0  # a landing fires only after the EKF saw the ball this high
     landing_horizon_s: float = 12.0
     landing_step_s: float = 0.02

@@ -367,7 +367,7 @@ class GolfTracker:
                 if landing is not None:
                     self.ekf.armed = False
 
-        if landing is not None and camera is not None:
+        if landing is not None and camera is not None and cfg.landing_reinit:
             centre = camera.project_points(landing.reshape(1, 3))[0]
             if np.all(np.isfinite(centre)):
                 centre = np.clip(centre, 0, [frame.image.shape[1] - 1, frame.image.shape[0] - 1])
@@ -377,7 +377,7 @@ class GolfTracker:
                 self.pf.initialise(centre, sigma, cfg.reinit_velocity_sigma_px * scale)
                 return "ekf_landing", centre
 
-        if not self.ekf.initialised and not self.parabola_used and self.misses >= cfg.image_landing_misses:
+        if cfg.landing_reinit and not self.ekf.initialised and not self.parabola_used and self.misses >= cfg.image_landing_misses:
             found = image_parabola_landing(np.array(self._history, float).reshape(-1, 3), float(frame.index))
             if found is not None:
                 centre, half = found
