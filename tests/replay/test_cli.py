@@ -75,3 +75,24 @@ def test_bench_reports_both_ratios(short_sim: Path, tmp_path: Path, capsys: pyte
     b = json.loads(out.read_text())
     assert b["frames"] == 12 and b["throughput_ratio"] > 0 and b["rerun_ratio"] > 0 and b["rrd_bytes"] > 0
     assert "cost ratio" in capsys.readouterr().out
+
+
+def test_truncated_and_corrupt_logs(flow_sim1: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    data = flow_sim1.read_bytes()  # 103 messages, flushed every 30: complete chunks before the cut
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(data[: int(len(data) * 0.7)])
+    assert main(["replay", str(cut), "--quiet"]) == 3
+    assert "run `trackreplay recover" in capsys.readouterr().err
+    fixed = tmp_path / "fixed.mcap"
+    assert main(["recover", str(cut), str(fixed)]) == 1  # partial salvage
+    summary = tmp_path / "s.json"
+    assert main(["replay", str(fixed), "--summary", str(summary), "--quiet"]) == 0
+    assert 0 < json.loads(summary.read_text())["frames"] < 51  # what was readable still replays
+    bad = bytearray(data)
+    middle = len(bad) // 2
+    bad[middle : middle + 64] = bytes(b ^ 0xFF for b in bad[middle : middle + 64])
+    corrupt = tmp_path / "corrupt.mcap"
+    corrupt.write_bytes(bytes(bad))
+    assert main(["replay", str(corrupt), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("trackreplay: error: ") and "corrupt.mcap" in err

@@ -1,0 +1,118 @@
+"""Golf tracker cost, measured in one run on one machine.
+
+(1) Per-frame tracker step at 720p and 1080p as a ratio to decoding one JPEG frame of the same
+    log (target: step <= 0.5 x one 720p decode; the paper needed 40 ms per HD frame on a 3.2 GHz
+    dual-processor PC). Both are timed per frame on the same frames, medians reported, plus the
+    tail (p90, max: frames where the ball is lost scan the largest search region).
+(2) Particle-count scaling: one CONDENSATION step (select, predict, measure against 3 candidates,
+    estimate) for N = 100 ... 100 000, vectorised numpy.
+
+Usage: python benchmarks/bench_golf.py [--seconds 4]
+Writes benchmarks/results/golf.json and prints tables.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.machine import describe  # noqa: E402
+from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
+from replay.bench import median_seconds  # noqa: E402
+from replay.engine import tracker_rng  # noqa: E402
+from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from replay.reader import LogReader  # noqa: E402
+from trackers.golf.config import GolfConfig  # noqa: E402
+from trackers.golf.particles import CondensationFilter  # noqa: E402
+from trackers.golf.tracker import GolfTracker  # noqa: E402
+
+
+def per_frame_costs(log: Path) -> dict:
+    cv2.setNumThreads(1)
+    reader = LogReader(log)
+    topics = FrameTopics.detect(reader)
+    tracker = GolfTracker(GolfConfig(), tracker_rng(0, "golf"))
+    tracker.prepare(marked_images(reader, topics))
+    steps, decodes = [], []
+    for frame in iter_frames(reader, topics):
+        buf = np.frombuffer(frame.encoded, np.uint8)
+        start = time.perf_counter()
+        cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        decodes.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        tracker.step(frame)
+        steps.append(time.perf_counter() - start)
+    steps_ms, decodes_ms = np.array(steps) * 1e3, np.array(decodes) * 1e3
+    return {
+        "frames": len(steps),
+        "step_ms": {"median": float(np.median(steps_ms)), "mean": float(steps_ms.mean()),
+                    "p90": float(np.percentile(steps_ms, 90)), "max": float(steps_ms.max())},
+        "decode_ms": {"median": float(np.median(decodes_ms)), "mean": float(decodes_ms.mean())},
+        "ratio_median": float(np.median(steps_ms) / np.median(decodes_ms)),
+        "ratio_mean": float(steps_ms.mean() / decodes_ms.mean()),
+    }
+
+
+def particle_scaling(counts: list[int], repeats: int) -> list[dict]:
+    candidates = np.array([[640.0, 360.0], [700.0, 300.0], [100.0, 600.0]])
+    rows = []
+    for n in counts:
+        pf = CondensationFilter(n, np.random.default_rng(0))
+        pf.initialise(np.array([640.0, 360.0]), 5.0, 3.0)
+
+        def one_step() -> None:
+            pf.select()
+            pf.predict(2.0, 1.5)
+            pf.measure(candidates, 6.0, 0.002)
+            pf.estimate()
+
+        seconds = median_seconds(lambda: [one_step() for _ in range(20)], repeats) / 20
+        rows.append({"particles": n, "step_ms": seconds * 1e3, "us_per_particle": seconds * 1e6 / n})
+    return rows
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seconds", type=float, default=8.0, help="length of the synthetic shots")
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "golf.json")
+    args = ap.parse_args()
+    sizes = {"720p": (1280, 720), "1080p": (1920, 1080)}
+    per_frame = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, (w, h) in sizes.items():
+            log = Path(tmp) / f"{name}.mcap"
+            write_golf_teeshot(log, GolfSceneConfig(width=w, height=h, duration=args.seconds))
+            per_frame[name] = per_frame_costs(log)
+    decode_720 = per_frame["720p"]["decode_ms"]["median"]
+    for r in per_frame.values():
+        r["ratio_to_720p_decode"] = r["step_ms"]["median"] / decode_720
+    scaling = particle_scaling([100, 300, 1000, 3000, 10000, 30000, 100000], args.repeats)
+    results = {"machine": describe(), "opencv_threads": 1, "shot_seconds": args.seconds,
+               "per_frame": per_frame, "target": "step median <= 0.5 x one 720p JPEG decode",
+               "particle_scaling": scaling}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"machine: {results['machine']['cpu']}, {results['machine']['cores']} cores")
+    print("size   frames  step median  p90     max      decode median  step/decode  step/720p-decode")
+    for name, r in per_frame.items():
+        print(f"{name:6} {r['frames']:6}  {r['step_ms']['median']:8.2f} ms {r['step_ms']['p90']:6.2f}  {r['step_ms']['max']:7.2f}  "
+              f"{r['decode_ms']['median']:8.2f} ms   {r['ratio_median']:8.2f}     {r['ratio_to_720p_decode']:8.2f}")
+    print("particles  step ms   us/particle")
+    for row in scaling:
+        print(f"{row['particles']:9}  {row['step_ms']:7.3f}   {row['us_per_particle']:.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
