@@ -74,8 +74,8 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8), opacity=0.5))
     rec.log(f"{root}/window/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
 
-    rec.log(f"{root}/histogram/u", rr.BarChart(inter.hist_u))
-    rec.log(f"{root}/histogram/v", rr.BarChart(inter.hist_v))
+    rec.log(f"{root}/histogram/u", rr.BarChart(inter.hist_u.astype(np.float32)))  # float32: cheaper to convert
+    rec.log(f"{root}/histogram/v", rr.BarChart(inter.hist_v.astype(np.float32)))
     for axis, k in (("x", 0), ("y", 1)):
         log_scalar(rec, f"{root}/velocity/raw_{axis}", inter.raw_velocity[k])
         log_scalar(rec, f"{root}/velocity/filtered_{axis}", inter.filtered_velocity[k])
