@@ -16,6 +16,7 @@ from replay.views.common import log_estimates, log_scalar, to_uint8
 
 ARROW_STRIDE = 4  # one arrow per 4x4 pixels keeps the field readable
 ARROW_SCALE = 2.0
+HIST_X_SCALE = 20.0  # drawing units per px/frame in the histogram view
 
 
 def blueprint(name: str) -> rrb.Blueprint:
@@ -31,10 +32,7 @@ def blueprint(name: str) -> rrb.Blueprint:
             rrb.Vertical(
                 rrb.Spatial2DView(name="FOV: log10 cond(G) (white = rejected side)", origin=f"{root}/window",
                                   contents=[f"{root}/window/log10_cond"]),
-                rrb.Horizontal(
-                    rrb.BarChartView(name="histogram u", origin=f"{root}/histogram/u"),
-                    rrb.BarChartView(name="histogram v", origin=f"{root}/histogram/v"),
-                ),
+                rrb.Spatial2DView(name="flow histograms u, v (x: px/frame, up: pixels)", origin=f"{root}/histogram"),
             ),
             rrb.Vertical(
                 rrb.TimeSeriesView(name="velocity raw vs filtered", origin=f"{root}/velocity"),
@@ -45,6 +43,13 @@ def blueprint(name: str) -> rrb.Blueprint:
         ),
         collapse_panels=False,
     )
+
+
+def histogram_strips(edges: np.ndarray, hist_u: np.ndarray, hist_v: np.ndarray) -> rr.LineStrips2D:
+    """Both flow histograms as step curves (one Rerun call; a BarChart costs ~0.35 ms each)."""
+    x = np.repeat(edges, 2)[1:-1] * HIST_X_SCALE
+    strips = [np.stack([x, -np.repeat(h, 2).astype(np.float64)], axis=1) for h in (hist_u, hist_v)]
+    return rr.LineStrips2D(strips, colors=[(255, 120, 60), (60, 160, 255)], labels=["u", "v"])
 
 
 def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
@@ -74,8 +79,7 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     rec.log(f"{root}/window/moving", rr.SegmentationImage(inter.moving.astype(np.uint8), opacity=0.5))
     rec.log(f"{root}/window/log10_cond", rr.Image(to_uint8(np.log10(np.maximum(inter.cond, 1.0)), 0.0, 3.0), color_model="L"))
 
-    rec.log(f"{root}/histogram/u", rr.BarChart(inter.hist_u.astype(np.float32)))  # float32: cheaper to convert
-    rec.log(f"{root}/histogram/v", rr.BarChart(inter.hist_v.astype(np.float32)))
+    rec.log(f"{root}/histogram", histogram_strips(inter.hist_edges, inter.hist_u, inter.hist_v))
     for axis, k in (("x", 0), ("y", 1)):
         log_scalar(rec, f"{root}/velocity/raw_{axis}", inter.raw_velocity[k])
         log_scalar(rec, f"{root}/velocity/filtered_{axis}", inter.filtered_velocity[k])

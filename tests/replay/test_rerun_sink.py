@@ -18,7 +18,7 @@ def test_rrd_holds_camera_every_flow_intermediate_both_timelines_and_a_layout(sh
         timelines.update(chunk.timeline_names)
     assert {"frame", "log_time"} <= timelines
     expected = {"/camera/image", "/trackers/flow/fov", "/trackers/flow/flow_field", "/trackers/flow/window/moving",
-                "/trackers/flow/window/log10_cond", "/trackers/flow/histogram/u", "/trackers/flow/velocity/raw_x",
+                "/trackers/flow/window/log10_cond", "/trackers/flow/histogram", "/trackers/flow/velocity/raw_x",
                 "/trackers/flow/velocity/filtered_x", "/trackers/flow/kalman/state/x/velocity",
                 "/trackers/flow/kalman/sigma/y/position", "/trackers/flow/estimate"}
     assert expected <= paths
