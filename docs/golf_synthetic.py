@@ -1,0 +1,532 @@
+"""Golf-ball tracker (seed 000) on synthetic broadcast tee shots with ground truth.
+
+    python docs/golf_synthetic.py [--workdir DIR]     (needs matplotlib: pip install -e '.[docs]')
+
+Synthesises tee shots with the project's own `synth golf-teeshot` (three seeds at 720p, then the
+variants: no bounce, a camera cut, a tree occlusion, an encoder dropout around the landing, and
+1080p), replays the golf tracker on each with landing re-initialisation on/off and
+``lost_search`` "centre"/"stay", and writes docs/golf_synthetic.md, docs/golf_synthetic.png
+(per-frame error around the landing) and two overlay images made with the `overlay` CLI.
+
+Everything is seeded (scene seeds, replay seed 0): the tables and digests are the same on every
+run. ``--workdir`` keeps the synthesised logs there and reuses them on the next run (the default
+is a temporary directory, removed at the end).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT))
+
+import cv2  # noqa: E402
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import polars as pl  # noqa: E402
+
+from recorder.synth.golf.flight import Launch  # noqa: E402
+from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
+from replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
+from replay.eval import evaluate  # noqa: E402
+from replay.export import fill_gaps, write_trajectory  # noqa: E402
+from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from replay.overlay import project_trajectory  # noqa: E402
+from replay.groundtruth import read_groundtruth  # noqa: E402
+from replay.reader import LogReader  # noqa: E402
+from schemas import topics as T  # noqa: E402
+from schemas.records import LensTable  # noqa: E402
+from trackers.golf.config import GolfConfig  # noqa: E402
+from trackers.golf.tracker import GolfTracker  # noqa: E402
+
+DETECT_PX = 5.0  # "detected": measured within this distance of the true centre
+FILLED_PX = 10.0  # completeness after gap filling: a position within this distance
+MAX_GAP = 15
+MAX_PNG_BYTES = 400_000
+
+RUNS: list[tuple[str, str, GolfSceneConfig]] = [
+    ("seed0", "720p, seed 0 (default shot)", GolfSceneConfig(seed=0)),
+    ("seed1", "720p, seed 1", GolfSceneConfig(seed=1)),
+    ("seed2", "720p, seed 2", GolfSceneConfig(seed=2)),
+    ("nobounce", "seed 0, `bounce=False` (checks into the turf)", GolfSceneConfig(seed=0, bounce=False)),
+    ("cut", "seed 0, `cut_at=4.0` (3x zoom-out, ball off-centre)", GolfSceneConfig(seed=0, cut_at=4.0)),
+    ("occl", "seed 0, `occlusion=(2.0, 3.0)` (tree, in flight)", GolfSceneConfig(seed=0, occlusion=(2.0, 3.0))),
+    ("encdrop", "seed 0, `encoder_dropout=(5.0, 6.5)` (no encoders around the landing)",
+     GolfSceneConfig(seed=0, encoder_dropout=(5.0, 6.5))),
+    ("1080p", "1080p, seed 0", GolfSceneConfig(seed=0, width=1920, height=1080)),
+    # The scene seed changes the course, distractors, clouds and encoder noise, not the shot; two
+    # more shots with a different flight / camera place:
+    ("launch2", "seed 3, 40 m/s at 16°, 4° right, 5000 rpm", GolfSceneConfig(seed=3, launch=Launch(40.0, 16.0, -4.0, 5000.0))),
+    ("beside", "seed 4, camera beside the tee", GolfSceneConfig(seed=4, camera="beside")),
+]
+# (key, label, landing_reinit, lost_search); the first one is the default configuration.
+CONFIGS = [
+    ("R+C", "re-init + centre (default)", True, "centre"),
+    ("-+C", "no re-init + centre", False, "centre"),
+    ("R+S", "re-init + stay (paper)", True, "stay"),
+    ("-+S", "no re-init + stay", False, "stay"),
+]
+
+
+# --- logs ------------------------------------------------------------------------------------------
+def synthesise(key: str, cfg: GolfSceneConfig, workdir: Path) -> tuple[Path, dict]:
+    log, meta = workdir / f"golf-{key}.mcap", workdir / f"golf-{key}.json"
+    if log.is_file() and meta.is_file():
+        return log, json.loads(meta.read_text())
+    summary = write_golf_teeshot(log, cfg)
+    info = dataclasses.asdict(summary)
+    meta.write_text(json.dumps(info))
+    return log, info
+
+
+# --- metrics -----------------------------------------------------------------------------------------
+def line_of_sight_errors(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray) -> np.ndarray:
+    """Degrees between the stored (dx, dy, dz) and the true camera->ball direction, measured visible frames."""
+    rows = traj.filter((pl.col("status") == "measured") & pl.col("dx").is_not_null()).select("frame", "dx", "dy", "dz")
+    truth = gt.filter(pl.col("visible") & pl.col("X").is_not_null()).select("frame", "X", "Y", "Z")
+    j = rows.join(truth, on="frame", how="inner")
+    if j.is_empty():
+        return np.zeros(0)
+    d = j.select("dx", "dy", "dz").to_numpy().astype(float, copy=True)
+    t = j.select("X", "Y", "Z").to_numpy().astype(float, copy=True) - camera
+    t /= np.linalg.norm(t, axis=1, keepdims=True)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return np.degrees(np.arccos(np.clip(np.sum(d * t, axis=1), -1.0, 1.0)))
+
+
+def reacquire(frames: pl.DataFrame, landing: int | None) -> int | None:
+    """Frames from the landing to the first measured estimate within DETECT_PX (None: never)."""
+    if landing is None:
+        return None
+    hit = frames.filter((pl.col("frame") >= landing) & (pl.col("status") == "measured") & (pl.col("centre_error") <= DETECT_PX))
+    return None if hit.is_empty() else int(hit["frame"].min()) - landing
+
+
+def run_metrics(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray, landing: int | None) -> tuple[dict, pl.DataFrame]:
+    _, frames = evaluate(traj, gt)
+    vis = frames.filter(pl.col("visible") & pl.col("x").is_not_null())
+    n = vis.height
+    measured = vis.filter(pl.col("status") == "measured")
+    err = measured["centre_error"].to_numpy()
+    los = line_of_sight_errors(traj, gt, camera)
+    _, filled = evaluate(fill_gaps(traj, "linear", max_gap=MAX_GAP), gt)
+    fvis = filled.filter(pl.col("visible") & pl.col("x").is_not_null())
+    m = {
+        "visible": n,
+        "detected": float((measured["centre_error"] <= DETECT_PX).sum() / n),
+        "measured_share": measured.height / n,
+        "rmse": float(np.sqrt(np.mean(err**2))) if err.size else None,
+        "median": float(np.median(err)) if err.size else None,
+        "los_median": float(np.median(los)) if los.size else None,
+        "los_p95": float(np.percentile(los, 95)) if los.size else None,
+        "los_frames": int(los.size),
+        "reacquire": reacquire(frames, landing),
+        "completeness": float((fvis["centre_error"] <= FILLED_PX).sum() / n),
+        "start": int(traj["frame"].min()) if traj.height else None,
+        "hidden": int(frames.filter(~pl.col("visible").fill_null(False)).height),
+        "false_measured": int(frames.filter(~pl.col("visible").fill_null(False) & (pl.col("status") == "measured")).height),
+    }
+    return m, frames
+
+
+def landing_events(log: Path, config: GolfConfig, gt: pl.DataFrame, info: dict) -> dict:
+    """Step the tracker as the engine does (same seed) and read its intermediates at the landing.
+
+    Returns the frames of the EKF / parabola re-initialisations with the distance from the
+    re-initialisation point to the true ball, the EKF's last predicted ground contact before the
+    landing vs the true landing point (m), and the per-frame status (to check it is the replay's)."""
+    reader = LogReader(log)
+    topics = FrameTopics.detect(reader)
+    tracker = GolfTracker(config, tracker_rng(0, "golf"))
+    tracker.prepare(marked_images(reader, topics))
+    truth = {int(r["frame"]): r for r in gt.iter_rows(named=True)}
+    events, statuses, contact = [], {}, None
+    land = info["landing_frame"]
+    for frame in iter_frames(reader, topics):
+        states = tracker.step(frame)
+        im = tracker.intermediates
+        statuses[frame.index] = states[0].status if states else None
+        if im.reinit in ("ekf_landing", "image_parabola"):
+            t = truth.get(frame.index)
+            d = None
+            if t is not None and t["x"] is not None:
+                d = float(np.hypot(im.reinit_point[0] - t["x"], im.reinit_point[1] - t["y"]))
+            events.append((frame.index, im.reinit, d))
+        if land is not None and frame.index < land and np.isfinite(im.landing_world).all():
+            contact = float(np.linalg.norm(im.landing_world[:2] - np.asarray(info["landing_point"][:2])))
+    return {"events": events, "contact_error_m": contact, "statuses": statuses}
+
+
+# --- figures -----------------------------------------------------------------------------------------
+def save_png(path: Path, image: np.ndarray, max_width: int = 1280) -> tuple[int, int, int]:
+    """Downscale to at most ``max_width`` and further until the PNG is under MAX_PNG_BYTES."""
+    width = min(max_width, image.shape[1])
+    while True:
+        h = int(round(image.shape[0] * width / image.shape[1]))
+        small = cv2.resize(image, (width, h), interpolation=cv2.INTER_AREA) if width != image.shape[1] else image
+        ok, buf = cv2.imencode(".png", small, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+        if ok and (len(buf) < MAX_PNG_BYTES or width <= 480):
+            path.write_bytes(buf.tobytes())
+            return width, h, len(buf)
+        width = int(width * 0.85)
+
+
+def error_plot(path: Path, curves: dict[str, pl.DataFrame], info: dict, title: str) -> None:
+    landing = info["landing_frame"]
+    styles = {"R+C": ("tab:blue", "-"), "-+C": ("tab:orange", "--"), "R+S": ("tab:green", "-"), "-+S": ("tab:red", "--")}
+    labels = {k: lab for k, lab, _, _ in CONFIGS}
+    fig, axes = plt.subplots(3, 1, figsize=(10, 9), gridspec_kw={"height_ratios": [1, 1.2, 1.2]})
+    lo, hi = max(0, landing - 25), min(info["frames"] - 1, landing + 75)
+    panels = [(axes[0], ("R+C",), (0, info["frames"] - 1), "whole shot, default configuration"),
+              (axes[1], ("R+C", "-+C"), (lo, hi), "around the landing, lost_search = centre (ours)"),
+              (axes[2], ("R+S", "-+S"), (lo, hi), "around the landing, lost_search = stay (the paper's mechanism alone)")]
+    for ax, keys, (a, b), sub in panels:
+        fr0 = curves[keys[0]]
+        invisible = fr0.filter(~pl.col("visible").fill_null(False))["frame"].to_numpy()
+        for f in invisible:
+            ax.axvspan(f - 0.5, f + 0.5, color="0.85", lw=0)
+        for i, k in enumerate(keys):
+            fr = curves[k].filter((pl.col("frame") >= a) & (pl.col("frame") <= b))
+            f = fr["frame"].to_numpy()
+            e = fr["centre_error"].fill_null(np.nan).to_numpy().astype(float)
+            color, ls = styles[k]
+            ax.semilogy(f, np.clip(e, 0.1, None), ls, color=color, lw=1.2, label=labels[k])
+            nopos = fr.filter(pl.col("est_x").is_null() & pl.col("visible").fill_null(False))["frame"].to_numpy()
+            ax.plot(nopos, np.full(nopos.size, 1500.0 * (0.75 ** i)), "|", color=color, ms=8)
+        ax.axvline(landing, color="k", lw=1)
+        ax.text(landing + 0.5, 0.13, " landing", fontsize=8)
+        for bt in info["bounce_times"][1:]:
+            ax.axvline(bt * info["fps"], color="k", lw=0.6, ls=":")
+        ax.axhline(DETECT_PX, color="0.4", lw=0.6, ls="--")
+        ax.set_xlim(a - 0.5, b + 0.5)
+        ax.set_ylim(0.1, 2500)
+        ax.set_ylabel("centre error (px)")
+        ax.set_title(sub, fontsize=10)
+        ax.legend(loc="upper left", fontsize=8)
+    axes[-1].set_xlabel("frame (grey: ball not visible; ticks at top: visible but no position reported; "
+                        "dotted: later bounces; dashed: 5 px)", fontsize=8)
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
+def overlay_images(log: Path, traj_path: Path, info: dict, gt: pl.DataFrame, camera_xyz: np.ndarray) -> list[tuple[str, int, str]]:
+    """Run `trackreplay overlay` into the widest frame in flight and into the last frame, then add
+    the true path (magenta) and the true ball in that frame (red circle) for comparison."""
+    reader = LogReader(log)
+    poses = {f.index: f.camera for f in iter_frames(reader, FrameTopics.detect(reader)) if f.camera is not None}
+    launch = int(round(info["launch_time"] * info["fps"]))
+    flight = [k for k in poses if launch <= k < info["landing_frame"]]
+    wide = min(flight, key=lambda k: (poses[k].intrinsics.fx, k))
+    late = max(poses)
+    path = gt.filter(pl.col("X").is_not_null()).sort("frame")
+    true_dirs = path.select("X", "Y", "Z").to_numpy().astype(float) - camera_xyz
+    true_dirs /= np.linalg.norm(true_dirs, axis=1, keepdims=True)
+    true_rows = pl.DataFrame({"frame": path["frame"], "dx": true_dirs[:, 0], "dy": true_dirs[:, 1], "dz": true_dirs[:, 2],
+                              "status": ["measured"] * path.height})
+    outputs: list[tuple[str, int, str]] = []
+    extra: tuple = ()
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, index in (("early", wide), ("late", late)):
+            raw = Path(tmp) / f"overlay-{name}.png"
+            res = subprocess.run([sys.executable, "-m", "replay.cli", "overlay", str(log), str(traj_path),
+                                  "--frame", str(index), "--out", str(raw)], env=env, capture_output=True, text=True, check=True)
+            image = cv2.imread(str(raw))
+            frame = SimpleNamespace(index=index, camera=poses[index])
+            pts = project_trajectory(true_rows, frame).points
+            ok = np.isfinite(pts).all(axis=1) & (np.abs(pts) < 1e5).all(axis=1)
+            for a, b, good in zip(pts[:-1], pts[1:], ok[:-1] & ok[1:]):
+                if good:
+                    cv2.line(image, tuple(np.round(a * 16).astype(int)), tuple(np.round(b * 16).astype(int)), (255, 0, 255), 1, cv2.LINE_AA, 4)
+            here = gt.filter(pl.col("frame") == index)
+            if here.height and here["x"][0] is not None:
+                cv2.circle(image, (int(round(here["x"][0])), int(round(here["y"][0]))), 14, (0, 0, 255), 2, cv2.LINE_AA)
+            legend = ["gold: tracker (measured/predicted)", "light blue: interpolated",
+                      "magenta: true path", f"red circle: true ball, frame {index}"]
+            cv2.rectangle(image, (6, 6), (470, 14 + 30 * len(legend)), (40, 40, 40), -1)
+            for i, text in enumerate(legend):
+                cv2.putText(image, text, (16, 34 + 30 * i), cv2.FONT_HERSHEY_SIMPLEX, 0.75, (255, 255, 255), 2, cv2.LINE_AA)
+            if name == "late":  # the landing area, enlarged: the bounces and the roll
+                after = ok & (path["frame"].to_numpy() >= info["landing_frame"] - 3)
+                x0, y0 = np.floor(pts[after].min(axis=0)).astype(int) - 40
+                x1, y1 = np.ceil(pts[after].max(axis=0)).astype(int) + 40
+                x0, y0 = max(x0, 0), max(y0, 0)
+                x1, y1 = min(x1, image.shape[1]), min(y1, image.shape[0])
+                crop = image[y0:y1, x0:x1]
+                zoom = min(3.0, 700.0 / crop.shape[0])
+                crop = cv2.resize(crop, None, fx=zoom, fy=zoom, interpolation=cv2.INTER_CUBIC)
+                cw, ch, csize = save_png(HERE / "golf_synthetic_overlay_landing.png", crop)
+                extra = (("landing", index, f"the landing area of frame {index} (x {x0}-{x1}, y {y0}-{y1}) enlarged {zoom:.1f}x "
+                                                  f"(saved {cw}x{ch}, {csize // 1000} KB)"),)
+            dest = HERE / f"golf_synthetic_overlay_{name}.png"
+            w, h, size = save_png(dest, image)
+            said = res.stdout.strip().replace(str(raw), raw.name)
+            outputs.append((name, index, f"`{said}` (f_x = {poses[index].intrinsics.fx:.0f} px; "
+                                         f"figure saved at {w}x{h}, {size // 1000} KB)"))
+    return outputs + list(extra)
+
+
+# --- report ------------------------------------------------------------------------------------------
+def fmt(v, spec: str = ".2f", none: str = "–") -> str:
+    return none if v is None else format(v, spec)
+
+
+def pct(v) -> str:
+    return "–" if v is None else f"{100 * v:.1f} %"
+
+
+def reac(v) -> str:
+    return "never" if v is None else str(v)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workdir", type=Path, help="keep (and reuse) the synthesised logs here")
+    args = ap.parse_args()
+    tmp = None
+    if args.workdir is None:
+        tmp = tempfile.TemporaryDirectory()
+        workdir = Path(tmp.name)
+    else:
+        workdir = args.workdir
+        workdir.mkdir(parents=True, exist_ok=True)
+    results: dict[str, dict] = {}
+    try:
+        for key, desc, scene in RUNS:
+            log, info = synthesise(key, scene, workdir)
+            reader = LogReader(log)
+            gt = read_groundtruth(reader).filter(pl.col("id") == 1)
+            camera = np.array(LensTable.from_pb(reader.first(T.PTZ_LENS_TABLE)).camera_position, float)
+            per = {}
+            for ckey, _, reinit, lost in CONFIGS:
+                res = replay(ReplayRequest(log=log, tracker="golf", config=GolfConfig(landing_reinit=reinit, lost_search=lost)))
+                m, frames = run_metrics(res.trajectory, gt, camera, info["landing_frame"])
+                m["digest"] = res.digest
+                m["fps"] = res.frames / res.seconds if res.seconds > 0 else float("nan")
+                per[ckey] = (m, frames, res.trajectory)
+                if reinit:
+                    ev = landing_events(log, GolfConfig(landing_reinit=reinit, lost_search=lost), gt, info)
+                    replayed = dict(zip(res.trajectory["frame"].to_list(), res.trajectory["status"].to_list()))
+                    if any(replayed.get(k) != v for k, v in ev["statuses"].items() if v is not None):
+                        raise SystemExit(f"{key} {ckey}: the step-by-step run differs from the replay")
+                    m["events"], m["contact_error_m"] = ev["events"], ev["contact_error_m"]
+            # ball not visible in the 30 frames after the landing (it hops out of the tight shot)
+            land = info["landing_frame"]
+            out_after = 0 if land is None else gt.filter((pl.col("frame") >= land) & (pl.col("frame") < land + 30) & ~pl.col("visible")).height
+            results[key] = {"desc": desc, "info": info, "per": per, "out_after": out_after, "log": log, "gt": gt, "camera": camera}
+            m = per["R+C"][0]
+            print(f"{key:9s} det5 {pct(m['detected']):>7s}  rmse {fmt(m['rmse']):>7s}  los {fmt(m['los_median'], '.4f')} deg  "
+                  f"reacquire " + " / ".join(f"{c}:{reac(per[c][0]['reacquire'])}" for c, *_ in CONFIGS)
+                  + f"  filled {pct(m['completeness'])}  ({m['fps']:.0f} fps)", flush=True)
+
+        # figures from seed 0
+        s0 = results["seed0"]
+        error_plot(HERE / "golf_synthetic.png", {k: v[1] for k, v in s0["per"].items()}, s0["info"],
+                   "Golf tracker, synthetic tee shot seed 0 (720p): centre error per frame")
+        traj_path = workdir / "golf-seed0-traj.parquet"
+        write_trajectory(fill_gaps(s0["per"]["R+C"][2], "linear", max_gap=MAX_GAP), traj_path)
+        overlays = overlay_images(s0["log"], traj_path, s0["info"], s0["gt"], s0["camera"])
+        write_report(results, overlays)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    print(f"wrote {HERE / 'golf_synthetic.md'}")
+    return 0
+
+
+def span(values: list[float], spec: str) -> str:
+    lo, hi = min(values), max(values)
+    return format(lo, spec) if format(lo, spec) == format(hi, spec) else f"{format(lo, spec)}–{format(hi, spec)}"
+
+
+def findings(results: dict[str, dict]) -> str:
+    """The prose under the tables: numbers from this run; the frame-level reading (which frames,
+    why) was checked on the frames and per-frame tables of the run that wrote this page."""
+    seeds = [results[k]["per"]["R+C"][0] for k in ("seed0", "seed1", "seed2")]
+    s0 = results["seed0"]["per"]
+    bouncing = [k for k, r in results.items() if len(r["info"]["bounce_times"]) > 1]
+    with_pose = [k for k in results if results[k]["per"]["R+S"][0].get("events")]
+    gain_s = [(results[k]["per"]["-+S"][0]["reacquire"] or 999) - (results[k]["per"]["R+S"][0]["reacquire"] or 999) for k in bouncing]
+    dist = [ev[2] for k in with_pose for ev in results[k]["per"]["R+S"][0]["events"][:1] if ev[2] is not None]
+    nb = results["nobounce"]["per"]
+    beside = results["beside"]["per"]["R+C"][0]
+    occl = results["occl"]["per"]["R+C"][0]
+    enc = results["encdrop"]["per"]
+    return "\n".join([
+        "### What the numbers say",
+        "",
+        f"- **Accuracy while it has the ball.** On the three 720p seeds {span([100 * m['detected'] for m in seeds], '.1f')} % of",
+        f"  the visible frames are measured within {DETECT_PX:g} px, with a median error of {span([m['median'] for m in seeds], '.2f')} px",
+        "  (sub-pixel: the blob centroid of a 2-10 px ball). The RMSE of the measured frames",
+        f"  ({span([m['rmse'] for m in seeds], '.1f')} px) is set by a handful of wrong blobs measured near the bounces, not by the",
+        f"  ordinary frames. The lines of sight are within {span([m['los_median'] for m in seeds], '.4f')}° (median) of the true",
+        "  direction, which is the level of the encoder noise and quantisation the synthetic log adds. After",
+        f"  linear gap filling (≤ {MAX_GAP} frames) {span([100 * m['completeness'] for m in seeds], '.1f')} % of the visible frames have a",
+        f"  position within {FILLED_PX:g} px. The scene seed changes the course, clouds, distractors and encoder noise but not",
+        "  the flight, so the three seeds are one shot under three renderings; `launch2` and `beside` are",
+        "  different shots.",
+        "- **Where it lets go** (seed 0, the plot; the same on every shot filmed from behind): (1) *launch*,",
+        "  frames 16-45: the ball leaves the tee at more than 100 px/frame, the simulated operator lags, the",
+        "  ball is out of the top of the picture on frames 18-21, blobs ~200 px from the ball are measured",
+        "  on frames 22-23 and 30-32, and the ball is only found again at frame 45, when the operator has it",
+        "  back in the centre (`lost_search=\"centre\"`); (2) *first bounce*, frame 181: at 20x zoom the 2 m hop",
+        "  crosses the picture at ~110 px/frame as a faint motion-blurred streak that the colour LUT does not",
+        "  pass, and leaves the top of the picture on frames 184-189; nothing is extracted until the ball",
+        "  slows near the top of the hop (frame 198); (3) *second bounce*, frame 218: the same, about ten",
+        "  frames. In between, in flight and while rolling, it holds the ball to a pixel.",
+        "- **The paper's claim (landing re-initialisation recovers the ball after the bounce) is not",
+        "  reproduced on these shots.** The EKF's predicted ground contact is good: the particles are",
+        f"  re-initialised {span(dist, '.0f')} px from the true ball in the landing frame in every run with encoders (table",
+        "  above). But on the bouncing shots the ball cannot be extracted in the frames that follow (streak,",
+        "  then out of the picture), and the re-initialised cloud at the contact point is no better placed",
+        "  than the diffused one when the ball comes back: with the paper's mechanism alone (`stay`),",
+        f"  re-initialisation shortens the re-acquisition by {min(gain_s):+d} to {max(gain_s):+d} frames over the {len(bouncing)} bouncing runs",
+        f"  (R+S: {span([results[k]['per']['R+S'][0]['reacquire'] or 999 for k in bouncing], 'd')} frames; the +4 is `beside`). It does help where",
+        f"  the ball does not hop: `bounce=False`, {reac(nb['R+S'][0]['reacquire'])} frames with it vs {reac(nb['-+S'][0]['reacquire'])} without",
+        f"  (stay). What actually recovers the ball is our centre search ({span([results[k]['per']['R+C'][0]['reacquire'] or 999 for k in results], 'd')} frames on every",
+        "  run, with or without re-initialisation): the operator brings the ball back to the middle of the",
+        "  picture. How much of this is the simulation (operator lag, blur model, hop height vs zoom) and how",
+        "  much would hold on real broadcast footage we cannot say from synthetic data.",
+        f"- **Variants.** The camera cut at 4 s (3x zoom-out, ball thrown off-centre) costs about 25 frames",
+        "  (lost 120-133, briefly found, lost again 136-144). Behind the tree (`occlusion`) the tracker does",
+        f"  not know the ball is hidden: it reports `measured` on {occl['false_measured']} of the {occl['hidden']} frames where the",
+        "  ball is not visible (hidden, or out of the picture; blobs 60-150 px away); the visible-frame",
+        "  metrics do not see these, the last column of the first table counts them.",
+        "  With the encoders off around the landing (`encoder_dropout`), no landing re-initialisation can",
+        "  fire (no pose for the EKF's contact point, and the image-space parabola is only used when the EKF",
+        "  never started), so R+S and -+S are the same run (same digest); the EKF's last contact prediction",
+        f"  before the dropout was {fmt(enc['R+S'][0].get('contact_error_m'), '.0f')} m off. 1080p behaves like 720p",
+        f"  ({pct(results['1080p']['per']['R+C'][0]['detected'])} detected). From `beside` the tee the synthetic annotator",
+        "  marks no ball on the tee (a distractor is too close), so the track only starts at the first sky",
+        f"  mark, frame {beside['start']}: the low detection rate ({pct(beside['detected'])}) is those first {beside['start']} frames; from there",
+        "  it behaves like the shots from behind.",
+    ])
+
+
+OVERLAY_TEXT = """The lines of sight are stored per frame, so the whole track can be drawn into any later pose
+without depth. In the wide frame (30, while the tracker is still lost after the launch) the tracked
+flight (gold; orange where it lies on the magenta truth) follows the true arch; the gold triangle
+beside the apex is the wrong blobs and drifting predictions of frames 16-45 described above. In
+the last frame, at about 15x that focal length, the descent comes in from the top, the first hop is
+the tall arch, the later hops and the roll end at the ball at rest (red circle), and the gold lies
+on the truth through all of it. The long vertical gold/blue lines are the launch: the tee, 10 m in
+front of the camera, projects far below this view, so the segments from the tee to the first
+in-flight points cross the picture; the short gold/blue branch below the landing is the
+predictions drifting down after the second bounce (frames 219-222) and their interpolation."""
+
+
+def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]]) -> None:
+    L = [
+        "# Golf-ball tracker on synthetic tee shots (seed 000)",
+        "",
+        "Generated by `python docs/golf_synthetic.py` (from the repository root; about 4-5 minutes on",
+        "one core, most of it rendering the shots). Every number below is deterministic: scene seeds as",
+        "listed, replay seed 0; the digest column is the replay digest (`trackreplay replay ... --expect-digest`).",
+        "",
+        "**Shots.** `trackreplay synth golf-teeshot`: a 46 m/s drive (apex ~24 m, carry ~149 m) filmed from",
+        "behind the tee by a simulated operator with a 20x lens, noisy quantised PTZ encoders, motion blur,",
+        "JPEG q90 and distractors (tee markers, spare balls, a bird). The tracker builds its sky and ground",
+        "LUTs from the log's own `/annotations/init` boxes (three on sky, three on ground; two of the ground",
+        "boxes are on frames *after* the landing, so the ground LUT has seen the ball on the landing area's",
+        "turf) and starts from the box on frame 0.",
+        "",
+        "**Metrics** (all over the frames where the ball is visible, i.e. in the image and not hidden):",
+        "",
+        f"- *detected*: status `measured` and within {DETECT_PX:g} px of the true centre; *measured*: status",
+        "  `measured` at all (the rest is `predicted` or `lost`);",
+        "- *RMSE / median*: centre error over the measured frames (a wrong blob counts with its full error);",
+        "- *LOS error*: angle between the trajectory's `(dx, dy, dz)` and the true direction from the lens",
+        "  table's camera position to the true ball `X, Y, Z`, on measured frames (these lines of sight are",
+        "  computed from the *noisy, quantised* encoder readings, so they include the encoder error);",
+        f"- *re-acquire*: first frame at or after the landing frame (first ground contact) with a measured",
+        f"  estimate within {DETECT_PX:g} px, minus the landing frame (0 = never lost it; `never` = not within the log);",
+        f"- *filled*: after `fill_gaps(traj, \"linear\", max_gap={MAX_GAP})`, share of visible frames with a",
+        f"  position within {FILLED_PX:g} px.",
+        "",
+        "## 1. Default configuration (landing re-initialisation on, `lost_search=\"centre\"`)",
+        "",
+        "| run | frames | visible | track starts | landing frame | ball px at landing | not visible in 30 frames after landing | detected ≤5 px | measured | RMSE px | median px | LOS error median / p95 (°) | re-acquire (frames) | filled ≤10 px | `measured` while not visible | digest |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for key, r in results.items():
+        info, m = r["info"], r["per"]["R+C"][0]
+        dia = info["ball_diameter_px_at_landing"]
+        L.append(
+            f"| {r['desc']} | {info['frames']} | {m['visible']} | {fmt(m['start'], 'd')} | {fmt(info['landing_frame'], 'd')} | {fmt(dia, '.1f')} | "
+            f"{r['out_after']} | {pct(m['detected'])} | {pct(m['measured_share'])} | {fmt(m['rmse'], '.1f')} | "
+            f"{fmt(m['median'], '.2f')} | {fmt(m['los_median'], '.4f')} / {fmt(m['los_p95'], '.4f')} | "
+            f"{reac(m['reacquire'])} | {pct(m['completeness'])} | {m['false_measured']} of {m['hidden']} | `{m['digest'][:16]}` |"
+        )
+    L += [
+        "",
+        "## 2. Landing re-initialisation and lost search: frames to re-acquire after the first bounce",
+        "",
+        "`R` = `landing_reinit=True` (paper §2.3: the 3-D EKF's predicted ground contact re-initialises the",
+        "particles), `-` = off; `C` = `lost_search=\"centre\"` (ours: once lost, respread the particles over",
+        "the picture's centre every frame), `S` = `\"stay\"` (paper only: keep diffusing where the ball was",
+        "last predicted). **R+S vs -+S is the test of the paper's claim**; R+C vs -+C is the same test with",
+        "our extra recovery in place.",
+        "",
+        "| run | re-acquire R+C | -+C | R+S | -+S | detected R+C | -+C | R+S | -+S | filled R+C | -+C | R+S | -+S |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for key, r in results.items():
+        per = r["per"]
+        keys = [c for c, *_ in CONFIGS]
+        L.append(f"| {r['desc']} | " + " | ".join(reac(per[c][0]["reacquire"]) for c in keys) + " | "
+                 + " | ".join(pct(per[c][0]["detected"]) for c in keys) + " | "
+                 + " | ".join(pct(per[c][0]["completeness"]) for c in keys) + " |")
+    L += [
+        "",
+        "Where the landing re-initialisation fired (stepping the same tracker with the same seed and",
+        "reading its intermediates; the per-frame status is checked equal to the replay's): frame,",
+        "distance from the re-initialisation point to the true ball in that frame, and the distance on",
+        "the ground between the EKF's last predicted contact point before the landing and the true one.",
+        "",
+        "| run | landing frame | R+C: re-inits (frame: px from ball) | R+S: re-inits (frame: px from ball) | EKF contact error before landing (m) |",
+        "|---|---|---|---|---|",
+    ]
+    for key, r in results.items():
+        per = r["per"]
+
+        def evs(c: str) -> str:
+            ev = per[c][0].get("events", [])
+            return ", ".join(f"{f} ({kind.replace('_', ' ')}): {fmt(d, '.0f')}" for f, kind, d in ev) or "none"
+
+        L.append(f"| {r['desc']} | {fmt(r['info']['landing_frame'], 'd')} | {evs('R+C')} | {evs('R+S')} | "
+                 f"{fmt(per['R+S'][0].get('contact_error_m'), '.1f')} |")
+    L += ["", "RESULTS_TEXT", "", "![per-frame centre error, seed 0](golf_synthetic.png)", "",
+          "## 3. Overlay: the stored lines of sight drawn into other frames", "",
+          "The default run on seed 0, gap-filled (`linear`, 15 frames), exported to Parquet and drawn with",
+          "`trackreplay overlay golf-seed0.mcap golf-seed0-traj.parquet --frame N --out overlay.png`",
+          "(gold: measured/predicted points and segments, light blue: interpolated segments).", ""]
+    for name, frame, msg in overlays:
+        what = {"early": "the widest frame in flight", "late": "the last frame (ball at rest, zoomed on the landing area)",
+                "landing": "enlarged"}[name]
+        L += [f"**Frame {frame}**, {what}: {msg}", "", f"![overlay frame {frame}, {name}](golf_synthetic_overlay_{name}.png)", ""]
+    L += ["OVERLAY_TEXT", "", "## Full digests", "", "| run | config | digest |", "|---|---|---|"]
+    for key, r in results.items():
+        for c, label, *_ in CONFIGS:
+            L.append(f"| {key} | {label} | `{r['per'][c][0]['digest']}` |")
+    L.append("")
+    text = "\n".join(L)
+    text = text.replace("RESULTS_TEXT", findings(results)).replace("OVERLAY_TEXT", OVERLAY_TEXT)
+    (HERE / "golf_synthetic.md").write_text(text)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
