@@ -2,14 +2,19 @@
 
     python docs/golf_real.py        (needs matplotlib: pip install -e '.[docs]')
 
-Records ../shared/data/real/golf_broadcast_approach/demo.mp4 to MCAP, marks the ball on four early
-frames with `annotate` (what a user would click), replays the golf tracker (image coordinates
-only) and compares with the hand-checked positions in docs/data/golf_broadcast_reference.csv.
-Writes docs/golf_real.md, docs/golf_real_error.png and docs/golf_real_frames.jpg.
+Records ../shared/data/real/golf_broadcast_approach/demo.mp4 to MCAP (JPEG) with `trackreplay
+record`, marks the ball on four early frames with `trackreplay annotate --from-csv` (the boxes a
+user would click), replays the golf tracker with `trackreplay replay` (image coordinates only: the
+clip has no encoders) and compares with the hand-checked positions in
+docs/data/golf_broadcast_reference.csv. Writes docs/golf_real.md, docs/golf_real_error.png (distance
+per frame) and docs/golf_real_frames.png (contact sheet). Skips with a message when the clip is
+absent. Deterministic: replay seed 0; the pictures come from stepping the same tracker with the
+same seed (checked equal to the CLI replay), which also gives the silhouettes drawn in them.
 """
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 import tempfile
@@ -27,23 +32,34 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from replay.frames import FrameTopics, iter_frames  # noqa: E402
+from replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
+from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
 from replay.reader import LogReader  # noqa: E402
+from trackers.golf.config import GolfConfig  # noqa: E402
+from trackers.golf.tracker import GolfTracker  # noqa: E402
 
-VIDEO = ROOT.parent / "shared" / "data" / "real" / "golf_broadcast_approach" / "demo.mp4"
+CLIP_DIR = ROOT.parent / "shared" / "data" / "real" / "golf_broadcast_approach"
+VIDEO = CLIP_DIR / "demo.mp4"
 REFERENCE = HERE / "data" / "golf_broadcast_reference.csv"
+# Top-left x, y, width, height of the boxes a user clicks on the ball (label "ball").
 MARKS = "frame,x,y,w,h\n12,343,177,6,6\n16,329,179,6,6\n20,313,201,6,6\n30,296,251,6,6\n"
-SHEET_FRAMES = (12, 24, 32, 40, 60, 90, 120, 150, 170, 190, 200, 206)
+SHEET_FRAMES = (12, 22, 24, 35, 70, 105, 112, 130, 150, 180, 200, 206)
+TILE = 220
+MAX_PNG_BYTES = 400_000
+CONFIGS = [("re-init + centre (default)", True, "centre"), ("no re-init + centre", False, "centre"),
+           ("re-init + stay (paper)", True, "stay"), ("no re-init + stay", False, "stay")]
 
 
-def cli(*args: str) -> str:
-    proc = subprocess.run([sys.executable, "-m", "replay.cli", *args], cwd=ROOT, capture_output=True, text=True)
+def cli(*args: str) -> tuple[str, str]:
+    """Run ``trackreplay ARGS``; (stdout, stderr)."""
+    proc = subprocess.run([sys.executable, "-m", "replay.cli", *args], cwd=ROOT, capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT)))
     if proc.returncode != 0:
-        raise SystemExit(f"trackreplay {' '.join(args)} failed: {proc.stderr.strip()}")
-    return proc.stdout + proc.stderr
+        raise SystemExit(f"trackreplay {' '.join(args[:1])} failed: {proc.stderr.strip()}")
+    return proc.stdout, proc.stderr
 
 
-def longest_run(ok: np.ndarray, frames: np.ndarray, start: int) -> int:
+def held_from(ok: np.ndarray, frames: np.ndarray, start: int) -> int:
     """Consecutive reference frames from ``start`` on which ``ok`` holds."""
     run = 0
     for f, good in zip(frames, ok):
@@ -55,107 +71,347 @@ def longest_run(ok: np.ndarray, frames: np.ndarray, start: int) -> int:
     return run
 
 
+def compare(traj: pl.DataFrame, ref: pl.DataFrame) -> pl.DataFrame:
+    est = traj.filter(pl.col("track_id") == 1).select("frame", pl.col("x").alias("ex"), pl.col("y").alias("ey"), "status")
+    j = ref.join(est, on="frame", how="left").sort("frame")
+    return j.with_columns((((pl.col("ex") - pl.col("x")) ** 2 + (pl.col("ey") - pl.col("y")) ** 2).sqrt()).alias("dist"))
+
+
+def category(status: str | None, d: float | None) -> str:
+    if status is None or status == "lost":
+        return "lost (no position)"
+    if status == "predicted":
+        return "predicted"
+    return "measured ≤ 5 px" if d <= 5 else ("measured 5-10 px" if d <= 10 else "measured > 10 px")
+
+
+def segments(j: pl.DataFrame) -> list[tuple[int, int, str, float, float]]:
+    """Runs of consecutive reference frames in the same category, with their distance range."""
+    out: list[list] = []
+    for f, s, d in zip(j["frame"], j["status"], j["dist"]):
+        c = category(s, d)
+        if out and out[-1][2] == c and out[-1][1] == f - 1:
+            out[-1][1] = f
+            if d is not None:
+                out[-1][3], out[-1][4] = min(out[-1][3], d), max(out[-1][4], d)
+        else:
+            out.append([f, f, c, d if d is not None else np.inf, d if d is not None else -np.inf])
+    return [tuple(x) for x in out]
+
+
+def step_through(log: Path, ref: pl.DataFrame) -> tuple[dict[int, dict], tuple[str, ...]]:
+    """The same run as the CLI (same seed), keeping per frame what the pictures and the text need:
+    status, re-initialisation, gate targets, particle spread and mean, and the blob nearest to the
+    reference centre (area, circularity, gate verdict)."""
+    where = {int(r["frame"]): (r["x"], r["y"]) for r in ref.iter_rows(named=True)}
+    reader = LogReader(log)
+    topics = FrameTopics.detect(reader)
+    config = GolfConfig()
+    tracker = GolfTracker(config, tracker_rng(0, "golf"))
+    tracker.prepare(marked_images(reader, topics))
+    keep: dict[int, dict] = {}
+    for frame in iter_frames(reader, topics):
+        states = tracker.step(frame)
+        im = tracker.intermediates
+        row = {"status": states[0].status if states else None, "reinit": im.reinit, "blobs": len(im.blobs),
+               "target_area": float(im.targets[0]), "target_circ": float(im.targets[1]),
+               "spread": float(np.max(im.spread)) if im.spread.size else np.nan, "ball_blob": None, "cloud_off": np.nan}
+        if frame.index in where and states:
+            rx, ry = where[frame.index]
+            row["cloud_off"] = float(np.hypot(im.predicted[0] - rx, im.predicted[1] - ry))
+            if len(im.blobs):
+                near = int(np.argmin(np.hypot(im.blobs[:, 0] - rx, im.blobs[:, 1] - ry)))
+                b = im.blobs[near]
+                if np.hypot(b[0] - rx, b[1] - ry) <= 3:
+                    row["ball_blob"] = (float(b[2]), float(b[3]), im.blob_reasons[int(b[5])])
+        if frame.index in SHEET_FRAMES:
+            row.update(image=frame.image.copy(), silhouette=im.silhouette.copy(), offset=im.silhouette_offset.copy(),
+                       est=None if not states or states[0].x is None else (states[0].x, states[0].y))
+        keep[frame.index] = row
+    return keep, tracker.luts.names
+
+
+def contact_sheet(steps: dict[int, dict], j: pl.DataFrame, path: Path) -> tuple[int, int, int]:
+    by_frame = {int(r["frame"]): r for r in j.iter_rows(named=True)}
+    tiles = []
+    for k in SHEET_FRAMES:
+        s, r = steps[k], by_frame[k]
+        half = int(max(20, 1.6 * max(r["w"], r["h"]) + 8))  # the crop grows with the ball
+        cx, cy = int(round(r["x"])), int(round(r["y"]))
+        image = s["image"]
+        x0, y0 = int(np.clip(cx - half, 0, image.shape[1] - 2 * half)), int(np.clip(cy - half, 0, image.shape[0] - 2 * half))
+        crop = image[y0:y0 + 2 * half, x0:x0 + 2 * half].copy()
+        # silhouette pixels (what the colour LUT passed) tinted magenta
+        sil = np.zeros(crop.shape[:2], bool)
+        m, (ox, oy) = s["silhouette"].astype(bool), s["offset"]
+        ys, xs = np.nonzero(m)
+        xs, ys = xs + ox - x0, ys + oy - y0
+        inside = (xs >= 0) & (ys >= 0) & (xs < crop.shape[1]) & (ys < crop.shape[0])
+        sil[ys[inside], xs[inside]] = True
+        crop[sil] = (0.4 * crop[sil] + 0.6 * np.array([255, 0, 255])).astype(np.uint8)
+        scale = TILE / crop.shape[0]
+        tile = cv2.resize(crop, (TILE, TILE), interpolation=cv2.INTER_NEAREST)
+
+        def at(x: float, y: float) -> tuple[int, int]:
+            return int(round((x - x0 + 0.5) * scale)), int(round((y - y0 + 0.5) * scale))
+
+        radius = max(6, int(round(0.5 * max(r["w"], r["h"]) * scale)) + 4)
+        cv2.circle(tile, at(r["x"], r["y"]), radius, (0, 220, 0), 1, cv2.LINE_AA)
+        if s["est"] is not None:
+            colour = (0, 0, 255) if s["status"] == "measured" else (0, 165, 255)
+            ex, ey = at(*s["est"])
+            if 0 <= ex < TILE and 0 <= ey < TILE:
+                cv2.drawMarker(tile, (ex, ey), colour, cv2.MARKER_CROSS, 16, 2, cv2.LINE_AA)
+            else:  # off the crop: an arrow from the centre towards it
+                c = np.array([TILE / 2, TILE / 2])
+                d = np.array([ex, ey]) - c
+                tip = c + d / np.abs(d).max() * (TILE / 2 - 6)
+                cv2.arrowedLine(tile, tuple(int(v) for v in c + d / np.linalg.norm(d) * 30), tuple(int(v) for v in tip),
+                                colour, 2, cv2.LINE_AA, tipLength=0.2)
+        dist = "-" if r["dist"] is None else f"{r['dist']:.1f} px"
+        label = f"{k} {s['status'] or 'none'} {dist}"
+        cv2.rectangle(tile, (0, 0), (TILE, 20), (30, 30, 30), -1)
+        cv2.putText(tile, label, (4, 15), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA)
+        cv2.putText(tile, f"x{scale:.1f}", (TILE - 40, TILE - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.4, (255, 255, 255), 1, cv2.LINE_AA)
+        tiles.append(cv2.copyMakeBorder(tile, 2, 2, 2, 2, cv2.BORDER_CONSTANT, value=(0, 0, 0)))
+    grid = np.vstack([np.hstack(tiles[i:i + 4]) for i in range(0, len(tiles), 4)])
+    ok, buf = cv2.imencode(".png", grid, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    if len(buf) > MAX_PNG_BYTES:
+        grid = cv2.resize(grid, None, fx=0.75, fy=0.75, interpolation=cv2.INTER_AREA)
+        ok, buf = cv2.imencode(".png", grid, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    path.write_bytes(buf.tobytes())
+    return grid.shape[1], grid.shape[0], len(buf)
+
+
+def error_plot(j: pl.DataFrame, path: Path) -> None:
+    f = j["frame"].to_numpy()
+    d = j["dist"].fill_null(np.nan).to_numpy().astype(float)
+    st = j["status"].fill_null("none").to_numpy()
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    ax.axvspan(24.5, 40.5, color="0.88", lw=0, label="landing and first hop (by eye)")
+    ax.axvspan(206.5, 211, color="#f3d9a4", lw=0, label="ball drops into the hole (~207)")
+    m, p = st == "measured", st == "predicted"
+    ax.semilogy(f[m], np.clip(d[m], 0.05, None), ".", ms=4, color="tab:blue", label="measured")
+    ax.semilogy(f[p], np.clip(d[p], 0.05, None), "x", ms=4, color="tab:orange", label="predicted")
+    lost = (st == "lost") | (st == "none")
+    ax.plot(f[lost], np.full(lost.sum(), 300.0), "|", ms=10, color="tab:red", label="lost (no position)")
+    ax.plot(f, 0.5 * np.maximum(j["w"].to_numpy(), j["h"].to_numpy()), "-", color="0.4", lw=0.8,
+            label="reference ball radius (blob)")
+    ax.axhline(5, color="0.5", lw=0.6, ls="--")
+    ax.axhline(10, color="0.5", lw=0.6, ls=":")
+    ax.set_ylim(0.05, 500)
+    ax.set_xlim(10, 211)
+    ax.set_xlabel("frame (dashed: 5 px, dotted: 10 px)")
+    ax.set_ylabel("distance to reference (px)")
+    ax.set_title("Golf tracker on a real broadcast approach shot (no encoders, default config)", fontsize=10)
+    ax.legend(fontsize=7, loc="upper left", ncol=3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+
+
 def main() -> int:
     if not VIDEO.is_file():
-        print(f"{VIDEO} is absent; nothing to do")
+        print(f"{CLIP_DIR} (demo.mp4) is absent: skipping the real-clip evidence", file=sys.stderr)
         return 0
     ref = pl.read_csv(REFERENCE, comment_prefix="#")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         (tmp / "marks.csv").write_text(MARKS)
-        cli("record", str(tmp / "clip.mcap"), "--video", str(VIDEO), "--quiet")
-        cli("annotate", str(tmp / "clip.mcap"), "--from-csv", str(tmp / "marks.csv"), "--label", "ball", "--out", str(tmp / "marked.mcap"))
-        out = cli("replay", str(tmp / "marked.mcap"), "--tracker", "golf", "--export", str(tmp / "traj.parquet"),
-                  "--interpolate", "none", "--quiet")
-        notice = next((line for line in out.splitlines() if line.startswith("trackreplay: golf:")), "")
-        traj = pl.read_parquet(tmp / "traj.parquet")
-        j = ref.join(traj.select("frame", pl.col("x").alias("ex"), pl.col("y").alias("ey"), "status"), on="frame", how="left")
-        frames = j["frame"].to_numpy()
-        err = np.hypot(j["ex"].to_numpy() - j["x"].to_numpy(), j["ey"].to_numpy() - j["y"].to_numpy())
-        measured = (j["status"] == "measured").fill_null(False).to_numpy()
-        ok5, ok10 = measured & (err <= 5), measured & (err <= 10)
-        # contact sheet: crops around the reference position, estimate in red, reference in green
-        reader = LogReader(tmp / "marked.mcap")
-        tiles = []
-        by_frame = {int(r["frame"]): r for r in j.iter_rows(named=True)}
-        for frame in iter_frames(reader, FrameTopics.detect(reader)):
-            if frame.index not in SHEET_FRAMES:
-                continue
-            r = by_frame[frame.index]
-            image = frame.image.copy()
-            cx, cy = int(r["x"]), int(r["y"])
-            cv2.circle(image, (cx, cy), 9, (0, 220, 0), 1, cv2.LINE_AA)
-            if r["ex"] is not None and np.isfinite(r["ex"]):
-                colour = (0, 0, 255) if r["status"] == "measured" else (0, 165, 255)
-                cv2.drawMarker(image, (int(round(r["ex"])), int(round(r["ey"]))), colour, cv2.MARKER_CROSS, 14, 1, cv2.LINE_AA)
-            y0, x0 = max(0, cy - 50), max(0, cx - 75)
-            tile = cv2.resize(image[y0 : y0 + 100, x0 : x0 + 150], (300, 200), interpolation=cv2.INTER_NEAREST)
-            cv2.putText(tile, f"{frame.index} {r['status'] or '-'}", (6, 18), cv2.FONT_HERSHEY_SIMPLEX, 0.55, (255, 255, 255), 1, cv2.LINE_AA)
-            tiles.append(tile)
-        grid = np.vstack([np.hstack(tiles[k : k + 4]) for k in range(0, len(tiles), 4)])
-        cv2.imwrite(str(HERE / "golf_real_frames.jpg"), grid, [cv2.IMWRITE_JPEG_QUALITY, 85])
-    fig, ax = plt.subplots(figsize=(10, 3.6))
-    ax.plot(frames[measured], err[measured], ".", ms=3, label="measured")
-    other = ~measured & np.isfinite(err)
-    ax.plot(frames[other], err[other], "x", ms=3, label="predicted")
-    ax.axvspan(25, 40, color="0.85", label="landing and first bounce (by eye)")
-    ax.set_yscale("log")
-    ax.set_xlabel("frame")
-    ax.set_ylabel("distance to reference [px]")
-    ax.set_title("Golf tracker on a real broadcast approach shot (no encoders)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(HERE / "golf_real_error.png", dpi=100)
-    first_fail = next((int(f) for f, good in zip(frames, ok10) if f >= 12 and not good), None)
-    lines = [
-        "# Golf tracker on a real broadcast clip",
+        log, marked, traj_path = tmp / "clip.mcap", tmp / "marked.mcap", tmp / "traj.parquet"
+        said = "\n".join(cli("record", str(log), "--video", str(VIDEO), "--encoding", "jpeg"))
+        said_record = next((line.split("\r")[-1].strip() for line in said.splitlines() if "wrote" in line), "")
+        said_record = said_record[said_record.find("wrote"):].replace(str(log), log.name)
+        said_annotate = cli("annotate", str(log), "--from-csv", str(tmp / "marks.csv"), "--label", "ball", "--out", str(marked))[0].strip()
+        out = "\n".join(cli("replay", str(marked), "--tracker", "golf", "--export", str(traj_path), "--interpolate", "none", "--quiet"))
+        notice = next((line.strip() for line in out.splitlines() if line.startswith("trackreplay: golf:")), "(no notice)")
+        digest = next((line.split("digest ")[1].strip() for line in out.splitlines() if "digest " in line), "?")
+        traj = pl.read_parquet(traj_path)
+        j = compare(traj, ref)
+        steps, lut_names = step_through(marked, ref)
+        same = all(steps[int(f)]["status"] == s for f, s in zip(traj["frame"], traj["status"]))
+        if not same:
+            raise SystemExit("the step-through differs from the CLI replay")
+        variants = []
+        for label, reinit, lost in CONFIGS:
+            res = replay(ReplayRequest(log=marked, tracker="golf", config=GolfConfig(landing_reinit=reinit, lost_search=lost)))
+            variants.append((label, compare(res.trajectory, ref), res.digest))
+        sheet = contact_sheet(steps, j, HERE / "golf_real_frames.png")
+    error_plot(j, HERE / "golf_real_error.png")
+    write_report(j, steps, variants, notice, digest, said_record, said_annotate, sheet, lut_names)
+    return 0
+
+
+def fmt_range(j: pl.DataFrame, a: int, b: int) -> str:
+    d = j.filter((pl.col("frame") >= a) & (pl.col("frame") <= b))["dist"].drop_nulls().to_numpy()
+    if not d.size:
+        return "-"
+    return f"{d.min():.1f}" if d.max() - d.min() < 0.05 else f"{d.min():.1f}-{d.max():.1f}"
+
+
+def blob_range(steps: dict[int, dict], a: int, b: int, col: int, spec: str) -> str:
+    v = [steps[k]["ball_blob"][col] for k in range(a, b + 1) if steps[k]["ball_blob"] is not None]
+    return "-" if not v else f"{format(min(v), spec)}-{format(max(v), spec)}"
+
+
+def spread_range(steps: dict[int, dict], a: int, b: int) -> str:
+    v = [steps[k]["spread"] for k in range(a, b + 1)]
+    return f"{min(v):.0f}-{max(v):.0f}"
+
+
+def cloud_max(steps: dict[int, dict], a: int, b: int) -> float:
+    return max(steps[k]["cloud_off"] for k in range(a, b + 1))
+
+
+def shares(j: pl.DataFrame) -> tuple[float, float, float, float]:
+    n = j.height
+    meas = (j["status"] == "measured").fill_null(False).to_numpy()
+    d = j["dist"].fill_null(np.inf).to_numpy()
+    return (meas & (d <= 5)).sum() / n, (meas & (d <= 10)).sum() / n, meas.sum() / n, (d <= 10).sum() / n
+
+
+def write_report(j, steps, variants, notice, digest, said_record, said_annotate, sheet, lut_names) -> None:
+    frames = j["frame"].to_numpy()
+    d = j["dist"].fill_null(np.inf).to_numpy()
+    meas = (j["status"] == "measured").fill_null(False).to_numpy()
+    d5, d10, measured, pos10 = shares(j)
+    held5, held10 = held_from(meas & (d <= 5), frames, 12), held_from(meas & (d <= 10), frames, 12)
+    any5, any10 = held_from(d <= 5, frames, 12), held_from(d <= 10, frames, 12)
+    landing = (frames >= 25) & (frames <= 40)
+    roll = (frames >= 41) & (frames <= 206)
+    reinits = [(k, s["reinit"]) for k, s in sorted(steps.items()) if s["reinit"] not in ("", "start")]
+    late_target = steps[206]["target_area"]
+    L = [
+        "# Golf tracker on a real broadcast clip (approach shot, no encoders)",
         "",
-        "Generated by `python docs/golf_real.py`. Input: `golf_broadcast_approach/demo.mp4` (760×388, 30 fps,",
-        "236 frames, TV broadcast: an approach shot comes down onto the green around frames 25–40, rolls,",
-        "and drops into the hole around frame 207) recorded with `trackreplay record`, the ball marked with",
-        "`trackreplay annotate --from-csv` on frames 12, 16, 20 and 30 (6×6 boxes), replayed with",
-        "`--tracker golf` (defaults). The log has no encoders, so the tracker works in image coordinates only",
-        f"and says so: `{notice.strip()}`.",
+        "Generated by `python docs/golf_real.py` (from the repository root; a few seconds). Input:",
+        "`../shared/data/real/golf_broadcast_approach/demo.mp4` (760×388, 30 fps, 236 frames, TV broadcast:",
+        "an approach shot comes down onto the green around frame 25, hops, rolls while the camera zooms in,",
+        "and drops into the hole around frame 207). What the script runs, in a temporary folder:",
         "",
-        "Reference: `docs/data/golf_broadcast_reference.csv`, the ball centre on frames 12–206 from a",
-        "nearest-bright-blob follower started by hand and checked by eye every 12th frame (not a ground truth",
-        "from the broadcaster).",
+        "```",
+        "trackreplay record clip.mcap --video demo.mp4 --encoding jpeg",
+        "trackreplay annotate clip.mcap --from-csv marks.csv --label ball --out marked.mcap",
+        "trackreplay replay marked.mcap --tracker golf --export traj.parquet --interpolate none --quiet",
+        "```",
+        "",
+        f"`record`: {said_record.replace(str(ROOT.parent), '..')}; `annotate`: {said_annotate.split(': ', 1)[-1]}",
+        "(`marks.csv`: boxes of 6×6 px at top-left (343,177) on frame 12, (329,179) on 16, (313,201) on 20,",
+        "(296,251) on 30). The tracker starts from the first mark (frame 12); all four marks feed the colour",
+        f"LUTs (built: {', '.join(lut_names)}; all four boxes are over grass). The log has no encoders and the",
+        f"tracker says so once: `{notice}`. Replay digest `{digest}` (seed 0).",
+        "",
+        "Reference: `docs/data/golf_broadcast_reference.csv`, the ball centre on frames 12-206 from a",
+        "nearest-bright-blob follower started by hand and checked by eye every 12th frame (not a",
+        "broadcaster's ground truth; on the zoomed-in frames it is the centre of the whole white ball).",
+        "",
+        "## Numbers (default configuration)",
         "",
         "| measure | value |",
         "|---|---|",
-        f"| reference frames | {len(frames)} (12–206) |",
-        f"| measured within 5 px / 10 px | {ok5.mean():.2f} / {ok10.mean():.2f} |",
-        f"| median distance of measured estimates | {np.nanmedian(err[measured]):.2f} px |",
-        f"| consecutive frames held within 10 px from frame 12 | {longest_run(ok10, frames, 12)} |",
-        f"| first reference frame not held within 10 px | {first_fail if first_fail is not None else 'none'} |",
-        f"| frames 25–40 (landing, bounce) held within 10 px | {ok10[(frames >= 25) & (frames <= 40)].sum()} of {((frames >= 25) & (frames <= 40)).sum()} |",
-        f"| frames 100–206 (roll, zoom in) held within 10 px | {ok10[frames >= 100].sum()} of {(frames >= 100).sum()} |",
+        f"| reference frames | {len(frames)} (12-206) |",
+        f"| detection rate: `measured` within 5 px / 10 px of the reference | {100 * d5:.1f} % / {100 * d10:.1f} % |",
+        f"| reported `measured` at all | {100 * measured:.1f} % |",
+        f"| any position (measured or predicted) within 10 px | {100 * pos10:.1f} % |",
+        f"| held from the first mark (frame 12), consecutive frames `measured` within 5 px / 10 px | {held5} / {held10} (frames 12-{12 + held5 - 1}) |",
+        f"| ... counting `predicted` positions too | {any5} / {any10} |",
+        f"| landing and first hop, frames 25-40: `measured` within 5 px | {(meas & (d <= 5))[landing].sum()} of {landing.sum()} |",
+        f"| roll and zoom, frames 41-206: `measured` within 5 px / 10 px | {(meas & (d <= 5))[roll].sum()} / {(meas & (d <= 10))[roll].sum()} of {roll.sum()} |",
+        f"| median distance, measured frames | {np.median(d[meas]):.2f} px |",
+        f"| re-initialisations after the start | {', '.join(f'frame {k}: {r}' for k, r in reinits) or 'none'} |",
         "",
-        "![distance to reference](golf_real_error.png)",
+        "Frame by frame (runs of consecutive reference frames in the same state; distance range in px):",
         "",
-        "Crops around the reference (green circle); red cross = measured estimate, orange = predicted:",
+        "| frames | state | distance |",
+        "|---|---|---|",
+    ]
+    for a, b, c, lo, hi in segments(j):
+        rng = "-" if not np.isfinite(lo) else (f"{lo:.1f}" if abs(hi - lo) < 0.05 else f"{lo:.1f}-{hi:.1f}")
+        L.append(f"| {a}{'' if a == b else f'-{b}'} | {c} | {rng} |")
+    L += [
         "",
-        "![frames](golf_real_frames.jpg)",
+        "![distance to the reference per frame](golf_real_error.png)",
         "",
-        "What the frames show (read off the pictures of the run that wrote this page):",
+        f"Contact sheet ({sheet[0]}×{sheet[1]}, {sheet[2] // 1000} KB): crops around the reference (green circle, its",
+        "blob size), enlarged by the factor in the corner; red cross = `measured` estimate, orange =",
+        "`predicted` (an arrow when it is off the crop); magenta = the pixels the colour LUT passed inside",
+        "the search region (the silhouette `I_c`).",
         "",
-        "- **Descent, landing and bounce (frames 12–40):** the ball is a 2–4 px speck over the green; apart",
-        "  from two frames (22–23) where the motion-blurred ball drops out of the LUT and the track is",
-        "  `predicted`, it is held to well under a pixel, through the ground contact around frame 25–30.",
-        "- **Roll (40–110):** held within a pixel while the camera pans and zooms in.",
-        "- **Around frames 111–133** the ball is lost as the camera pans faster; the particles are respread",
-        "  over the picture centre (our `lost_search = centre` addition) and for a few frames a false speck",
-        "  is `measured` about 55 px away, until the ball is re-acquired.",
-        "- **Zoomed in (150–206):** the ball grows to 20–30 px; the silhouette keeps only its sunlit upper",
-        "  side, so the estimate sits on the ball but 4–10 px up and right of the reference centroid (the",
-        "  reference itself is a bright-blob centroid, biased the other way by the shadowed side). The",
-        "  area gate follows the zoom (targets from past extractions), so the ball is never rejected.",
+        "![contact sheet](golf_real_frames.png)",
+        "",
+        "## Landing re-initialisation and lost search on this clip",
+        "",
+        "Without encoders the landing re-initialisation is the image-space parabola (`image_parabola`):",
+        "after two misses while the ball descends, the particles are re-spread around the parabola's",
+        "continuation.",
+        "",
+        "| config | `measured` ≤5 px | ≤10 px | frames 22-40 `measured` ≤5 px | first `measured` ≤5 px after frame 21 | digest |",
+        "|---|---|---|---|---|---|",
+    ]
+    for label, jj, dig in variants:
+        a5, a10, _, _ = shares(jj)
+        dd = jj["dist"].fill_null(np.inf).to_numpy()
+        mm = (jj["status"] == "measured").fill_null(False).to_numpy()
+        win = (frames >= 22) & (frames <= 40)
+        after = frames[(frames > 21) & mm & (dd <= 5)]
+        L.append(f"| {label} | {100 * a5:.1f} % | {100 * a10:.1f} % | {(mm & (dd <= 5))[win].sum()} of {win.sum()} | "
+                 f"{after.min() if after.size else 'never'} | `{dig[:16]}` |")
+    L += [
+        "",
+        "## Where and why it lets go",
+        "",
+        "Read off the contact sheet, the per-frame table, enlarged crops of every frame named and the",
+        "tracker's intermediates (blob areas, circularities and gate verdicts, particle spread), all from",
+        "the run that wrote this page:",
+        "",
+        "- **Descent (12-21):** the ball is a 3-4 px speck over the green; held to under a pixel.",
+        f"- **Just before the ground (22-23):** the ball falls 10-12 px per frame and is a faint vertical",
+        "  streak; the LUT passes nothing, and the constant-velocity particles lag above it",
+        f"  ({fmt_range(j, 22, 23)} px off, `predicted`).",
+        "- **Landing (24):** after two misses while descending, the image-space parabola re-initialises the",
+        f"  particles on the ball's continued path and the ball is measured again at once ({fmt_range(j, 24, 24)} px). This",
+        "  is the paper's landing re-initialisation, in its image-only form, doing its job on real footage:",
+        "  without it the track does not come back for the landing (table above).",
+        "- **Hop and roll (25-104):** held within a pixel while the camera pans and starts zooming in.",
+        f"- **105-110, the ball rejected in plain view:** the ball is now ~6 px and bright. Its silhouette",
+        f"  is there, in place and of the expected area ({blob_range(steps, 105, 110, 0, '.0f')} px² against a target of",
+        f"  {steps[105]['target_area']:.0f}), but ragged: the white core and the highlight only partly pass the LUT learned",
+        f"  from the 3-4 px specks, so its circularity is {blob_range(steps, 105, 110, 1, '.2f')} and the circularity gate (target",
+        f"  {steps[105]['target_circ']:.2f} - 0.35) rejects it frame after frame. The gate widens with misses for the area only, so",
+        "  the track goes `predicted` and then `lost` (110).",
+        f"- **111-132, the centre search and a slow re-convergence:** at 111 the particles are respread over",
+        "  the picture centre (`lost_search=\"centre\"`); on 112-113 and 119 the ball blob is again rejected",
+        f"  for its shape and the reported estimate (the cloud's mean) is {fmt_range(j, 112, 113)} px away. From 114 the",
+        f"  ball is measured, but the cloud stays wide (spread {spread_range(steps, 114, 127)} px, its mean up to",
+        f"  {cloud_max(steps, 114, 127):.0f} px from the ball): with σ = 6 px × 388/1080 = 2.2 px and a cloud that wide only one to",
+        "  three of the 1000 particles lie within σ of the ball, and the likelihood floor α summed over all",
+        "  the others outweighs them (they carry a few per cent of the weight), so the weights stay nearly",
+        "  uniform and the cloud closes in slowly. On 128-132 a grass speck 56-58 px above the ball passes the gates as",
+        "  well and lies nearer the (wrong) cloud mean, so it is selected; by 133 the cloud has converged.",
+        f"- **133-206, hanging on by the rim:** as the camera zooms in (ball 8-35 px) the LUT passes only a",
+        "  few pixels along the ball's upper outline (magenta in the sheet), where ball and grass blend like",
+        "  in the marked specks; the white body never passes. The selected fragments pull the gate targets",
+        f"  along: by frame 180 the target is {steps[180]['target_area']:.1f} px² and circularity {steps[180]['target_circ']:.2f} (a single pixel scores 1.27), so",
+        "  only one- or two-pixel fragments pass any more, and the estimate sits on the edge of the ball: the",
+        "  distance to the centre grows with the ball's radius (grey line in the plot), past 10 px from 202.",
+        "- **After 206:** the ball drops into the hole; the tracker goes on reporting `measured` specks on",
+        "  the cup's rim and the grass to the end of the clip (no reference there): it never notices that",
+        "  the ball is gone.",
+        "",
+        "In short: through the descent, the landing and the first hop (frames 12-40) it holds the ball",
+        "except for the two streaked frames 22-23, which the image-space landing re-initialisation bridges;",
+        "it holds the roll to a pixel until the zoom makes the ball several times larger than the marked",
+        "specks (~frame 105); from there on the colour LUT, built once from tiny distant balls, no longer",
+        "describes the ball, the shape gate rejects what it does pass, and after the re-spread the track",
+        "survives on edge fragments. The `stay` variant does better overall here: it keeps the cloud on the",
+        "ball at 110-111 instead of re-spreading it, and so avoids the misses of 112-132;",
+        "marking the ball once more on a zoomed frame would add its colours to the LUT, but this page",
+        "keeps to the four early clicks.",
         "",
     ]
-    (HERE / "golf_real.md").write_text("\n".join(lines))
-    print("\n".join(lines[12:21]))
-    return 0
+    (HERE / "golf_real.md").write_text("\n".join(L))
+    print("\n".join(L[26:38]))
+    print(f"wrote {HERE / 'golf_real.md'}")
 
 
 if __name__ == "__main__":

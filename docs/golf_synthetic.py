@@ -264,6 +264,8 @@ def overlay_images(log: Path, traj_path: Path, info: dict, gt: pl.DataFrame, cam
                 after = ok & (path["frame"].to_numpy() >= info["landing_frame"] - 3)
                 x0, y0 = np.floor(pts[after].min(axis=0)).astype(int) - 40
                 x1, y1 = np.ceil(pts[after].max(axis=0)).astype(int) + 40
+                grow = max(0, int(0.75 * (y1 - y0)) - (x1 - x0)) // 2  # at least 3:4, for context
+                x0, x1 = x0 - grow, x1 + grow
                 x0, y0 = max(x0, 0), max(y0, 0)
                 x1, y1 = min(x1, image.shape[1]), min(y1, image.shape[0])
                 crop = image[y0:y1, x0:x1]
@@ -395,7 +397,7 @@ def findings(results: dict[str, dict]) -> str:
         "  then out of the picture), and the re-initialised cloud at the contact point is no better placed",
         "  than the diffused one when the ball comes back: with the paper's mechanism alone (`stay`),",
         f"  re-initialisation shortens the re-acquisition by {min(gain_s):+d} to {max(gain_s):+d} frames over the {len(bouncing)} bouncing runs",
-        f"  (R+S: {span([results[k]['per']['R+S'][0]['reacquire'] or 999 for k in bouncing], 'd')} frames; the +4 is `beside`). It does help where",
+        f"  (R+S: {span([results[k]['per']['R+S'][0]['reacquire'] or 999 for k in bouncing], 'd')} frames; the largest gain is `{bouncing[int(np.argmax(gain_s))]}`). It does help where",
         f"  the ball does not hop: `bounce=False`, {reac(nb['R+S'][0]['reacquire'])} frames with it vs {reac(nb['-+S'][0]['reacquire'])} without",
         f"  (stay). What actually recovers the ball is our centre search ({span([results[k]['per']['R+C'][0]['reacquire'] or 999 for k in results], 'd')} frames on every",
         "  run, with or without re-initialisation): the operator brings the ball back to the middle of the",
@@ -408,8 +410,8 @@ def findings(results: dict[str, dict]) -> str:
         "  metrics do not see these, the last column of the first table counts them.",
         "  With the encoders off around the landing (`encoder_dropout`), no landing re-initialisation can",
         "  fire (no pose for the EKF's contact point, and the image-space parabola is only used when the EKF",
-        "  never started), so R+S and -+S are the same run (same digest); the EKF's last contact prediction",
-        f"  before the dropout was {fmt(enc['R+S'][0].get('contact_error_m'), '.0f')} m off. 1080p behaves like 720p",
+        "  never started), so R+S and -+S are the same run (same digest); the EKF, coasting without updates",
+        f"  through the dropout, predicted the contact {fmt(enc['R+S'][0].get('contact_error_m'), '.0f')} m off. 1080p behaves like 720p",
         f"  ({pct(results['1080p']['per']['R+C'][0]['detected'])} detected). From `beside` the tee the synthetic annotator",
         "  marks no ball on the tee (a distractor is too close), so the track only starts at the first sky",
         f"  mark, frame {beside['start']}: the low detection rate ({pct(beside['detected'])}) is those first {beside['start']} frames; from there",
@@ -442,7 +444,7 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
         "JPEG q90 and distractors (tee markers, spare balls, a bird). The tracker builds its sky and ground",
         "LUTs from the log's own `/annotations/init` boxes (three on sky, three on ground; two of the ground",
         "boxes are on frames *after* the landing, so the ground LUT has seen the ball on the landing area's",
-        "turf) and starts from the box on frame 0.",
+        "turf) and starts from the box on frame 0 (the ball on the tee; `beside`: see below).",
         "",
         "**Metrics** (all over the frames where the ball is visible, i.e. in the image and not hidden):",
         "",
