@@ -138,9 +138,9 @@ class GolfTracker:
 
     name = "golf"
 
-    def __init__(self, config: GolfConfig | None = None, rng: np.random.Generator | None = None) -> None:
-        self.config = config if config is not None else GolfConfig()
-        self.rng = rng if rng is not None else np.random.default_rng(0)
+    def __init__(self, config: GolfConfig, rng: np.random.Generator) -> None:
+        self.config = config
+        self.rng = rng  # handed in by the engine: a tracker never draws its own seed
         self.luts = LutSet(self.config)
         self.pf = CondensationFilter(self.config.n_particles, self.rng)
         self.ekf = BallisticEkf(self.config)
