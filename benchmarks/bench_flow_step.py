@@ -25,10 +25,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
-from replay.bench import median_seconds  # noqa: E402
-from trackers.flow.config import FlowConfig  # noqa: E402
-from trackers.flow.refine import online_step  # noqa: E402
-from trackers.flow.velocity import histogram_edges, object_velocity  # noqa: E402
+from trackreplay.replay.bench import median_seconds  # noqa: E402
+from trackreplay.trackers.flow.config import FlowConfig  # noqa: E402
+from trackreplay.trackers.flow.refine import online_step  # noqa: E402
+from trackreplay.trackers.flow.velocity import histogram_edges, object_velocity  # noqa: E402
 
 LK_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 0.01)
 

@@ -27,14 +27,14 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
-from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from replay.bench import median_seconds  # noqa: E402
-from replay.engine import tracker_rng  # noqa: E402
-from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
-from replay.reader import LogReader  # noqa: E402
-from trackers.golf.config import GolfConfig  # noqa: E402
-from trackers.golf.particles import CondensationFilter  # noqa: E402
-from trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
+from trackreplay.replay.bench import median_seconds  # noqa: E402
+from trackreplay.replay.engine import tracker_rng  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
+from trackreplay.trackers.golf.particles import CondensationFilter  # noqa: E402
+from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
 
 
 def per_frame_costs(log: Path) -> dict:

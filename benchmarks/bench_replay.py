@@ -23,13 +23,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from replay.bench import time_replay  # noqa: E402
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
+from trackreplay.replay.bench import time_replay  # noqa: E402
 
 PEAK_RSS = """
 import resource, sys, tracemalloc
 sys.path.insert(0, {root!r})
-from replay.engine import ReplayRequest, replay
+from trackreplay.replay.engine import ReplayRequest, replay
 tracemalloc.start()
 r = replay(ReplayRequest(log={log!r}, tracker="flow"))
 print(r.frames, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, tracemalloc.get_traced_memory()[1] // 1024)
@@ -37,7 +37,7 @@ print(r.frames, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, tracemalloc.
 IMPORTS_RSS = """
 import resource, sys
 sys.path.insert(0, {root!r})
-import replay.engine, replay.registry, trackers.flow.tracker, polars, cv2
+import trackreplay.replay.engine, trackreplay.replay.registry, trackreplay.trackers.flow.tracker, polars, cv2
 print(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 """
 

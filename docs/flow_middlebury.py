@@ -18,8 +18,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from trackers.flow.config import FlowConfig
-from trackers.flow.refine import refine_flow
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.refine import refine_flow
 
 DEFAULT_DATA = Path("/work/shared/data/real/flow_middlebury/Dimetrodon")
 HERE = Path(__file__).resolve().parent

@@ -32,11 +32,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
-from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
-from replay.reader import LogReader  # noqa: E402
-from trackers.golf.config import GolfConfig  # noqa: E402
-from trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
+from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
 
 CLIP_DIR = ROOT.parent / "shared" / "data" / "real" / "golf_broadcast_approach"
 VIDEO = CLIP_DIR / "demo.mp4"
@@ -52,7 +52,7 @@ CONFIGS = [("re-init + centre (default)", True, "centre"), ("no re-init + centre
 
 def cli(*args: str) -> tuple[str, str]:
     """Run ``trackreplay ARGS``; (stdout, stderr)."""
-    proc = subprocess.run([sys.executable, "-m", "replay.cli", *args], cwd=ROOT, capture_output=True, text=True,
+    proc = subprocess.run([sys.executable, "-m", "trackreplay", *args], cwd=ROOT, capture_output=True, text=True,
                           env=dict(os.environ, PYTHONPATH=str(ROOT)))
     if proc.returncode != 0:
         raise SystemExit(f"trackreplay {' '.join(args[:1])} failed: {proc.stderr.strip()}")

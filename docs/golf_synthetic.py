@@ -37,19 +37,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from recorder.synth.golf.flight import Launch  # noqa: E402
-from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
-from replay.eval import evaluate  # noqa: E402
-from replay.export import fill_gaps, write_trajectory  # noqa: E402
-from replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
-from replay.overlay import project_trajectory  # noqa: E402
-from replay.groundtruth import read_groundtruth  # noqa: E402
-from replay.reader import LogReader  # noqa: E402
-from schemas import topics as T  # noqa: E402
-from schemas.records import LensTable  # noqa: E402
-from trackers.golf.config import GolfConfig  # noqa: E402
-from trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
+from trackreplay.replay.eval import evaluate  # noqa: E402
+from trackreplay.replay.export import fill_gaps, write_trajectory  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from trackreplay.replay.overlay import project_trajectory  # noqa: E402
+from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.schemas import topics as T  # noqa: E402
+from trackreplay.schemas.records import LensTable  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
+from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
 
 DETECT_PX = 5.0  # "detected": measured within this distance of the true centre
 FILLED_PX = 10.0  # completeness after gap filling: a position within this distance
@@ -243,7 +243,7 @@ def overlay_images(log: Path, traj_path: Path, info: dict, gt: pl.DataFrame, cam
     with tempfile.TemporaryDirectory() as tmp:
         for name, index in (("early", wide), ("late", late)):
             raw = Path(tmp) / f"overlay-{name}.png"
-            res = subprocess.run([sys.executable, "-m", "replay.cli", "overlay", str(log), str(traj_path),
+            res = subprocess.run([sys.executable, "-m", "trackreplay", "overlay", str(log), str(traj_path),
                                   "--frame", str(index), "--out", str(raw)], env=env, capture_output=True, text=True, check=True)
             image = cv2.imread(str(raw))
             frame = SimpleNamespace(index=index, camera=poses[index])

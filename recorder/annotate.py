@@ -12,10 +12,10 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 from mcap_protobuf.schema import register_schema
 
-from schemas import messages as m
-from schemas import topics as T
-from schemas.errors import SourceError
-from schemas.records import InitRegion, init_annotations_pb
+from trackreplay.schemas import messages as m
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import InitRegion, init_annotations_pb
 
 
 @dataclass(frozen=True)
@@ -80,7 +80,7 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     ``out`` may equal ``src``: the new log is written beside it and renamed over it only
     once complete, so an interruption never damages the original.
     """
-    from replay.reader import LogReader  # the reader's checks give the clear errors
+    from trackreplay.replay.reader import LogReader  # the reader's checks give the clear errors
 
     reader = LogReader(src)
     reader.require(image_topic)

@@ -5,8 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from schemas import messages as m
-from schemas.records import timestamp
+from trackreplay.schemas import messages as m
+from trackreplay.schemas.records import timestamp
 
 ENCODINGS = ("jpeg", "png", "raw")
 

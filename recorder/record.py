@@ -15,17 +15,17 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from recorder.image_codec import ENCODINGS, compressed_image, image_message
-from recorder.sources.base import FrameClock, ImageFrame, read_timestamps
-from recorder.sources.encoders import read_encoders, read_lens_table
-from recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
-from recorder.sources.images import check_count, list_images, read_images
-from recorder.sources.stereo import Calibration, StereoSource, load_calibration
-from recorder.sources.video import frame_count_hint, read_video, video_clock
-from recorder.writer import LogWriter
-from schemas import topics as T
-from schemas.errors import SourceError
-from schemas.records import GroundTruthFrame, PtzReading
+from trackreplay.recorder.image_codec import ENCODINGS, compressed_image, image_message
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_timestamps
+from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
+from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
+from trackreplay.recorder.sources.images import check_count, list_images, read_images
+from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration
+from trackreplay.recorder.sources.video import frame_count_hint, read_video, video_clock
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import GroundTruthFrame, PtzReading
 
 
 @dataclass(frozen=True)

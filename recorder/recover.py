@@ -20,7 +20,7 @@ from mcap.records import Attachment, Channel, Footer, Header, McapRecord, Messag
 from mcap.stream_reader import StreamReader
 from mcap.writer import CompressionType, Writer
 
-from schemas.errors import LogError
+from trackreplay.schemas.errors import LogError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 

@@ -13,10 +13,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from replay.decode import decode_image
-from replay.engine import ReplayRequest, replay
-from replay.frames import FrameTopics
-from replay.reader import LogReader
+from trackreplay.replay.decode import decode_image
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.frames import FrameTopics
+from trackreplay.replay.reader import LogReader
 
 
 def median_seconds(fn: Callable[[], object], repeats: int) -> float:

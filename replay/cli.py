@@ -6,7 +6,8 @@ import argparse
 import importlib
 import sys
 
-from schemas.errors import TrackreplayError
+import trackreplay
+from trackreplay.schemas.errors import TrackreplayError
 
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
 VERBS = ("record", "synth", "info", "recover", "annotate", "replay_cmd", "export", "eval_cmd", "overlay", "bench", "demo")
@@ -17,9 +18,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="trackreplay",
         description="Record camera/PTZ/stereo logs to MCAP, replay trackers deterministically, inspect in Rerun.",
     )
+    parser.add_argument("--version", action="version", version=f"trackreplay {trackreplay.__version__}")
     sub = parser.add_subparsers(dest="verb", required=True, metavar="VERB")
     for name in VERBS:
-        importlib.import_module(f"replay.commands.{name}").add_parser(sub)
+        importlib.import_module(f"trackreplay.replay.commands.{name}").add_parser(sub)
     return parser
 
 

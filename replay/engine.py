@@ -14,12 +14,12 @@ import numpy as np
 import polars as pl
 from tqdm import tqdm
 
-from replay import registry
-from replay.digest import ReplayDigest
-from replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
-from replay.prefetch import prefetch
-from replay.reader import LogReader
-from replay.trajectory import state_row, trajectory_table
+from trackreplay.replay import registry
+from trackreplay.replay.digest import ReplayDigest
+from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
+from trackreplay.replay.prefetch import prefetch
+from trackreplay.replay.reader import LogReader
+from trackreplay.replay.trajectory import state_row, trajectory_table
 
 
 def tracker_rng(seed: int, tracker: str) -> np.random.Generator:
@@ -88,7 +88,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
         tracker.prepare(marked_images(reader, topics))
     sink = None
     if req.rrd is not None:
-        from replay.rerun_sink import RerunSink
+        from trackreplay.replay.rerun_sink import RerunSink
 
         sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", entry.view.blueprint(req.tracker))
     report = BundleReport()

@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import polars as pl
 
-from schemas.errors import TrackreplayError
+from trackreplay.schemas.errors import TrackreplayError
 
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_PX = 20.0

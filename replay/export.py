@@ -8,8 +8,8 @@ import numpy as np
 import polars as pl
 from scipy.interpolate import CubicSpline
 
-from schemas.errors import TrackreplayError
-from replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order
 
 METHODS = ("linear", "cubic")
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}

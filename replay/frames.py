@@ -5,14 +5,14 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-from schemas import topics as T
-from schemas.errors import LogError
-from schemas.records import InitRegion, LensTable, PtzReading
-from trackers.frame import Frame
-from trackers.geometry.ptz import PtzCamera
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import LogError
+from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.ptz import PtzCamera
 
-from replay.decode import decode_image
-from replay.reader import LogMessage, LogReader
+from trackreplay.replay.decode import decode_image
+from trackreplay.replay.reader import LogMessage, LogReader
 
 
 @dataclass(frozen=True)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import polars as pl
 
-from schemas import topics as T
-from schemas.records import GroundTruthFrame
-from replay.reader import LogReader
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.records import GroundTruthFrame
+from trackreplay.replay.reader import LogReader
 
 GT_SCHEMA = {
     "frame": pl.Int64, "t_ns": pl.Int64, "id": pl.Int64,

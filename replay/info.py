@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 from mcap.records import Attachment, Channel, Message, Metadata, Schema
 
-from recorder.recover import RecordStream, truncation_message
-from schemas.errors import LogError, TruncatedLogError
-from schemas.messages import IMAGE_SCHEMAS
+from trackreplay.recorder.recover import RecordStream, truncation_message
+from trackreplay.schemas.errors import LogError, TruncatedLogError
+from trackreplay.schemas.messages import IMAGE_SCHEMAS
 
 ENCODER_SCHEMA = "trackreplay.PtzEncoders"
 GAP_FACTOR = 1.5  # an interval longer than this times the median is a gap

@@ -13,8 +13,8 @@ import cv2
 import numpy as np
 import polars as pl
 
-from schemas.errors import TrackreplayError
-from trackers.frame import Frame
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.frame import Frame
 
 MEASURED = (0, 215, 255)  # BGR gold
 FILLED = (255, 200, 80)  # BGR light blue

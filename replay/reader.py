@@ -16,7 +16,7 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
-from schemas.errors import LogError, TruncatedLogError
+from trackreplay.schemas.errors import LogError, TruncatedLogError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 

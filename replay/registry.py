@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from schemas.errors import TrackreplayError
+from trackreplay.schemas.errors import TrackreplayError
 
 
 @dataclass(frozen=True)
@@ -17,17 +17,17 @@ class TrackerEntry:
 
 
 def _flow() -> TrackerEntry:
-    from replay.views import flow as view
-    from trackers.flow.config import FlowConfig
-    from trackers.flow.tracker import FlowTracker
+    from trackreplay.replay.views import flow as view
+    from trackreplay.trackers.flow.config import FlowConfig
+    from trackreplay.trackers.flow.tracker import FlowTracker
 
     return TrackerEntry("flow", FlowConfig, FlowTracker, view)
 
 
 def _golf() -> TrackerEntry:
-    from replay.views import golf as view
-    from trackers.golf.config import GolfConfig
-    from trackers.golf.tracker import GolfTracker
+    from trackreplay.replay.views import golf as view
+    from trackreplay.trackers.golf.config import GolfConfig
+    from trackreplay.trackers.golf.tracker import GolfTracker
 
     return TrackerEntry("golf", GolfConfig, GolfTracker, view)
 

@@ -13,7 +13,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from trackers.frame import Frame
+from trackreplay.trackers.frame import Frame
 
 CAMERA = "camera/image"
 RIGHT = "camera/right"

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 import polars as pl
 
-from trackers.base import TrackState
+from trackreplay.trackers.base import TrackState
 
 FLOAT_COLUMNS = ("x", "y", "w", "h", "X", "Y", "Z", "dx", "dy", "dz", "vx", "vy")
 SCHEMA: dict[str, pl.DataType] = {
@@ -36,8 +36,11 @@ def canonical_order(df: pl.DataFrame) -> pl.DataFrame:
     return df.select(COLUMNS).sort(["tracker", "track_id", "frame"], maintain_order=True)
 
 
-def canonical_bytes(df: pl.DataFrame) -> bytes:
-    """A byte string that depends only on the table's values (column order fixed, nulls marked)."""
+def canonical_bytes(df: pl.DataFrame, float_bytes: Callable[[np.ndarray], bytes] = lambda v: v.tobytes()) -> bytes:
+    """A byte string that depends only on the table's values (column order fixed, nulls marked).
+
+    ``float_bytes`` turns a float64 column into bytes (the replay digest rounds first).
+    """
     df = canonical_order(df)
     parts: list[bytes] = [",".join(COLUMNS).encode(), np.int64(df.height).tobytes()]
     for name in COLUMNS:
@@ -50,7 +53,7 @@ def canonical_bytes(df: pl.DataFrame) -> bytes:
             parts.append(col.fill_null(0).to_numpy().astype("<i8").tobytes())
         else:
             values = col.fill_null(0.0).to_numpy().astype("<f8")
-            parts.append(values.tobytes())
+            parts.append(float_bytes(values))
     return b"".join(len(p).to_bytes(8, "little") + p for p in parts)
 
 

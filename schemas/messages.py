@@ -5,10 +5,10 @@ from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
 from foxglove_schemas_protobuf.FrameTransform_pb2 import FrameTransform
 from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
 
-from schemas._gen.GroundTruth_pb2 import GroundTruthFrame, GroundTruthObject
-from schemas._gen.InitAnnotations_pb2 import InitAnnotations, InitRegion
-from schemas._gen.LensTable_pb2 import LensEntry, LensTable
-from schemas._gen.PtzEncoders_pb2 import PtzEncoders
+from trackreplay.schemas._gen.GroundTruth_pb2 import GroundTruthFrame, GroundTruthObject
+from trackreplay.schemas._gen.InitAnnotations_pb2 import InitAnnotations, InitRegion
+from trackreplay.schemas._gen.LensTable_pb2 import LensEntry, LensTable
+from trackreplay.schemas._gen.PtzEncoders_pb2 import PtzEncoders
 
 __all__ = [
     "CameraCalibration",

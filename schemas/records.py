@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 
 from google.protobuf.timestamp_pb2 import Timestamp
 
-from schemas import messages as m
+from trackreplay.schemas import messages as m
 
 _OPTIONAL_GT_FIELDS = ("x", "y", "w", "h", "X", "Y", "Z", "vx", "vy", "visible", "group")
 

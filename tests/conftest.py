@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
 
 
 @pytest.fixture(scope="session")
@@ -27,9 +27,9 @@ def short_sim(tmp_path_factory: pytest.TempPathFactory) -> Path:
 @pytest.fixture(scope="session")
 def golf_short(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Three seconds of a small synthetic tee shot (640x360) with encoders and marked balls."""
-    from recorder.synth.golf.flight import Launch
-    from recorder.synth.golf.operator import OperatorConfig
-    from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
+    from trackreplay.recorder.synth.golf.flight import Launch
+    from trackreplay.recorder.synth.golf.operator import OperatorConfig
+    from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
 
     path = tmp_path_factory.mktemp("logs") / "golf-short.mcap"
     write_golf_teeshot(path, GolfSceneConfig(

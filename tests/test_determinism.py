@@ -12,9 +12,9 @@ from pathlib import Path
 import polars as pl
 import pytest
 
-from replay.registry import NAMES
-from replay.rerun_sink import rrd_digest
-from replay.trajectory import table_digest
+from trackreplay.replay.registry import NAMES
+from trackreplay.replay.rerun_sink import rrd_digest
+from trackreplay.replay.trajectory import table_digest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def _replay(log: Path, tracker: str, out: Path, hashseed: str, threads: int) -> dict:
     out.mkdir()
     env = {**os.environ, "PYTHONHASHSEED": hashseed}
-    cmd = [sys.executable, "-m", "replay.cli", "replay", str(log), "--tracker", tracker, "--seed", "7",
+    cmd = [sys.executable, "-m", "trackreplay", "replay", str(log), "--tracker", tracker, "--seed", "7",
            "--opencv-threads", str(threads), "--rrd", str(out / "r.rrd"), "--export", str(out / "t.parquet"),
            "--summary", str(out / "s.json"), "--quiet"]
     proc = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=600)
@@ -42,7 +42,7 @@ def test_two_processes_agree(tracker: str, tracker_logs: dict[str, Path], tmp_pa
 
 
 def test_different_seed_is_a_different_stream(tracker_logs: dict[str, Path]) -> None:
-    from replay.engine import tracker_rng
+    from trackreplay.replay.engine import tracker_rng
 
     assert tracker_rng(1, "flow").integers(1 << 30) != tracker_rng(2, "flow").integers(1 << 30)
     assert tracker_rng(1, "flow").integers(1 << 30) != tracker_rng(1, "golf").integers(1 << 30)

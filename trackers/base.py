@@ -7,7 +7,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from trackers.frame import Frame
+from trackreplay.trackers.frame import Frame
 
 STATUSES = ("measured", "predicted", "interpolated", "lost")
 

@@ -7,7 +7,7 @@ import tomllib
 from pathlib import Path
 from typing import Any, TypeVar
 
-from schemas.errors import TrackreplayError
+from trackreplay.schemas.errors import TrackreplayError
 
 C = TypeVar("C")
 

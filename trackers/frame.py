@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from schemas.records import InitRegion, LensTable, PtzReading
-from trackers.geometry.ptz import PtzCamera
+from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
+from trackreplay.trackers.geometry.ptz import PtzCamera
 
 
 @dataclass(frozen=True, eq=False)

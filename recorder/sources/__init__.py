@@ -1,11 +1,11 @@
 """Recording inputs, one module per kind; each yields plain records (see ``base.ImageFrame``)."""
 
-from recorder.sources.base import FrameClock, ImageFrame, read_timestamps
-from recorder.sources.encoders import read_encoders, read_lens_table
-from recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
-from recorder.sources.images import list_images, read_images
-from recorder.sources.stereo import Calibration, CameraModel, load_calibration, read_stereo
-from recorder.sources.video import read_video, video_clock
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_timestamps
+from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
+from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
+from trackreplay.recorder.sources.images import list_images, read_images
+from trackreplay.recorder.sources.stereo import Calibration, CameraModel, load_calibration, read_stereo
+from trackreplay.recorder.sources.video import read_video, video_clock
 
 __all__ = [
     "Calibration",

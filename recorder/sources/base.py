@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from schemas.errors import SourceError
+from trackreplay.schemas.errors import SourceError
 
 JPEG_MAGIC = b"\xff\xd8\xff"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

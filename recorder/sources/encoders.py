@@ -17,9 +17,9 @@ import math
 from collections.abc import Iterator
 from pathlib import Path
 
-from recorder.sources.base import require_file
-from schemas.errors import SourceError
-from schemas.records import LensEntry, LensTable, PtzReading
+from trackreplay.recorder.sources.base import require_file
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 
 ENCODER_COLUMNS = ("t_ns", "pan", "tilt", "zoom", "focus")
 LENS_COLUMNS = ("zoom", "focus", "fx", "fy", "cx", "cy")

@@ -20,9 +20,9 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from recorder.sources.base import require_file
-from schemas.errors import SourceError
-from schemas.records import GroundTruthObject
+from trackreplay.recorder.sources.base import require_file
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import GroundTruthObject
 
 FORMATS = ("auto", "mot", "otb")
 OTB_ID = 1

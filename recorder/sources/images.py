@@ -12,8 +12,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from recorder.sources.base import FrameClock, ImageFrame, encoded_format, natural_key
-from schemas.errors import SourceError
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, encoded_format, natural_key
+from trackreplay.schemas.errors import SourceError
 
 EXTENSIONS = (".jpg", ".jpeg", ".png", ".bmp")
 

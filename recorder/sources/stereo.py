@@ -23,12 +23,12 @@ from typing import Any
 import cv2
 import numpy as np
 
-from recorder.sources.base import FrameClock, ImageFrame, require_file
-from recorder.sources.images import check_count, list_images, read_image_files
-from recorder.sources.video import read_video
-from schemas import messages as m
-from schemas.errors import SourceError
-from schemas.records import timestamp
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, require_file
+from trackreplay.recorder.sources.images import check_count, list_images, read_image_files
+from trackreplay.recorder.sources.video import read_video
+from trackreplay.schemas import messages as m
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import timestamp
 
 _ALIASES = {
     "width": ("width", "image_width"),

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import cv2
 
-from recorder.sources.base import FrameClock, ImageFrame, require_file
-from schemas.errors import SourceError
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, require_file
+from trackreplay.schemas.errors import SourceError
 
 
 def open_video(path: str | Path) -> cv2.VideoCapture:

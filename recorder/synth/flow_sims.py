@@ -14,11 +14,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from recorder.image_codec import image_message
-from recorder.synth.texture import natural_texture, photo_background
-from recorder.writer import LogWriter
-from schemas import topics as T
-from schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.synth.texture import natural_texture, photo_background
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb
 
 SCENES = ("flow-sim1", "flow-sim2", "flow-sim3")
 _SUPERSAMPLE = 8

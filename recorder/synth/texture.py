@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from schemas.errors import SourceError
+from trackreplay.schemas.errors import SourceError
 
 PHOTOS = ("camera", "moon", "coins", "text", "brick", "grass", "gravel")
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from recorder.annotate import annotate, parse_box, read_marks_csv
-from schemas import topics as T
-from schemas.errors import TrackreplayError
+from trackreplay.recorder.annotate import annotate, parse_box, read_marks_csv
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import TrackreplayError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

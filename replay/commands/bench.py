@@ -6,10 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
-from trackers.config_io import config_from_toml
+from trackreplay.trackers.config_io import config_from_toml
 
-from replay import registry
-from replay.bench import format_timing, time_replay
+from trackreplay.replay import registry
+from trackreplay.replay.bench import format_timing, time_replay
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

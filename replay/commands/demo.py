@@ -6,12 +6,12 @@ import argparse
 import json
 from pathlib import Path
 
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
-from replay.engine import ReplayRequest, replay
-from replay.eval import evaluate, format_summary
-from replay.export import fill_gaps, write_trajectory
-from replay.groundtruth import read_groundtruth
-from replay.reader import LogReader
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.eval import evaluate, format_summary
+from trackreplay.replay.export import fill_gaps, write_trajectory
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

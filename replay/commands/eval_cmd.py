@@ -6,10 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
-from replay.eval import evaluate, format_summary
-from replay.export import read_trajectory
-from replay.groundtruth import read_groundtruth
-from replay.reader import LogReader
+from trackreplay.replay.eval import evaluate, format_summary
+from trackreplay.replay.export import read_trajectory
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.export import METHODS, fill_gaps, read_trajectory, write_trajectory
+from trackreplay.replay.export import METHODS, fill_gaps, read_trajectory, write_trajectory
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

@@ -6,9 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
-from replay.info import format_info, log_info
-from recorder.recover import truncation_message
-from schemas.errors import TruncatedLogError
+from trackreplay.replay.info import format_info, log_info
+from trackreplay.recorder.recover import truncation_message
+from trackreplay.schemas.errors import TruncatedLogError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

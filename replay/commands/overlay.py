@@ -9,11 +9,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from schemas.errors import TrackreplayError
-from replay.export import read_trajectory
-from replay.frames import FrameTopics, iter_frames
-from replay.overlay import overlay_frames, project_trajectory, draw, trajectory_directions
-from replay.reader import LogReader
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.replay.export import read_trajectory
+from trackreplay.replay.frames import FrameTopics, iter_frames
+from trackreplay.replay.overlay import overlay_frames, project_trajectory, draw, trajectory_directions
+from trackreplay.replay.reader import LogReader
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
     if args.rrd is not None:
         import rerun as rr
 
-        from replay.rerun_sink import RerunSink
+        from trackreplay.replay.rerun_sink import RerunSink
         import rerun.blueprint as rrb
 
         sink = RerunSink(args.rrd, f"{args.log.stem}-overlay", rrb.Blueprint(rrb.Spatial2DView(origin="/")))

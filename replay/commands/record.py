@@ -6,10 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from recorder.image_codec import ENCODINGS
-from recorder.record import RecordTopics, record
-from recorder.sources.groundtruth import FORMATS
-from schemas.errors import TrackreplayError
+from trackreplay.recorder.image_codec import ENCODINGS
+from trackreplay.recorder.record import RecordTopics, record
+from trackreplay.recorder.sources.groundtruth import FORMATS
+from trackreplay.schemas.errors import TrackreplayError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from recorder.recover import recover
+from trackreplay.recorder.recover import recover
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:

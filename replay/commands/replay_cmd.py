@@ -7,12 +7,12 @@ import json
 import sys
 from pathlib import Path
 
-from schemas.errors import TrackreplayError
-from trackers.config_io import config_from_toml
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.config_io import config_from_toml
 
-from replay import registry
-from replay.engine import ReplayRequest, replay
-from replay.export import METHODS, fill_gaps, write_trajectory
+from trackreplay.replay import registry
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.export import METHODS, fill_gaps, write_trajectory
 
 
 class DigestMismatch(TrackreplayError):

@@ -6,12 +6,12 @@ import argparse
 import sys
 from pathlib import Path
 
-from recorder.synth.flow_sims import SCENES as FLOW_SCENES
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
-from recorder.synth.golf.scene import CAMERA_PLACES, SCENE as GOLF_SCENE
-from recorder.synth.golf.scene import SIZES, GolfSceneConfig, write_golf_teeshot
-from recorder.synth.texture import PHOTOS
-from schemas.errors import TrackreplayError
+from trackreplay.recorder.synth.flow_sims import SCENES as FLOW_SCENES
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+from trackreplay.recorder.synth.golf.scene import CAMERA_PLACES, SCENE as GOLF_SCENE
+from trackreplay.recorder.synth.golf.scene import SIZES, GolfSceneConfig, write_golf_teeshot
+from trackreplay.recorder.synth.texture import PHOTOS
+from trackreplay.schemas.errors import TrackreplayError
 
 # Options of one family of scenes only: (dest, flag). Their parser defaults are None so that
 # giving one to the other family is caught instead of silently ignored.

@@ -7,9 +7,9 @@ from collections.abc import Sequence
 import numpy as np
 import rerun as rr
 
-from trackers.base import TrackState
+from trackreplay.trackers.base import TrackState
 
-from replay.rerun_sink import FrameLogger
+from trackreplay.replay.rerun_sink import FrameLogger
 
 STATUS_COLOURS = {"measured": (0, 220, 0), "predicted": (255, 170, 0), "interpolated": (0, 160, 255), "lost": (255, 0, 0)}
 

@@ -8,11 +8,11 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from trackers.base import TrackState
-from trackers.frame import Frame
+from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.frame import Frame
 
-from replay.rerun_sink import FrameLogger
-from replay.views.common import log_estimates, log_scalar, to_uint8
+from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.common import log_estimates, log_scalar, to_uint8
 
 ARROW_STRIDE = 4  # one arrow per 4x4 pixels keeps the field readable
 ARROW_SCALE = 2.0

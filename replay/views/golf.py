@@ -16,11 +16,11 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from trackers.base import TrackState
-from trackers.frame import Frame
+from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.frame import Frame
 
-from replay.rerun_sink import FrameLogger
-from replay.views.common import log_estimates, log_scalar
+from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.common import log_estimates, log_scalar
 
 ACCEPTED = (40, 230, 40)
 REJECTED = (235, 50, 50)

@@ -2,7 +2,9 @@
 
     python tests/golden/regenerate.py
 
-Review the digest change in the diff: it says which trackers' outputs moved.
+Review the digest change in the diff: it says which trackers' outputs moved. Each tracker's
+trajectory is kept beside its log (``<tracker>.trajectory.parquet``) so that a digest change
+that leaves the trajectory alone can be told from one that moves it.
 """
 
 from __future__ import annotations
@@ -14,13 +16,13 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1]))
 
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from replay.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
 
 def _golf(path: Path) -> None:
-    from recorder.synth.golf.flight import Launch
-    from recorder.synth.golf.operator import OperatorConfig
-    from recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
+    from trackreplay.recorder.synth.golf.flight import Launch
+    from trackreplay.recorder.synth.golf.operator import OperatorConfig
+    from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot
 
     write_golf_teeshot(path, GolfSceneConfig(
         width=640, height=360, seed=3, duration=2.0, jpeg_quality=80,
@@ -43,6 +45,7 @@ def main() -> None:
         make(path)
         result = replay(ReplayRequest(log=path, tracker=tracker, seed=0))
         expected[tracker] = {"log": name, "seed": 0, "frames": result.frames, "digest": result.digest}
+        result.trajectory.write_parquet(HERE / f"{tracker}.trajectory.parquet")
         print(f"{tracker}: {name} {result.digest}")
     (HERE / "expected.json").write_text(json.dumps(expected, indent=2, sort_keys=True) + "\n")
 

@@ -2,10 +2,10 @@ from pathlib import Path
 
 import pytest
 
-from replay.cli import main
-from replay.frames import FrameTopics, read_hints
-from replay.reader import LogReader
-from schemas import topics as T
+from trackreplay.replay.cli import main
+from trackreplay.replay.frames import FrameTopics, read_hints
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas import topics as T
 
 
 def _payloads(path: Path) -> list[tuple]:

@@ -15,15 +15,15 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from recorder.recover import recover
-from recorder.sources.images import list_images
+from trackreplay.recorder.recover import recover
+from trackreplay.recorder.sources.images import list_images
 
 ROOT = Path(__file__).resolve().parents[2]
 
 # The real recorder, with the image source slowed down so the kill lands mid-recording.
 CHILD = """
 import sys, time
-import recorder.record as r
+import trackreplay.recorder.record as r
 original = r.read_images
 def slow(*args, **kwargs):
     for frame in original(*args, **kwargs):

@@ -10,12 +10,12 @@ from mcap.reader import make_reader
 from mcap.records import Chunk, Message
 from mcap.stream_reader import StreamReader, breakup_chunk
 
-from recorder.image_codec import image_message
-from recorder.recover import recover
-from recorder.writer import LogWriter
-from replay.commands import recover as recover_cmd
-from schemas.errors import LogError
-from schemas.records import PtzReading
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.recover import recover
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.replay.commands import recover as recover_cmd
+from trackreplay.schemas.errors import LogError
+from trackreplay.schemas.records import PtzReading
 
 
 @pytest.fixture
@@ -127,7 +127,7 @@ def test_cli_exit_codes(intact, tmp_path, capsys):
     assert "saved 60 messages" in capsys.readouterr().out
     junk = tmp_path / "junk.mcap"
     junk.write_text("hello")
-    from replay.cli import main
+    from trackreplay.replay.cli import main
 
     assert main(["recover", str(junk), str(tmp_path / "c.mcap")]) == 2
     assert "trackreplay: error:" in capsys.readouterr().err

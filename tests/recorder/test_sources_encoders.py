@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from recorder.record import record
-from recorder.sources.encoders import read_encoders, read_lens_table
-from schemas.errors import SourceError
-from schemas.records import LensTable, PtzReading
+from trackreplay.recorder.record import record
+from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import LensTable, PtzReading
 
 
 def write_encoders(path, rows, header="t_ns,pan,tilt,zoom,focus"):

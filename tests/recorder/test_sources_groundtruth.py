@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from recorder.record import record
-from recorder.sources.groundtruth import read_groundtruth
-from schemas.errors import SourceError
-from schemas.records import GroundTruthFrame, GroundTruthObject
+from trackreplay.recorder.record import record
+from trackreplay.recorder.sources.groundtruth import read_groundtruth
+from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject
 
 
 def test_mot_rows_become_centre_boxes_on_zero_based_frames(tmp_path):

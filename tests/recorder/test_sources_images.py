@@ -6,9 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from recorder.record import record
-from recorder.sources.images import list_images
-from schemas.errors import SourceError
+from trackreplay.recorder.record import record
+from trackreplay.recorder.sources.images import list_images
+from trackreplay.schemas.errors import SourceError
 
 
 def test_natural_order_and_extensions(tmp_path, make_images):

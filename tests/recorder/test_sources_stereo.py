@@ -8,9 +8,9 @@ import cv2
 import numpy as np
 import pytest
 
-from recorder.record import record
-from recorder.sources.stereo import load_calibration
-from schemas.errors import SourceError
+from trackreplay.recorder.record import record
+from trackreplay.recorder.sources.stereo import load_calibration
+from trackreplay.schemas.errors import SourceError
 
 K = [[100.0, 0.0, 32.0], [0.0, 110.0, 24.0], [0.0, 0.0, 1.0]]
 

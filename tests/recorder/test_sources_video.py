@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from recorder.record import record
-from recorder.sources.base import FrameClock
-from recorder.sources.video import read_video
-from schemas.errors import SourceError
+from trackreplay.recorder.record import record
+from trackreplay.recorder.sources.base import FrameClock
+from trackreplay.recorder.sources.video import read_video
+from trackreplay.schemas.errors import SourceError
 
 
 def test_video_frames_timed_by_file_fps_and_lossless_png(tmp_path, make_video, log_messages, decode_image):

@@ -8,7 +8,7 @@ from pathlib import Path
 import polars as pl
 import pytest
 
-from replay.cli import main
+from trackreplay.replay.cli import main
 
 
 def test_replay_export_eval_chain(short_sim: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
@@ -60,7 +60,7 @@ def test_user_errors_are_one_sentence(argv, message, short_sim: Path, tmp_path: 
 
 def test_console_entry_point_runs_demo(tmp_path: Path) -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "replay.cli", "demo", "--out", str(tmp_path / "demo")],
+        [sys.executable, "-m", "trackreplay", "demo", "--out", str(tmp_path / "demo")],
         capture_output=True, text=True, timeout=300,
     )
     assert proc.returncode == 0, proc.stderr

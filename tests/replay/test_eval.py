@@ -2,10 +2,10 @@ import numpy as np
 import polars as pl
 import pytest
 
-from replay.eval import evaluate, iou
-from replay.groundtruth import GT_SCHEMA
-from replay.trajectory import state_row, trajectory_table
-from trackers.base import TrackState
+from trackreplay.replay.eval import evaluate, iou
+from trackreplay.replay.groundtruth import GT_SCHEMA
+from trackreplay.replay.trajectory import state_row, trajectory_table
+from trackreplay.trackers.base import TrackState
 
 
 def _gt(n: int) -> pl.DataFrame:

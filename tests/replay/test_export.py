@@ -4,10 +4,10 @@ import numpy as np
 import polars as pl
 import pytest
 
-from replay.export import fill_gaps, read_trajectory, write_trajectory
-from replay.trajectory import COLUMNS, state_row, table_digest, trajectory_table
-from schemas.errors import TrackreplayError
-from trackers.base import TrackState
+from trackreplay.replay.export import fill_gaps, read_trajectory, write_trajectory
+from trackreplay.replay.trajectory import COLUMNS, state_row, table_digest, trajectory_table
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.base import TrackState
 
 
 def _table(frames, positions, statuses=None):

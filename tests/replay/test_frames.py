@@ -3,13 +3,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from recorder.image_codec import image_message
-from recorder.writer import LogWriter
-from replay.frames import BundleReport, FrameTopics, PtzInterpolator, interpolate_ptz, iter_frames
-from replay.reader import LogReader
-from schemas import topics as T
-from schemas.errors import LogError
-from schemas.records import LensEntry, LensTable, PtzReading
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.replay.frames import BundleReport, FrameTopics, PtzInterpolator, interpolate_ptz, iter_frames
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import LogError
+from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 
 MS = 1_000_000
 

@@ -8,13 +8,13 @@ import json
 import numpy as np
 import pytest
 
-from recorder.image_codec import image_message
-from recorder.writer import LogWriter
-from replay.commands import info as info_cmd
-from replay.info import format_info, log_info
-from schemas import topics as T
-from schemas.errors import LogError, TruncatedLogError
-from schemas.records import PtzReading
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.replay.commands import info as info_cmd
+from trackreplay.replay.info import format_info, log_info
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import LogError, TruncatedLogError
+from trackreplay.schemas.records import PtzReading
 
 MS = 1_000_000
 IMG = np.zeros((8, 8), np.uint8)
@@ -107,7 +107,7 @@ def test_cli_json_and_truncated_exit(tmp_path, capsys):
     assert data["topics"][0]["count"] == 40
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(path.read_bytes()[:-50])
-    from replay.cli import main
+    from trackreplay.replay.cli import main
 
     assert main(["info", str(cut)]) == 3
     captured = capsys.readouterr()

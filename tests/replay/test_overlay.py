@@ -4,15 +4,15 @@ import cv2
 import numpy as np
 import pytest
 
-from recorder.image_codec import image_message
-from recorder.writer import LogWriter
-from replay.cli import main
-from replay.export import write_trajectory
-from replay.trajectory import state_row, trajectory_table
-from schemas import topics as T
-from schemas.records import LensEntry, LensTable, PtzReading
-from trackers.base import TrackState
-from trackers.geometry.ptz import PtzCamera, pan_tilt_towards
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.replay.cli import main
+from trackreplay.replay.export import write_trajectory
+from trackreplay.replay.trajectory import state_row, trajectory_table
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
+from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
 
 LENS = LensTable(320, 240, (LensEntry(0, 0, 300, 300, 160, 120), LensEntry(10, 0, 900, 900, 160, 120)), (0.0, 0.0, 1.5))
 FRAMES = 10

@@ -1,6 +1,6 @@
 import pytest
 
-from replay.prefetch import prefetch
+from trackreplay.replay.prefetch import prefetch
 
 
 def test_order_is_preserved() -> None:

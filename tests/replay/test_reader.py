@@ -3,12 +3,12 @@ from pathlib import Path
 import pytest
 from mcap.writer import Writer
 
-from recorder.image_codec import image_message
-from recorder.writer import LogWriter
-from replay.reader import LogReader
-from schemas import topics as T
-from schemas.errors import LogError, TruncatedLogError
-from schemas.records import PtzReading
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import LogError, TruncatedLogError
+from trackreplay.schemas.records import PtzReading
 
 import numpy as np
 

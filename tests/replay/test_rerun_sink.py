@@ -3,8 +3,8 @@ from pathlib import Path
 import pytest
 import rerun.chunk as rc
 
-from replay import registry
-from replay.engine import ReplayRequest, replay
+from trackreplay.replay import registry
+from trackreplay.replay.engine import ReplayRequest, replay
 
 
 def test_rrd_holds_camera_every_flow_intermediate_both_timelines_and_a_layout(short_sim: Path, tmp_path: Path) -> None:

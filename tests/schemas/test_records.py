@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from schemas import records as r
+from trackreplay.schemas import records as r
 
 
 def test_ground_truth_absent_is_not_zero() -> None:
@@ -26,7 +26,7 @@ def test_round_trips() -> None:
 
 @pytest.mark.skipif(importlib.util.find_spec("grpc_tools") is None, reason="grpcio-tools not installed")
 def test_generated_code_is_current(tmp_path: Path) -> None:
-    from schemas.generate import GEN_DIR, generate
+    from trackreplay.schemas.generate import GEN_DIR, generate
 
     for fresh in generate(tmp_path):
         assert fresh.read_bytes() == (GEN_DIR / fresh.name).read_bytes(), f"run python -m schemas.generate ({fresh.name} is stale)"

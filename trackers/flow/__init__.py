@@ -4,7 +4,7 @@ derivatives (Beaudet 5x5 operators) → local_flow (eq. 5–8) → refine (eq. 9
 velocity (eq. 11) → kalman (eq. 23–24) → fov (§4.2, eq. 26) → tracker.
 """
 
-from trackers.flow.config import FlowConfig
-from trackers.flow.tracker import FlowIntermediates, FlowTracker
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.tracker import FlowIntermediates, FlowTracker
 
 __all__ = ["FlowConfig", "FlowIntermediates", "FlowTracker"]

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from trackers.config_io import config_from_dict, config_from_toml
+from trackreplay.trackers.config_io import config_from_dict, config_from_toml
 
 
 @dataclass(frozen=True)

@@ -22,9 +22,9 @@ import dataclasses
 import cv2
 import numpy as np
 
-from trackers.flow.config import FlowConfig
-from trackers.flow.derivatives import derivatives
-from trackers.flow.local_flow import FlowField, local_flow
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.derivatives import derivatives
+from trackreplay.trackers.flow.local_flow import FlowField, local_flow
 
 
 def blur(image: np.ndarray, sigma: float) -> np.ndarray:

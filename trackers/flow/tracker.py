@@ -13,14 +13,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from trackers.base import TrackState
-from trackers.flow.config import FlowConfig
-from trackers.flow.fov import crop, fov_origin, inside, next_centre, shift_field
-from trackers.flow.kalman import AxisFilters
-from trackers.flow.local_flow import FlowField
-from trackers.flow.refine import online_step, refine_flow
-from trackers.flow.velocity import histogram_edges, object_velocity
-from trackers.frame import Frame
+from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.fov import crop, fov_origin, inside, next_centre, shift_field
+from trackreplay.trackers.flow.kalman import AxisFilters
+from trackreplay.trackers.flow.local_flow import FlowField
+from trackreplay.trackers.flow.refine import online_step, refine_flow
+from trackreplay.trackers.flow.velocity import histogram_edges, object_velocity
+from trackreplay.trackers.frame import Frame
 
 
 @dataclass(frozen=True, eq=False)

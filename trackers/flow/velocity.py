@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.flow.local_flow import FlowField
+from trackreplay.trackers.flow.local_flow import FlowField
 
 
 @dataclass(frozen=True, eq=False)

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from schemas.records import LensTable, PtzReading
+from trackreplay.schemas.records import LensTable, PtzReading
 
 
 @dataclass(frozen=True)

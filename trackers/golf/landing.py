@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.geometry.ptz import PtzCamera
-from trackers.golf.config import GolfConfig
+from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.golf.config import GolfConfig
 
 NIS_GATE = 30.0  # chi-square, 3 dof: beyond 99.999 %; a selected blob that far is not our ball
 MAX_REJECTIONS = 3  # consecutive gated measurements before the filter restarts from the measurement

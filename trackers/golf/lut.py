@@ -22,8 +22,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from schemas.records import InitRegion
-from trackers.golf.config import GolfConfig
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.golf.config import GolfConfig
 
 LUT_NAMES = ("sky", "ground")
 SKY_SCORE_THRESHOLD = 8.0  # (Cb - Cr) + (Y - 128)/4 of the context: blue sky ~ +50, grass ~ -10

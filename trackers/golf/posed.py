@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackers.geometry.ptz import Intrinsics, PtzCamera
+from trackreplay.trackers.geometry.ptz import Intrinsics, PtzCamera
 
 
 @dataclass(frozen=True, eq=False)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from trackers.golf.lut import ColourLut, to_ycc
+from trackreplay.trackers.golf.lut import ColourLut, to_ycc
 
 
 def region_slice(box: np.ndarray, width: int, height: int) -> tuple[int, int, int, int]:

@@ -32,16 +32,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from schemas.records import InitRegion
-from trackers.base import TrackState
-from trackers.frame import Frame
-from trackers.golf import blobs as B
-from trackers.golf.config import GolfConfig
-from trackers.golf.landing import BallisticEkf, image_parabola_landing, range_from_area, range_rel_sigma
-from trackers.golf.lut import LUT_NAMES, LutSet, region_key, region_samples
-from trackers.golf.particles import CondensationFilter
-from trackers.golf.posed import PosedCamera, pose_homography
-from trackers.golf.silhouette import crop_ycc, silhouette
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.golf import blobs as B
+from trackreplay.trackers.golf.config import GolfConfig
+from trackreplay.trackers.golf.landing import BallisticEkf, image_parabola_landing, range_from_area, range_rel_sigma
+from trackreplay.trackers.golf.lut import LUT_NAMES, LutSet, region_key, region_samples
+from trackreplay.trackers.golf.particles import CondensationFilter
+from trackreplay.trackers.golf.posed import PosedCamera, pose_homography
+from trackreplay.trackers.golf.silhouette import crop_ycc, silhouette
 
 NO_ENCODER_NOTICE = (
     "no PTZ encoder pose for this frame (no /ptz/encoders or lens table): tracking in image "
@@ -444,7 +444,7 @@ class GolfTracker:
     def _projected_sigma(self, camera: PosedCamera, scale: float, offset: np.ndarray) -> np.ndarray:
         """Pixel spread of the EKF position covariance seen through ``camera``, at least the floor
         and half of ``offset`` (per axis), at most what the largest search region can hold."""
-        from trackers.golf.landing import measurement_jacobian
+        from trackreplay.trackers.golf.landing import measurement_jacobian
 
         cfg = self.config
         _, H = measurement_jacobian(camera, self.ekf.x[:3])

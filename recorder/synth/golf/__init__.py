@@ -10,10 +10,10 @@ ground truth and the user's marked ball regions, written as a log.
 - ``scene``: ``GolfSceneConfig`` and ``write_golf_teeshot``.
 """
 
-from recorder.synth.golf.flight import PHASES, BallModel, Flight, Launch, Trajectory, simulate_shot
-from recorder.synth.golf.lens import BroadcastLens
-from recorder.synth.golf.operator import EncoderModel, OperatorConfig
-from recorder.synth.golf.scene import GolfSceneConfig, GolfSceneSummary, GolfShot, plan_shot, write_golf_teeshot
+from trackreplay.recorder.synth.golf.flight import PHASES, BallModel, Flight, Launch, Trajectory, simulate_shot
+from trackreplay.recorder.synth.golf.lens import BroadcastLens
+from trackreplay.recorder.synth.golf.operator import EncoderModel, OperatorConfig
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, GolfSceneSummary, GolfShot, plan_shot, write_golf_teeshot
 
 __all__ = [
     "PHASES", "BallModel", "BroadcastLens", "EncoderModel", "Flight", "GolfSceneConfig", "GolfSceneSummary", "GolfShot",

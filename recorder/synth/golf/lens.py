@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from schemas.records import LensEntry, LensTable
+from trackreplay.schemas.records import LensEntry, LensTable
 
 COUNTS = 10000
 ZOOM_STEPS = 41

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from recorder.synth.golf.lens import COUNTS, BroadcastLens
-from schemas.records import PtzReading
+from trackreplay.recorder.synth.golf.lens import COUNTS, BroadcastLens
+from trackreplay.schemas.records import PtzReading
 
 
 @dataclass(frozen=True)

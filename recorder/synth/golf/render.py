@@ -20,9 +20,9 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-from recorder.synth.golf.world import Blob, World
-from recorder.synth.texture import natural_texture
-from trackers.geometry.ptz import PtzCamera
+from trackreplay.recorder.synth.golf.world import Blob, World
+from trackreplay.recorder.synth.texture import natural_texture
+from trackreplay.trackers.geometry.ptz import PtzCamera
 
 # Colours, BGR 0..255.
 ZENITH = np.array([200.0, 135.0, 70.0], np.float32)

@@ -22,21 +22,21 @@ from pathlib import Path
 
 import numpy as np
 
-from recorder.image_codec import image_message
-from recorder.synth.golf.flight import BallModel, Launch, Trajectory, simulate_shot
-from recorder.synth.golf.lens import BroadcastLens
-from recorder.synth.golf.operator import (
+from trackreplay.recorder.image_codec import image_message
+from trackreplay.recorder.synth.golf.flight import BallModel, Launch, Trajectory, simulate_shot
+from trackreplay.recorder.synth.golf.lens import BroadcastLens
+from trackreplay.recorder.synth.golf.operator import (
     CameraPath, EncoderModel, OperatorConfig, ShotTimes, encoder_readings, follow_ball,
 )
-from recorder.synth.golf.render import FrameView, GolfRenderer
-from recorder.synth.golf.truth import Annotation, FrameTruth, choose_annotations, frame_truth
-from recorder.synth.golf.occluders import build_occluder
-from recorder.synth.golf.world import World, build_blobs, build_course, sun_direction
-from recorder.writer import LogWriter
-from schemas import topics as T
-from schemas.errors import TrackreplayError
-from schemas.records import LensTable, PtzReading, init_annotations_pb
-from trackers.geometry.ptz import PtzCamera
+from trackreplay.recorder.synth.golf.render import FrameView, GolfRenderer
+from trackreplay.recorder.synth.golf.truth import Annotation, FrameTruth, choose_annotations, frame_truth
+from trackreplay.recorder.synth.golf.occluders import build_occluder
+from trackreplay.recorder.synth.golf.world import World, build_blobs, build_course, sun_direction
+from trackreplay.recorder.writer import LogWriter
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.schemas.records import LensTable, PtzReading, init_annotations_pb
+from trackreplay.trackers.geometry.ptz import PtzCamera
 
 SCENE = "golf-teeshot"
 SIZES = {"720p": (1280, 720), "1080p": (1920, 1080)}

@@ -8,12 +8,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from recorder.synth.golf.flight import AIR, REST, ROLL, TEE
-from recorder.synth.golf.occluders import coverage
-from schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion
+from trackreplay.recorder.synth.golf.flight import AIR, REST, ROLL, TEE
+from trackreplay.recorder.synth.golf.occluders import coverage
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion
 
 if TYPE_CHECKING:
-    from recorder.synth.golf.scene import GolfShot
+    from trackreplay.recorder.synth.golf.scene import GolfShot
 
 BALL_ID = 1
 

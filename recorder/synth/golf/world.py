@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from recorder.synth.golf.flight import Trajectory
-from recorder.synth.golf.occluders import Occluder
+from trackreplay.recorder.synth.golf.flight import Trajectory
+from trackreplay.recorder.synth.golf.occluders import Occluder
 
 
 @dataclass(frozen=True, eq=False)

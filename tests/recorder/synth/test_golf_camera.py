@@ -6,14 +6,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from recorder.synth.golf.flight import AIR, BOUNCE
-from recorder.synth.golf.lens import COUNTS, BroadcastLens
-from recorder.synth.golf.operator import EncoderModel, encoder_readings
-from recorder.synth.golf.scene import GolfSceneConfig, logged_readings, plan_shot, write_golf_teeshot
-from replay.frames import FrameTopics, iter_frames
-from replay.groundtruth import read_groundtruth
-from replay.reader import LogReader
-from trackers.geometry.ptz import intrinsics_at
+from trackreplay.recorder.synth.golf.flight import AIR, BOUNCE
+from trackreplay.recorder.synth.golf.lens import COUNTS, BroadcastLens
+from trackreplay.recorder.synth.golf.operator import EncoderModel, encoder_readings
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, logged_readings, plan_shot, write_golf_teeshot
+from trackreplay.replay.frames import FrameTopics, iter_frames
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
+from trackreplay.trackers.geometry.ptz import intrinsics_at
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from recorder.synth.golf.flight import AIR, BOUNCE, PHASES, REST, ROLL, TEE, BallModel, Launch, simulate_shot
+from trackreplay.recorder.synth.golf.flight import AIR, BOUNCE, PHASES, REST, ROLL, TEE, BallModel, Launch, simulate_shot
 
 VACUUM = BallModel(drag_cd=0.0, lift=False)
 

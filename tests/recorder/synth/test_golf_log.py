@@ -6,16 +6,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
-from recorder.synth.golf.flight import AIR, REST, ROLL, TEE
-from recorder.synth.golf.scene import GolfSceneConfig, SceneConfigError, logged_readings, plan_shot, write_golf_teeshot
-from recorder.synth.golf.truth import choose_annotations
-from replay.cli import main
-from replay.frames import read_hints
-from replay.groundtruth import read_groundtruth
-from replay.reader import LogReader
-from schemas import topics as T
-from schemas.records import LensTable, PtzReading
+from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+from trackreplay.recorder.synth.golf.flight import AIR, REST, ROLL, TEE
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, SceneConfigError, logged_readings, plan_shot, write_golf_teeshot
+from trackreplay.recorder.synth.golf.truth import choose_annotations
+from trackreplay.replay.cli import main
+from trackreplay.replay.frames import read_hints
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas import topics as T
+from trackreplay.schemas.records import LensTable, PtzReading
 
 SMALL = dict(width=320, height=180, duration=1.0)
 

@@ -6,9 +6,9 @@ import cv2
 import numpy as np
 import pytest
 
-from recorder.synth.golf.flight import AIR, REST, ROLL, TEE
-from recorder.synth.golf.render import GolfRenderer
-from recorder.synth.golf.scene import GolfSceneConfig, plan_shot
+from trackreplay.recorder.synth.golf.flight import AIR, REST, ROLL, TEE
+from trackreplay.recorder.synth.golf.render import GolfRenderer
+from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, plan_shot
 
 
 @pytest.fixture(scope="module")

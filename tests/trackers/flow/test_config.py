@@ -1,7 +1,7 @@
 import pytest
 
-from schemas.errors import TrackreplayError
-from trackers.flow.config import FlowConfig
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.flow.config import FlowConfig
 
 
 def test_defaults_are_the_papers() -> None:

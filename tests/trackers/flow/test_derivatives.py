@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from trackers.flow.derivatives import beaudet_kernels, derivatives, spatial_gradient
+from trackreplay.trackers.flow.derivatives import beaudet_kernels, derivatives, spatial_gradient
 
 
 def _grid(n: int = 32) -> tuple[np.ndarray, np.ndarray]:

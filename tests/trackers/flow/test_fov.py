@@ -1,6 +1,6 @@
 import numpy as np
 
-from trackers.flow.fov import crop, fov_origin, inside, next_centre, shift_field
+from trackreplay.trackers.flow.fov import crop, fov_origin, inside, next_centre, shift_field
 
 
 def test_crop_inside_is_a_plain_slice() -> None:

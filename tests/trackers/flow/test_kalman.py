@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from trackers.flow.kalman import OBSERVATION, AxisFilters, transition
+from trackreplay.trackers.flow.kalman import OBSERVATION, AxisFilters, transition
 
 
 def test_matrices_are_eq_23_and_24() -> None:

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from trackers.flow.derivatives import derivatives
-from trackers.flow.local_flow import FlowField, condition_number, local_flow, normal_equations
+from trackreplay.trackers.flow.derivatives import derivatives
+from trackreplay.trackers.flow.local_flow import FlowField, condition_number, local_flow, normal_equations
 
 INNER = (slice(8, -8), slice(8, -8))
 

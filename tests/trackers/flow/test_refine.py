@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from trackers.flow.config import FlowConfig
-from trackers.flow.refine import online_step, refine_flow
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.refine import online_step, refine_flow
 
 INNER = (slice(12, -12), slice(12, -12))
 

@@ -3,10 +3,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from schemas.records import InitRegion
-from trackers.flow.config import FlowConfig
-from trackers.flow.tracker import FlowIntermediates, FlowTracker
-from trackers.frame import Frame
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.tracker import FlowIntermediates, FlowTracker
+from trackreplay.trackers.frame import Frame
 
 
 def _frames(scene, centres: np.ndarray, side: int = 13, bgr: bool = False) -> list[Frame]:

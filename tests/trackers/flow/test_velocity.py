@@ -2,10 +2,10 @@ import cv2
 import numpy as np
 import pytest
 
-from trackers.flow.config import FlowConfig
-from trackers.flow.local_flow import FlowField
-from trackers.flow.refine import refine_flow
-from trackers.flow.velocity import histogram_edges, object_velocity
+from trackreplay.trackers.flow.config import FlowConfig
+from trackreplay.trackers.flow.local_flow import FlowField
+from trackreplay.trackers.flow.refine import refine_flow
+from trackreplay.trackers.flow.velocity import histogram_edges, object_velocity
 
 EDGES = histogram_edges(8.0, 0.25)
 

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from schemas.records import LensEntry, LensTable, PtzReading
-from trackers.geometry.ptz import PtzCamera, intrinsics_at, pan_tilt_towards, rotation_world_from_camera
+from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
+from trackreplay.trackers.geometry.ptz import PtzCamera, intrinsics_at, pan_tilt_towards, rotation_world_from_camera
 
 LENS = LensTable(
     1280, 720,

@@ -8,9 +8,9 @@ import cv2
 import numpy as np
 import pytest
 
-from schemas.records import InitRegion, LensEntry, LensTable, PtzReading
-from trackers.frame import Frame
-from trackers.geometry.ptz import PtzCamera
+from trackreplay.schemas.records import InitRegion, LensEntry, LensTable, PtzReading
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.ptz import PtzCamera
 
 SKY_BGR = (205, 160, 95)
 GRASS_BGR = (45, 135, 60)

@@ -2,7 +2,7 @@ import cv2
 import numpy as np
 import pytest
 
-from trackers.golf.blobs import REASONS, BlobTargets, gate, measure_blobs, nearest
+from trackreplay.trackers.golf.blobs import REASONS, BlobTargets, gate, measure_blobs, nearest
 
 
 def rows_for(mask, targets, predicted=(100.0, 100.0), widen=1.0):

@@ -3,11 +3,11 @@ import math
 import numpy as np
 import pytest
 
-from recorder.synth.golf.flight import BallModel, Launch, simulate_shot
-from schemas.records import LensEntry, LensTable, PtzReading
-from trackers.geometry.ptz import PtzCamera, pan_tilt_towards
-from trackers.golf.config import GolfConfig
-from trackers.golf.landing import BallisticEkf, image_parabola_landing, predict_landing, range_from_area, range_rel_sigma
+from trackreplay.recorder.synth.golf.flight import BallModel, Launch, simulate_shot
+from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
+from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
+from trackreplay.trackers.golf.config import GolfConfig
+from trackreplay.trackers.golf.landing import BallisticEkf, image_parabola_landing, predict_landing, range_from_area, range_rel_sigma
 
 LENS = LensTable(1280, 720, (LensEntry(0, 0, 1000, 1000, 640, 360), LensEntry(100, 0, 9000, 9000, 640, 360)), (-12.0, 18.0, 4.0))
 FPS = 30.0

@@ -1,10 +1,10 @@
 import numpy as np
 import pytest
 
-from schemas.records import InitRegion
-from trackers.golf.config import GolfConfig
-from trackers.golf.lut import build_luts, region_samples
-from trackers.golf.silhouette import crop_ycc, silhouette
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.golf.config import GolfConfig
+from trackreplay.trackers.golf.lut import build_luts, region_samples
+from trackreplay.trackers.golf.silhouette import crop_ycc, silhouette
 
 
 def disc_mask(shape, centre, radius):

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from trackers.golf.particles import CondensationFilter, likelihood, systematic_resample, warp_states
+from trackreplay.trackers.golf.particles import CondensationFilter, likelihood, systematic_resample, warp_states
 
 
 def run(truth, detections, *, sigma=3.0, alpha=1e-4, pos=1.0, vel=0.5, seed=0, known_velocity=True):

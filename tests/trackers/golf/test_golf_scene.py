@@ -8,15 +8,15 @@ import math
 import numpy as np
 import pytest
 
-scene = pytest.importorskip("recorder.synth.golf.scene")
+scene = pytest.importorskip("trackreplay.recorder.synth.golf.scene")
 
-from recorder.synth.golf.flight import Launch  # noqa: E402
-from recorder.synth.golf.operator import OperatorConfig  # noqa: E402
-from replay import registry  # noqa: E402
-from replay.frames import FrameTopics, iter_frames  # noqa: E402
-from replay.groundtruth import read_groundtruth  # noqa: E402
-from replay.reader import LogReader  # noqa: E402
-from trackers.golf import GolfConfig, GolfTracker  # noqa: E402
+from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
+from trackreplay.recorder.synth.golf.operator import OperatorConfig  # noqa: E402
+from trackreplay.replay import registry  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.golf import GolfConfig, GolfTracker  # noqa: E402
 
 # A short shot at 640x360, the operator zoomed in twice as far as his 720p default so the ball has
 # the same pixel size as there (3.5 px in the climb, 5 px at landing).
@@ -115,7 +115,7 @@ def test_without_encoders_it_still_tracks_in_the_image(teeshot):
 
 @pytest.mark.skipif("golf" not in registry.NAMES, reason="the golf tracker is not registered with the engine yet")
 def test_engine_replay_is_deterministic_and_prints_no_notice(teeshot, capsys):
-    from replay.engine import ReplayRequest, replay
+    from trackreplay.replay.engine import ReplayRequest, replay
 
     path, summary = teeshot
     a = replay(ReplayRequest(log=path, tracker="golf", seed=5, end_s=4.0))

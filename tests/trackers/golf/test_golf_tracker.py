@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from replay.digest import ReplayDigest
-from trackers.frame import Frame
-from trackers.golf import GolfConfig, GolfTracker
-from trackers.golf.tracker import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
+from trackreplay.replay.digest import ReplayDigest
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.golf import GolfConfig, GolfTracker
+from trackreplay.trackers.golf.tracker import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
 
 BIG = 0.4  # m, the ball of the PTZ sequence (see conftest)
 
@@ -92,8 +92,8 @@ def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
 
 
 def test_config_loads_from_a_dict_and_rejects_nonsense():
-    from schemas.errors import TrackreplayError
-    from trackers.config_io import config_from_dict
+    from trackreplay.schemas.errors import TrackreplayError
+    from trackreplay.trackers.config_io import config_from_dict
 
     cfg = config_from_dict(GolfConfig, {"n_particles": 500, "sigma_px": 4.0, "lost_search": "stay"})
     assert cfg.n_particles == 500 and cfg.lost_search == "stay"

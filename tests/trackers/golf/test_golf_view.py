@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from replay.rerun_sink import RerunSink
-from replay.views import golf as view
-from trackers.golf import GolfConfig, GolfTracker
+from trackreplay.replay.rerun_sink import RerunSink
+from trackreplay.replay.views import golf as view
+from trackreplay.trackers.golf import GolfConfig, GolfTracker
 
 BIG = 0.4  # m, the ball of the PTZ sequence (see conftest)
 

@@ -1,0 +1,5 @@
+"""``python -m trackreplay``: the command line."""
+
+from trackreplay.replay.cli import main
+
+raise SystemExit(main())
