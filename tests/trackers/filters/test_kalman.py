@@ -1,0 +1,44 @@
+import numpy as np
+
+from trackreplay.trackers.filters.gating import chi2_gate, gaussian_density, innovation, mahalanobis_sq
+from trackreplay.trackers.filters.kalman import MotionModelEkf, linear_kalman
+
+
+def test_ekf_with_a_linear_model_equals_the_linear_filter() -> None:
+    F = np.array([[1.0, 1.0], [0.0, 1.0]])
+    Q = np.diag([0.01, 0.1])
+    H = np.array([[1.0, 0.0]])
+    R = np.array([[0.5]])
+    kf = linear_kalman([0.0, 1.0], np.eye(2), F, Q, H, R)
+    ekf = MotionModelEkf(2, 1, lambda x, dt: F @ x)
+    ekf.x = np.array([0.0, 1.0])
+    ekf.P = np.eye(2)
+    ekf.F, ekf.Q = F, Q
+    rng = np.random.default_rng(0)
+    for k in range(20):
+        z = np.array([k + rng.normal(0, 0.7)])
+        kf.predict()
+        kf.update(z.reshape(1, 1))
+        ekf.predict()
+        ekf.update(z, lambda x: H, lambda x: H @ x, R=R)
+        np.testing.assert_allclose(ekf.x, kf.x[:, 0], atol=1e-12)
+        np.testing.assert_allclose(ekf.P, kf.P, atol=1e-12)
+
+
+def test_nis_of_consistent_innovations_is_chi_square() -> None:
+    rng = np.random.default_rng(1)
+    P, H, R = np.diag([4.0, 1.0]), np.eye(2), np.diag([1.0, 2.0])
+    S = H @ P @ H.T + R
+    z = rng.multivariate_normal([0, 0], S, size=4000)
+    nis = np.array([innovation(P, H, R, zi, np.zeros(2)).nis for zi in z])
+    assert abs(nis.mean() - 2.0) < 0.1
+    assert abs(np.mean(nis < chi2_gate(2, 0.95)) - 0.95) < 0.01
+    np.testing.assert_allclose(mahalanobis_sq(z[:50], np.zeros(2), S), nis[:50])
+
+
+def test_gaussian_density_integrates_to_one() -> None:
+    xs = np.linspace(-10, 10, 401)
+    grid = np.stack(np.meshgrid(xs, xs), axis=-1).reshape(-1, 2)
+    cov = np.array([[2.0, 0.6], [0.6, 1.0]])
+    total = gaussian_density(grid, np.array([0.5, -0.5]), cov).sum() * (xs[1] - xs[0]) ** 2
+    assert abs(total - 1.0) < 1e-3

@@ -1,0 +1,1 @@
+"""Colour: conversions, n-D histograms and their similarity, colour lookup tables."""

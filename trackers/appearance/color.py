@@ -1,0 +1,25 @@
+"""Colour conversions of BGR (or grey) uint8 images, as the trackers' tables and histograms index them."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+
+def _bgr(image: np.ndarray) -> np.ndarray:
+    if image.ndim == 2:
+        return cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
+    return np.ascontiguousarray(image)
+
+
+def to_ycbcr(image: np.ndarray) -> np.ndarray:
+    """(..., 3) uint8 in (Y, Cb, Cr) order (OpenCV gives Y, Cr, Cb)."""
+    return cv2.cvtColor(_bgr(image), cv2.COLOR_BGR2YCrCb)[..., [0, 2, 1]]
+
+
+def to_hsv(image: np.ndarray) -> np.ndarray:
+    """(..., 3) uint8 H, S, V with OpenCV's ranges: H in [0, 180), S and V in [0, 256)."""
+    return cv2.cvtColor(_bgr(image), cv2.COLOR_BGR2HSV)
+
+
+HSV_RANGES = ((0.0, 180.0), (0.0, 256.0), (0.0, 256.0))  # value ranges of to_hsv's channels

@@ -1,0 +1,1 @@
+"""Estimation filters shared by the trackers: particles, Kalman/EKF (filterpy), gating, Gaussian merging."""

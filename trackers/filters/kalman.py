@@ -1,0 +1,44 @@
+"""Kalman and extended Kalman filters: filterpy's, in its textbook vocabulary (x, P, F, Q, H, R).
+
+Linear models use ``filterpy.kalman.KalmanFilter`` (``update(z, R=, H=)`` takes the measurement
+model per call). Nonlinear ones use :class:`MotionModelEkf`, filterpy's ``ExtendedKalmanFilter``
+whose state prediction is a function the tracker passes in (filterpy's documented way: override
+``predict_x``); ``update(z, HJacobian, Hx, R=)`` takes the measurement model per call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
+
+
+def linear_kalman(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray, H: np.ndarray, R: np.ndarray) -> KalmanFilter:
+    """A filterpy ``KalmanFilter`` with every matrix set (x as a column)."""
+    H = np.asarray(H, dtype=np.float64)
+    kf = KalmanFilter(dim_x=len(F), dim_z=H.shape[0])
+    kf.x = np.asarray(x, dtype=np.float64).reshape(-1, 1)
+    kf.P = np.asarray(P, dtype=np.float64)
+    kf.F = np.asarray(F, dtype=np.float64)
+    kf.Q = np.asarray(Q, dtype=np.float64)
+    kf.H = H
+    kf.R = np.asarray(R, dtype=np.float64)
+    return kf
+
+
+class MotionModelEkf(ExtendedKalmanFilter):
+    """filterpy's EKF with the state prediction ``x ← fx(x, dt)`` passed in.
+
+    ``predict(u=dt)`` propagates the mean with ``fx`` and the covariance with the current ``F``
+    and ``Q`` (``P = F P Fᵀ + Q``); set ``F`` (the Jacobian of ``fx``) and ``Q`` before each call.
+    The state is a 1-D vector.
+    """
+
+    def __init__(self, dim_x: int, dim_z: int, fx: Callable[[np.ndarray, float], np.ndarray]) -> None:
+        super().__init__(dim_x=dim_x, dim_z=dim_z)
+        self.fx = fx
+        self.x = np.zeros(dim_x)
+
+    def predict_x(self, u: float = 0.0) -> None:
+        self.x = self.fx(self.x, u)
