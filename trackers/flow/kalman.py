@@ -3,13 +3,16 @@
 State ``(x, ẋ, ẍ)`` with ``Φ = [[1, 1, 1/2], [0, 1, 1], [0, 0, α]]`` (eq. 23): the acceleration is
 ``α`` times the previous one plus white noise of variance ``q``; position and velocity are
 observed (``H``, eq. 24) with variances ``r_pos``, ``r_vel``. The paper treats x and y as
-independent with the same model, so there is one filterpy filter per axis.
+independent with the same model, so there is one filter per axis — the project's one Kalman
+vocabulary, filterpy's, built by ``trackers.filters.kalman.linear_kalman``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from filterpy.kalman import KalmanFilter
+
+from trackreplay.trackers.filters.kalman import linear_kalman
 
 
 def transition(alpha: float) -> np.ndarray:
@@ -28,14 +31,14 @@ class AxisFilters:
     ) -> None:
         self.filters: list[KalmanFilter] = []
         for p in position:
-            kf = KalmanFilter(dim_x=3, dim_z=2)
-            kf.x = np.array([[float(p)], [0.0], [0.0]])
-            kf.F = transition(alpha)
-            kf.H = OBSERVATION.copy()
-            kf.Q = np.diag([0.0, 0.0, q])  # noise enters only the acceleration (eq. 23)
-            kf.R = np.diag([r_pos, r_vel])  # eq. 24
-            kf.P = np.diag(np.asarray(p0, dtype=np.float64))  # eq. 22
-            self.filters.append(kf)
+            self.filters.append(linear_kalman(
+                x=[float(p), 0.0, 0.0],
+                P=np.diag(np.asarray(p0, dtype=np.float64)),  # eq. 22
+                F=transition(alpha),
+                Q=np.diag([0.0, 0.0, q]),  # noise enters only the acceleration (eq. 23)
+                H=OBSERVATION.copy(),
+                R=np.diag([r_pos, r_vel]),  # eq. 24
+            ))
 
     def predict(self) -> None:
         """Propagation, eq. 19–20."""
