@@ -143,6 +143,8 @@ def read_trajectory(path: str | Path) -> pl.DataFrame:
             raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
     except (pl.exceptions.PolarsError, OSError) as err:
         raise TrackreplayError(f"{path} is not a readable trajectory table ({err})") from None
+    if "confidence" not in df.columns:  # tables written before the column existed
+        df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
     absent = [c for c in COLUMNS if c not in df.columns]
     if absent:
         raise TrackreplayError(f"{path} lacks trajectory columns: {', '.join(absent)}")

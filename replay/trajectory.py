@@ -18,12 +18,13 @@ SCHEMA: dict[str, pl.DataType] = {
     "t_ns": pl.Int64,
     **{c: pl.Float64 for c in FLOAT_COLUMNS},
     "status": pl.String,
+    "confidence": pl.Float64,
 }
 COLUMNS = tuple(SCHEMA)
 
 
 def state_row(tracker: str, frame: int, t_ns: int, state: TrackState) -> tuple:
-    return (tracker, state.track_id, frame, t_ns, *(getattr(state, c) for c in FLOAT_COLUMNS), state.status)
+    return (tracker, state.track_id, frame, t_ns, *(getattr(state, c) for c in FLOAT_COLUMNS), state.status, state.confidence)
 
 
 def trajectory_table(rows: Iterable[Sequence]) -> pl.DataFrame:

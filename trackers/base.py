@@ -10,6 +10,7 @@ import numpy as np
 from trackreplay.trackers.frame import Frame
 
 STATUSES = ("measured", "predicted", "interpolated", "lost")
+POSITION_FIELDS = ("x", "y", "X", "Y", "Z", "dx", "dy", "dz")
 
 
 @dataclass(frozen=True)
@@ -30,10 +31,15 @@ class TrackState:
     vx: float | None = None
     vy: float | None = None
     status: str = "measured"
+    confidence: float | None = None  # in [0, 1], where the tracker has one
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
             raise ValueError(f"status must be one of {STATUSES}, not {self.status!r}")
+        if self.status == "lost" and any(getattr(self, c) is not None for c in POSITION_FIELDS):
+            raise ValueError("a lost track state has no position (ARCHITECTURE ★ trajectory table)")
+        if self.confidence is not None and not 0.0 <= self.confidence <= 1.0:
+            raise ValueError(f"confidence must be in [0, 1], not {self.confidence!r}")
 
 
 class Tracker(Protocol):

@@ -71,3 +71,15 @@ def test_bad_inputs(tmp_path: Path) -> None:
         read_trajectory(bad)
     with pytest.raises(TrackreplayError, match="interpolation method"):
         fill_gaps(_table([0], [1.0]), "quadratic")
+
+
+def test_lost_state_with_a_position_is_refused_and_confidence_is_bounded() -> None:
+    import pytest
+
+    from trackreplay.trackers.base import TrackState
+
+    with pytest.raises(ValueError, match="no position"):
+        TrackState(1, x=3.0, y=4.0, status="lost")
+    with pytest.raises(ValueError, match="confidence"):
+        TrackState(1, x=3.0, y=4.0, confidence=1.5)
+    assert TrackState(1, status="lost", confidence=0.0).x is None

@@ -113,7 +113,9 @@ class FlowTracker:
             moving_pixels=est.count,
         )
         lost = not inside(filtered, grey.shape) or self._still >= cfg.lost_after
-        status = "lost" if lost else ("measured" if est.count > 0 else "predicted")
+        if lost:  # no position: the FOV has left the picture or nothing has moved for lost_after frames
+            return [TrackState(1, status="lost")]
+        status = "measured" if est.count > 0 else "predicted"
         return [TrackState(1, x=float(filtered[0]), y=float(filtered[1]), w=self._extent[0], h=self._extent[1],
                            vx=float(velocity[0]), vy=float(velocity[1]), status=status)]
 

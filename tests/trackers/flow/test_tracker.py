@@ -117,6 +117,7 @@ def test_nothing_moving_predicts_then_is_lost(scene) -> None:
     outs, inters = _run(frames, FlowConfig(lost_after=4, init_center=(128.0, 128.0)))
     statuses = [o[0].status for o in outs]
     assert statuses == ["measured", "predicted", "predicted", "predicted", "lost", "lost", "lost", "lost"]
+    assert all(o[0].x is None and o[0].y is None for o in outs[4:])  # lost rows carry no position
     assert all(i.moving_pixels == 0 for i in inters)
 
 
