@@ -36,6 +36,8 @@ class FrameLogger:
         self._frame = 0
         self._t_ns = 0
         self._series: dict[str, tuple[list[int], list[int], list[float]]] = {}
+        self._static: set[str] = set()
+        self.live_tracks: set[int] = set()  # track ids drawn under tracks/ last frame (views.parts.tracks)
 
     def set_frame(self, index: int, t_ns: int) -> None:
         self._frame, self._t_ns = index, t_ns
@@ -44,6 +46,12 @@ class FrameLogger:
 
     def log(self, path: str, *entities, **kwargs) -> None:
         self.rec.log(path, *entities, **kwargs)
+
+    def static_once(self, path: str, entity: rr.AsComponents) -> None:
+        """Log ``entity`` statically at ``path`` the first time only (an annotation context, a layout)."""
+        if path not in self._static:
+            self._static.add(path)
+            self.rec.log(path, entity, static=True)
 
     def scalar(self, path: str, value: float) -> None:
         frames, times, values = self._series.setdefault(path, ([], [], []))
@@ -65,18 +73,29 @@ class FrameLogger:
         self._series.clear()
 
 
+def _stream(recording_id: str) -> rr.RecordingStream:
+    rec = rr.RecordingStream("trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher())
+    # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
+    rec.set_log_time_enabled(False)
+    return rec
+
+
 class RerunSink:
-    """Owns the RecordingStream; trackers' views log through ``self.logger``."""
+    """Owns the RecordingStream; trackers' views log through ``self.logger``.
+
+    The stream is written to ``<path>.partial`` and rewritten in a canonical chunk order on
+    ``close`` (see :func:`canonical_chunks`), so ``rerun rrd compare`` of two replays passes
+    without ``--unordered``.
+    """
 
     def __init__(self, path: str | Path, recording_id: str, blueprint: rrb.Blueprint) -> None:
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.rec = rr.RecordingStream(
-            "trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher()
-        )
-        # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
-        self.rec.set_log_time_enabled(False)
-        self.rec.save(str(self.path), default_blueprint=blueprint)
+        self.partial = self.path.with_name(self.path.name + ".partial")
+        self.recording_id = recording_id
+        self.blueprint = blueprint
+        self.rec = _stream(recording_id)
+        self.rec.save(str(self.partial))
         self.logger = FrameLogger(self.rec)
 
     def begin_frame(self, frame: Frame) -> None:
@@ -96,6 +115,38 @@ class RerunSink:
         self.logger.flush_scalars()
         self.rec.flush()
         self.rec.disconnect()
+        out = _stream(self.recording_id)
+        out.save(str(self.path), default_blueprint=self.blueprint)
+        out.send_chunks(canonical_chunks(self.partial))
+        out.flush()
+        out.disconnect()
+        self.partial.unlink()
+
+
+def canonical_chunks(path: str | Path) -> list:
+    """The recording's chunks of an .rrd in an order that does not depend on the process, with
+    fresh chunk ids assigned in that order.
+
+    Rerun's batcher splits one entity's rows into one chunk per component set (a ``Clear`` and a
+    ``Points2D`` on the same path make two) and emits those in hash-map order, which differs
+    between processes; readers (``rerun rrd compare``, the store) order chunks by chunk id, so
+    two replays differed in order, not content. Here chunks are sorted by entity path, then by
+    their first row id (row ids grow in logging order), and re-created so their new ids follow
+    that order.
+    """
+    import rerun.chunk as rc
+
+    keyed = []
+    for chunk in rc.RrdReader(str(path)).stream():
+        batch = chunk.to_record_batch()
+        first_row = batch.column(batch.schema.names.index("rerun.controls.RowId"))[0].as_py() if batch.num_rows else b""
+        index = None if chunk.is_static else sorted(chunk.timeline_names)
+        keyed.append((str(chunk.entity_path), first_row, batch, index))
+    keyed.sort(key=lambda k: (k[0], k[1]))
+    chunks = []
+    for _, _, batch, index in keyed:  # naming the index columns makes Rerun assign fresh ids
+        chunks += rc.Chunk.from_record_batch(batch, index=index)
+    return chunks
 
 
 def rrd_digest(path: str | Path) -> str:
