@@ -1,10 +1,23 @@
-"""The deterministic replay loop: log -> frames -> tracker -> trajectory, digest, Rerun."""
+"""The deterministic replay loop: log -> frames -> tracker -> trajectory, digest, Rerun.
+
+:func:`iter_steps` is the loop itself, one :class:`ReplayStep` (frame, track states,
+intermediates) per frame; :func:`replay` consumes it into the trajectory, the digest and the
+optional .rrd, so tests, notebooks, docs scripts and benchmarks step the path the CLI takes.
+
+Notices belong in the digest. A tracker's ``intermediates.notice`` (e.g. "no PTZ encoders:
+tracking in image coordinates only") is a field of its intermediates like any other, so it is
+hashed with them in every frame: it is derived from the log, config and seed alone, and it
+records a change of mode that the numbers alone may not show. Rewording a notice therefore
+changes the digest (as any change of a tracker's outputs does). Separately, :func:`replay`
+prints each distinct notice once to stderr and returns them, in order, in ``ReplayResult.notices``.
+"""
 
 from __future__ import annotations
 
 import sys
 import time
 import zlib
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,11 +28,14 @@ import polars as pl
 from tqdm import tqdm
 
 from trackreplay.replay import registry
+from trackreplay.replay.config import ConfigSource, load_config
 from trackreplay.replay.digest import ReplayDigest
 from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
 from trackreplay.replay.trajectory import state_row, trajectory_table
+from trackreplay.trackers.base import Tracker, TrackState
+from trackreplay.trackers.frame import Frame
 
 
 def tracker_rng(seed: int, tracker: str) -> np.random.Generator:
@@ -31,7 +47,7 @@ def tracker_rng(seed: int, tracker: str) -> np.random.Generator:
 class ReplayRequest:
     log: Path
     tracker: str
-    config: Any = None  # the tracker's frozen config; None = defaults
+    config: ConfigSource = None  # the tracker's config: None (defaults), an instance, a dict or a TOML path
     seed: int = 0
     rrd: Path | None = None
     start_s: float | None = None  # seconds from the first message of the log
@@ -52,6 +68,7 @@ class ReplayResult:
     seconds: float
     report: BundleReport = field(default_factory=BundleReport)
     rrd: Path | None = None
+    notices: tuple[str, ...] = ()  # each distinct tracker notice, in the order first seen
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
@@ -68,52 +85,88 @@ class ReplayResult:
             "unpaired_images": len(self.report.unpaired),
             "frames_outside_encoder_coverage": len(self.report.outside_encoder_coverage),
             "rrd": str(self.rrd) if self.rrd else None,
+            "notices": list(self.notices),
         }
 
 
+@dataclass(frozen=True)
+class ReplayStep:
+    """One frame of a replay: the frame as the tracker saw it, its track states, its intermediates."""
+
+    frame: Frame
+    states: tuple[TrackState, ...]
+    intermediates: Any
+
+
+class ReplaySteps(Iterator[ReplayStep]):
+    """The replay loop as an iterator; opening the log, building and preparing the tracker happen
+    on construction, so a bad log, topic or config fails before the first step.
+    """
+
+    def __init__(self, req: ReplayRequest) -> None:
+        self.request = req
+        self.entry = registry.get(req.tracker)
+        self.config = load_config(self.entry.config_cls, req.config, table=req.tracker)
+        cv2.setNumThreads(req.opencv_threads)
+        cv2.setRNGSeed(req.seed)
+        reader = LogReader(req.log)
+        topics = FrameTopics.detect(reader, req.image_topic)
+        reader.require(topics.image)
+        t0, _ = reader.time_range()
+        start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
+        end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
+        self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
+        self.tracker.prepare(marked_images(reader, topics))  # a no-op for trackers that need no look ahead
+        self.report = BundleReport()
+        self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)
+        self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report),
+                                req.prefetch)
+
+    def __next__(self) -> ReplayStep:
+        frame = next(self._frames)
+        states = tuple(self.tracker.step(frame))
+        return ReplayStep(frame, states, self.tracker.intermediates)
+
+    def close(self) -> None:
+        """Stop reading ahead (for a consumer that leaves the loop early)."""
+        self._frames.close()
+
+
+def iter_steps(req: ReplayRequest) -> ReplaySteps:
+    """The replay loop, one :class:`ReplayStep` per frame in log-time order (what :func:`replay` runs)."""
+    return ReplaySteps(req)
+
+
 def replay(req: ReplayRequest) -> ReplayResult:
-    """Step the tracker over every frame of the log in log-time order."""
-    entry = registry.get(req.tracker)
-    config = req.config if req.config is not None else entry.config_cls()
-    cv2.setNumThreads(req.opencv_threads)
-    cv2.setRNGSeed(req.seed)
-    reader = LogReader(req.log)
-    topics = FrameTopics.detect(reader, req.image_topic)
-    reader.require(topics.image)
-    t0, _ = reader.time_range()
-    start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
-    end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
-    tracker = entry.tracker_cls(config, tracker_rng(req.seed, req.tracker))
-    if hasattr(tracker, "prepare"):  # trackers that learn from every marked frame up front
-        tracker.prepare(marked_images(reader, topics))
+    """Step the tracker over every frame of the log: trajectory, digest, notices and the optional .rrd."""
+    steps = iter_steps(req)
     sink = None
     if req.rrd is not None:
         from trackreplay.replay.rerun_sink import RerunSink
 
-        sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", entry.view.blueprint(req.tracker))
-    report = BundleReport()
+        sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker))
     digest = ReplayDigest()
     rows: list[tuple] = []
     notices: list[str] = []
-    total = reader.topics()[topics.image].count
-    frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=report), req.prefetch)
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
     started = time.perf_counter()
     try:
-        for frame in tqdm(frames, total=total, disable=not req.progress, unit="frame", desc=req.tracker, leave=False):
-            states = tracker.step(frame)
-            notice = getattr(tracker.intermediates, "notice", "")
+        for step in tqdm(steps, total=steps.total, disable=not req.progress, unit="frame", desc=req.tracker, leave=False):
+            frame = step.frame
+            notice = getattr(step.intermediates, "notice", "")
             if notice and notice not in notices:
                 notices.append(notice)
                 print(f"trackreplay: {req.tracker}: {notice}", file=sys.stderr)
-            digest.add_frame(frame.index, (tracker.intermediates, tuple(states)))
-            rows.extend(state_row(req.tracker, frame.index, frame.t_ns, s) for s in states)
+            digest.add_frame(frame.index, (step.intermediates, step.states))
+            rows.extend(state_row(req.tracker, frame.index, frame.t_ns, s) for s in step.states)
             if sink is not None:
                 sink.begin_frame(frame)
-                entry.view.log(sink.logger, req.tracker, frame, tracker.intermediates, states)
+                steps.entry.view.log(sink.logger, req.tracker, frame, step.intermediates, list(step.states))
     finally:
+        steps.close()
         if sink is not None:
             sink.close()
     seconds = time.perf_counter() - started
     table = trajectory_table(rows)
-    return ReplayResult(req.tracker, req.seed, table, digest.finish(table), report.frames, seconds, report, req.rrd)
+    return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
+                        req.rrd, tuple(notices))

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.frame import Frame
+
+Marked = Iterable[tuple[np.ndarray, Sequence[InitRegion]]]  # (image, regions marked on it) per marked frame
 
 STATUSES = ("measured", "predicted", "interpolated", "lost")
 POSITION_FIELDS = ("x", "y", "X", "Y", "Z", "dx", "dy", "dz")
@@ -43,11 +48,12 @@ class TrackState:
 
 
 class Tracker(Protocol):
-    """A tracker is built from ``(config, rng)`` and stepped once per frame.
+    """A tracker is built from ``(config, rng)``, prepared once, then stepped once per frame.
 
-    After each ``step`` its ``intermediates`` hold that frame's inner results as
-    plain numpy data (a frozen dataclass); the engine hashes them into the digest
-    and, when a Rerun recording is on, hands them to the tracker's view.
+    ``prepare`` receives every frame the log's init annotations mark, before the first step
+    (the engine always calls it). After each ``step`` its ``intermediates`` hold that frame's
+    inner results as plain numpy data (a frozen dataclass); the engine hashes them into the
+    digest and, when a Rerun recording is on, hands them to the tracker's view.
     """
 
     name: ClassVar[str]
@@ -55,4 +61,24 @@ class Tracker(Protocol):
 
     def __init__(self, config: Any, rng: np.random.Generator) -> None: ...
 
+    def prepare(self, marked: Marked) -> None: ...
+
     def step(self, frame: Frame) -> list[TrackState]: ...
+
+
+class TrackerBase(ABC):
+    """The :class:`Tracker` protocol's defaults; trackers subclass it and override what they use."""
+
+    name: ClassVar[str]
+    intermediates: Any = None
+
+    def prepare(self, marked: Marked) -> None:  # noqa: B027 (a default, not an abstract method)
+        """Learn from the marked frames before the first step.
+
+        Does nothing by design: most trackers start from the hints a frame carries when it
+        arrives; one that must see every mark up front (the golf tracker's LUTs) overrides this.
+        """
+
+    @abstractmethod
+    def step(self, frame: Frame) -> list[TrackState]:
+        """This frame's track states; sets ``self.intermediates``."""

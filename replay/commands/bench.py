@@ -6,8 +6,6 @@ import argparse
 import json
 from pathlib import Path
 
-from trackreplay.trackers.config_io import config_from_toml
-
 from trackreplay.replay import registry
 from trackreplay.replay.bench import format_timing, time_replay
 
@@ -24,9 +22,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    entry = registry.get(args.tracker)
-    config = config_from_toml(entry.config_cls, args.config, table=args.tracker) if args.config else None
-    timing = time_replay(args.log, args.tracker, args.repeats, config)
+    timing = time_replay(args.log, args.tracker, args.repeats, args.config)
     print(format_timing(f"{args.tracker} on {args.log}", timing))
     if args.json:
         args.json.write_text(json.dumps({

@@ -8,7 +8,6 @@ import sys
 from pathlib import Path
 
 from trackreplay.schemas.errors import TrackreplayError
-from trackreplay.trackers.config_io import config_from_toml
 
 from trackreplay.replay import registry
 from trackreplay.replay.engine import ReplayRequest, replay
@@ -45,10 +44,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayRequest:
-    entry = registry.get(args.tracker)
-    config = config_from_toml(entry.config_cls, args.config, table=args.tracker) if args.config else None
     return ReplayRequest(
-        log=args.log, tracker=args.tracker, config=config, seed=args.seed, rrd=rrd,
+        log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
         progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads,
     )

@@ -45,7 +45,7 @@ def test_start_end_select_a_time_range(short_sim: Path, tmp_path: Path) -> None:
     [
         (["replay", "missing.mcap"], "missing.mcap does not exist"),
         (["replay", "{log}", "--image-topic", "/nope"], "has no topic /nope; topics present:"),
-        (["replay", "{log}", "--config", "{cfg}"], "unknown FlowConfig key(s) bogus"),
+        (["replay", "{log}", "--config", "{cfg}"], "c.toml: unknown key bogus; known: "),
         (["eval", "{traj}", "{log}"], "does not exist"),
     ],
 )

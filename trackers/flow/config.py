@@ -3,10 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
-
-from trackreplay.trackers.config_io import config_from_dict, config_from_toml
 
 
 @dataclass(frozen=True)
@@ -67,12 +63,3 @@ class FlowConfig:
     def sigma_at(self, iteration: int) -> float:
         """Blur of the given refinement (offline) or frame (on-line); the last value repeats."""
         return float(self.sigmas[min(iteration, len(self.sigmas) - 1)])
-
-    @classmethod
-    def from_dict(cls, values: dict[str, Any], source: str = "flow config") -> FlowConfig:
-        return config_from_dict(cls, values, source)
-
-    @classmethod
-    def from_toml(cls, path: str | Path) -> FlowConfig:
-        """Read a TOML file (top level or a ``[flow]`` table); unknown keys are an error."""
-        return config_from_toml(cls, path, table="flow")

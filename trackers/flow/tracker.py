@@ -13,7 +13,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from trackreplay.trackers.base import TrackState
+from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.flow.config import FlowConfig
 from trackreplay.trackers.flow.fov import crop, fov_origin, inside, next_centre, shift_field
 from trackreplay.trackers.flow.kalman import AxisFilters
@@ -45,7 +45,7 @@ class FlowIntermediates:
     moving_pixels: int
 
 
-class FlowTracker:
+class FlowTracker(TrackerBase):
     """Tracks one moving object with the gradient method (seed 004); ``name = "flow"``."""
 
     name: ClassVar[str] = "flow"

@@ -1,0 +1,123 @@
+"""Tracker configs from TOML files, dicts or instances (trackers themselves do no I/O).
+
+A tracker's config is a frozen dataclass whose fields may themselves be frozen dataclasses
+(``GolfConfig(particles=ParticleConfig(...), lut=LutConfig(...))``). A TOML file gives it either
+at the top level or under the tracker's table, nested the same way (``[golf]``, ``[golf.particles]``);
+a dict is nested the same way too. Unknown keys are an error naming the key's full path; lists
+become tuples so configs stay hashable.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+import types
+import typing
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, TypeVar
+
+from trackreplay.schemas.errors import TrackreplayError
+
+C = TypeVar("C")
+ConfigSource = Any  # None | a config dataclass instance | a Mapping | a TOML path (str or Path)
+
+
+def _dataclass_of(hint: Any) -> type | None:
+    """The dataclass a field holds (also through ``X | None``), else None."""
+    if dataclasses.is_dataclass(hint) and isinstance(hint, type):
+        return hint
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        inner = [a for a in typing.get_args(hint) if a is not type(None)]
+        if len(inner) == 1:
+            return _dataclass_of(inner[0])
+    return None
+
+
+def _tuples(value: Any) -> Any:
+    if isinstance(value, list | tuple):
+        return tuple(_tuples(v) for v in value)
+    return value
+
+
+def _join(prefix: str, key: str) -> str:
+    return f"{prefix}.{key}" if prefix else key
+
+
+def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "config", prefix: str = "") -> C:
+    """Build ``cls`` from ``values`` (nested mappings for nested config dataclasses).
+
+    ``source`` names where the values came from (a file) and ``prefix`` the key path of ``values``
+    there (``golf`` for a ``[golf]`` table); both only shape the error messages.
+    """
+    if not isinstance(values, Mapping):
+        where = prefix or cls.__name__
+        raise TrackreplayError(f"{source}: {where} must be a table of keys, not {type(values).__name__} {values!r}")
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    unknown = sorted(set(values) - set(fields))
+    if unknown:
+        keys = ", ".join(_join(prefix, k) for k in unknown)
+        raise TrackreplayError(f"{source}: unknown key{'s' if len(unknown) > 1 else ''} {keys}; "
+                               f"known: {', '.join(sorted(fields))}")
+    hints = typing.get_type_hints(cls)
+    clean: dict[str, Any] = {}
+    for key, value in values.items():
+        inner = _dataclass_of(hints.get(key))
+        if inner is None or value is None or isinstance(value, inner):
+            clean[key] = _tuples(value)
+        else:  # a nested config: its table (anything else is reported there)
+            clean[key] = config_from_dict(inner, value, source, _join(prefix, key))
+    try:
+        return cls(**clean)
+    except (TypeError, ValueError) as err:
+        raise TrackreplayError(f"{source}: invalid {prefix or cls.__name__} ({err})") from None
+
+
+def read_toml(path: str | Path) -> dict[str, Any]:
+    """A TOML file's tables; a missing or malformed file is a one-sentence error."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise TrackreplayError(f"{path} does not exist") from None
+    except IsADirectoryError:
+        raise TrackreplayError(f"{path} is a directory, not a TOML file") from None
+    except UnicodeDecodeError:
+        raise TrackreplayError(f"{path} is not a text (TOML) file") from None
+    except tomllib.TOMLDecodeError as err:
+        raise TrackreplayError(f"{path} is not valid TOML ({err})") from None
+
+
+def config_from_toml(cls: type[C], path: str | Path, table: str | None = None) -> C:
+    """Read ``path`` into ``cls``: its ``[table]`` (with sub-tables) when present, else the top level."""
+    data = read_toml(path)
+    if table is not None and isinstance(data.get(table), dict):
+        return config_from_dict(cls, data[table], str(path), table)
+    return config_from_dict(cls, data, str(path))
+
+
+def load_config(cls: type[C], source: ConfigSource = None, table: str | None = None) -> C:
+    """``cls`` from None (defaults), an instance of ``cls``, a dict, or a TOML file path."""
+    if source is None:
+        return cls()
+    if isinstance(source, cls):
+        return source
+    if isinstance(source, Mapping):
+        return config_from_dict(cls, source, f"{table or cls.__name__} config dict")
+    if isinstance(source, str | Path):
+        return config_from_toml(cls, source, table)
+    raise TrackreplayError(f"a {cls.__name__} must be given as None, a {cls.__name__}, a dict or a TOML path, "
+                           f"not {type(source).__name__}")
+
+
+def config_to_dict(config: Any) -> dict[str, Any]:
+    """The inverse of :func:`config_from_dict`: nested dicts, tuples as lists (TOML/JSON ready)."""
+
+    def plain(value: Any) -> Any:
+        if isinstance(value, dict):
+            return {k: plain(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [plain(v) for v in value]
+        return value
+
+    return plain(dataclasses.asdict(config))

@@ -1,0 +1,62 @@
+"""The replay loop as an iterator: what replay() consumes, prepare always called, early exit."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+import pytest
+
+from trackreplay.replay import registry
+from trackreplay.replay.digest import ReplayDigest
+from trackreplay.replay.engine import ReplayRequest, ReplayStep, iter_steps, replay
+from trackreplay.replay.trajectory import state_row, trajectory_table
+from trackreplay.trackers.base import TrackerBase
+from trackreplay.trackers.flow.tracker import FlowTracker
+
+
+def test_steps_rebuild_exactly_what_replay_returns(short_sim: Path) -> None:
+    req = ReplayRequest(log=short_sim, tracker="flow")
+    digest, rows, indices = ReplayDigest(), [], []
+    for step in iter_steps(req):
+        assert isinstance(step, ReplayStep) and isinstance(step.states, tuple)
+        indices.append(step.frame.index)
+        digest.add_frame(step.frame.index, (step.intermediates, step.states))
+        rows += [state_row("flow", step.frame.index, step.frame.t_ns, s) for s in step.states]
+    table = trajectory_table(rows)
+    result = replay(req)
+    assert indices == list(range(result.frames))
+    assert table.equals(result.trajectory)
+    assert digest.finish(table) == result.digest
+
+
+def test_prepare_is_part_of_the_protocol_and_always_called(short_sim: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    assert TrackerBase.prepare(FlowTracker.__new__(FlowTracker), [(None, ())]) is None  # the documented no-op
+    seen: list[list] = []
+
+    class Recording(FlowTracker):
+        def prepare(self, marked) -> None:
+            seen.append(list(marked))
+
+    entry = registry.get("flow")
+    monkeypatch.setattr(registry, "get", lambda name: registry.TrackerEntry("flow", entry.config_cls, Recording, entry.view))
+    steps = iter_steps(ReplayRequest(log=short_sim, tracker="flow"))
+    assert len(seen) == 1  # on construction, before any step
+    (image, regions), = seen[0]  # the sim marks its target in frame 0
+    assert image.shape == (256, 256) and [r.frame for r in regions] == [0]
+    steps.close()
+
+
+def test_leaving_the_loop_early_stops_the_reader_thread(short_sim: Path) -> None:
+    steps = iter_steps(ReplayRequest(log=short_sim, tracker="flow", prefetch=2))
+    first = next(steps)
+    assert first.frame.index == 0
+    steps.close()
+    assert not any(t.name == "trackreplay-prefetch" and t.is_alive() for t in threading.enumerate())
+
+
+def test_a_bad_config_fails_before_the_first_step(short_sim: Path) -> None:
+    from trackreplay.schemas.errors import TrackreplayError
+
+    with pytest.raises(TrackreplayError, match="unknown key fovv"):
+        iter_steps(ReplayRequest(log=short_sim, tracker="flow", config={"fovv": 3}))
