@@ -93,7 +93,7 @@ def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
 
 def test_config_loads_from_a_dict_and_rejects_nonsense():
     from trackreplay.schemas.errors import TrackreplayError
-    from trackreplay.trackers.config_io import config_from_dict
+    from trackreplay.replay.config import config_from_dict
 
     cfg = config_from_dict(GolfConfig, {"n_particles": 500, "sigma_px": 4.0, "lost_search": "stay"})
     assert cfg.n_particles == 500 and cfg.lost_search == "stay"
