@@ -12,6 +12,7 @@ from mcap.reader import make_reader
 from mcap.writer import Writer
 from mcap_protobuf.schema import register_schema
 
+from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -80,10 +81,8 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     ``out`` may equal ``src``: the new log is written beside it and renamed over it only
     once complete, so an interruption never damages the original.
     """
-    from trackreplay.replay.reader import LogReader  # the reader's checks give the clear errors
-
-    reader = LogReader(src)
-    reader.require(image_topic)
+    summary = read_summary(src)  # missing, not MCAP or truncated: one-sentence errors
+    require_topic(src, summary, image_topic)
     times = _frame_times(src, image_topic)
     regions = []
     for mk in marks:
@@ -118,7 +117,7 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
             cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
             if cid is None:
                 cid = writer.register_channel(T.ANNOTATIONS_INIT, "protobuf", register_schema(writer, m.InitAnnotations))
-            sequence = reader.topics()[T.ANNOTATIONS_INIT].count if T.ANNOTATIONS_INIT in reader.topics() else 0
+            sequence = topic_counts(summary).get(T.ANNOTATIONS_INIT, 0)
             writer.add_message(cid, times[0], annotation.SerializeToString(), times[0], sequence)
             writer.finish()
         os.replace(tmp, out)

@@ -41,3 +41,17 @@ def test_in_place_is_atomic_and_bad_marks_are_named(short_sim: Path, tmp_path: P
     assert "bad.csv:2: expected frame,x,y,w,h[,label], got 4 columns" in capsys.readouterr().err
     assert main(["annotate", str(log), "--frame", "0", "--box", "1,1,2,2", "--in-place"]) == 0
     assert len(read_hints(LogReader(log), T.ANNOTATIONS_INIT)) == 2
+
+
+def test_a_truncated_or_topicless_source_is_named_and_nothing_is_written(short_sim: Path, tmp_path: Path,
+                                                                         capsys: pytest.CaptureFixture) -> None:
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(short_sim.read_bytes()[:-100])
+    out = tmp_path / "out.mcap"
+    assert main(["annotate", str(cut), "--frame", "0", "--box", "1,1,2,2", "--out", str(out)]) == 3
+    assert f"{cut} is truncated or corrupt" in capsys.readouterr().err and not out.exists()
+    from trackreplay.recorder.annotate import Mark, annotate
+    from trackreplay.schemas.errors import LogError
+
+    with pytest.raises(LogError, match=r"has no topic /nope; topics present: .*/camera/image"):
+        annotate(short_sim, tmp_path / "x.mcap", [Mark(0, 1, 1, 2, 2)], image_topic="/nope")
