@@ -4,9 +4,9 @@
 intermediates) per frame; :func:`replay` consumes it into the trajectory, the digest and the
 optional .rrd, so tests, notebooks, docs scripts and benchmarks step the path the CLI takes.
 
-Notices belong in the digest. A tracker's ``intermediates.notice`` (e.g. "no PTZ encoders:
-tracking in image coordinates only") is a field of its intermediates like any other, so it is
-hashed with them in every frame: it is derived from the log, config and seed alone, and it
+Notices belong in the digest. A tracker's ``intermediates.notice`` (e.g. the golf tracker's
+"… tracking in image coordinates only") is a field of its intermediates like any other, so it
+is hashed with them in every frame: it is derived from the log, config and seed alone, and it
 records a change of mode that the numbers alone may not show. Rewording a notice therefore
 changes the digest (as any change of a tracker's outputs does). Separately, :func:`replay`
 prints each distinct notice once to stderr and returns them, in order, in ``ReplayResult.notices``.

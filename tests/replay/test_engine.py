@@ -60,3 +60,33 @@ def test_a_bad_config_fails_before_the_first_step(short_sim: Path) -> None:
 
     with pytest.raises(TrackreplayError, match="unknown key fovv"):
         iter_steps(ReplayRequest(log=short_sim, tracker="flow", config={"fovv": 3}))
+
+
+def test_notices_are_hashed_into_the_digest_printed_once_and_returned(short_sim: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                      capsys: pytest.CaptureFixture) -> None:
+    from dataclasses import dataclass
+    from typing import Any
+
+    @dataclass(frozen=True)
+    class Noted:
+        inner: Any
+        notice: str
+
+    def run(text: str):
+        class Noting(FlowTracker):
+            def step(self, frame):
+                states = super().step(frame)
+                self.intermediates = Noted(self.intermediates, text if frame.index >= 2 else "")
+                return states
+
+        entry = registry.get("flow")
+        monkeypatch.setattr(registry, "get", lambda name: registry.TrackerEntry("flow", entry.config_cls, Noting, entry.view))
+        result = replay(ReplayRequest(log=short_sim, tracker="flow"))
+        monkeypatch.undo()
+        return result
+
+    a, b = run("mode A"), run("mode B")
+    assert a.notices == ("mode A",) and b.notices == ("mode B",)
+    assert capsys.readouterr().err.count("trackreplay: flow: mode A") == 1
+    assert a.trajectory.equals(b.trajectory) and a.digest != b.digest
+    assert a.summary(short_sim)["notices"] == ["mode A"]
