@@ -6,9 +6,9 @@ top-level module of those names is installed next to other packages.
 
 Python API (imported on first use, so ``import trackreplay`` stays light)::
 
-    result = trackreplay.replay_log("clip.mcap", "golf", config={"particles": {"n": 500}})
+    result = trackreplay.replay_log("clip.mcap", "flow", config={"fov": 41})
     result.trajectory, result.digest
-    for step in trackreplay.iter_steps(trackreplay.ReplayRequest(log="clip.mcap", tracker="golf")):
+    for step in trackreplay.iter_steps(trackreplay.ReplayRequest(log="clip.mcap", tracker="flow")):
         step.frame, step.states, step.intermediates
 """
 
