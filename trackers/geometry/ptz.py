@@ -5,25 +5,25 @@ World frame: right-handed, metres, Z up, ground plane Z = 0. Pan rotates about w
 camera's horizontal axis (degrees, positive up). Camera frame as OpenCV: x right, y down,
 z forward. Because the camera only rotates, a line of sight stored under one pose can be
 drawn into the image of any other pose without knowing depth (seed 000, §2).
+
+:class:`PtzCamera` is the one posed camera of the project (the frame bundle carries it): its
+rotation ``R`` and the intrinsic matrices are computed once and cached, so a tracker may use it a
+dozen times a frame (lines of sight, projections, the pose-change homography, an EKF Jacobian).
+Projection and back-projection are the pinhole's (:mod:`trackreplay.trackers.geometry.pinhole`).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from trackreplay.schemas.records import LensTable, PtzReading
+from trackreplay.trackers.geometry.pinhole import Intrinsics
 
-
-@dataclass(frozen=True)
-class Intrinsics:
-    fx: float
-    fy: float
-    cx: float
-    cy: float
-    width: int
-    height: int
+__all__ = ["Intrinsics", "PtzCamera", "intrinsics_at", "pan_tilt_towards", "pose_homography", "rotation_world_from_camera",
+           "zoom_area_ratio"]
 
 
 def intrinsics_at(lens: LensTable, zoom: float, focus: float) -> Intrinsics:
@@ -76,33 +76,42 @@ class PtzCamera:
         return cls(np.asarray(lens.camera_position, dtype=np.float64), reading.pan, reading.tilt,
                    intrinsics_at(lens, reading.zoom, reading.focus))
 
-    @property
-    def R(self) -> np.ndarray:
+    @cached_property
+    def R(self) -> np.ndarray:  # noqa: N802 (the textbook symbol)
+        """World from camera: columns are the camera's right, down and forward axes in world axes."""
         return rotation_world_from_camera(self.pan, self.tilt)
+
+    @property
+    def K(self) -> np.ndarray:  # noqa: N802
+        return self.intrinsics.K
+
+    @property
+    def K_inv(self) -> np.ndarray:  # noqa: N802
+        return self.intrinsics.K_inv
 
     def line_of_sight(self, pixels: np.ndarray) -> np.ndarray:
         """Unit world vectors from the camera through image points ``(N, 2)`` (u, v)."""
-        k = self.intrinsics
-        uv = np.atleast_2d(np.asarray(pixels, dtype=np.float64))
-        rays = np.stack([(uv[:, 0] - k.cx) / k.fx, (uv[:, 1] - k.cy) / k.fy, np.ones(len(uv))], axis=1)
-        world = rays @ self.R.T
-        return world / np.linalg.norm(world, axis=1, keepdims=True)
+        rays = self.intrinsics.back_project(pixels) @ self.R.T
+        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
 
     def project_directions(self, directions: np.ndarray) -> np.ndarray:
         """Image points ``(N, 2)`` of world directions; NaN for directions behind the camera."""
-        k = self.intrinsics
-        cam = np.atleast_2d(np.asarray(directions, dtype=np.float64)) @ self.R
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = k.fx * cam[:, 0] / cam[:, 2] + k.cx
-            v = k.fy * cam[:, 1] / cam[:, 2] + k.cy
-        ahead = cam[:, 2] > 1e-9
-        return np.stack([np.where(ahead, u, np.nan), np.where(ahead, v, np.nan)], axis=1)
+        return self.intrinsics.project(np.atleast_2d(np.asarray(directions, dtype=np.float64)) @ self.R)
 
     def project_points(self, points: np.ndarray) -> np.ndarray:
         """Image points of world points ``(N, 3)``."""
         return self.project_directions(np.atleast_2d(points) - self.position)
 
     def in_image(self, pixels: np.ndarray) -> np.ndarray:
-        k = self.intrinsics
-        uv = np.atleast_2d(pixels)
-        return (uv[:, 0] >= 0) & (uv[:, 0] < k.width) & (uv[:, 1] >= 0) & (uv[:, 1] < k.height)
+        return self.intrinsics.in_image(pixels)
+
+
+def pose_homography(before: PtzCamera, after: PtzCamera) -> np.ndarray:
+    """Pixels under the pose ``before`` -> pixels under ``after``, for a camera that only rotates
+    and zooms about a fixed point: ``K_a R_aᵀ R_b K_b⁻¹``."""
+    return after.K @ after.R.T @ before.R @ before.K_inv
+
+
+def zoom_area_ratio(before: PtzCamera, after: PtzCamera) -> float:
+    """How much a zoom from ``before`` to ``after`` multiplies apparent areas: ``(fx fy)_a / (fx fy)_b``."""
+    return after.intrinsics.fx * after.intrinsics.fy / (before.intrinsics.fx * before.intrinsics.fy)

@@ -47,3 +47,20 @@ def test_line_of_sight_drawn_into_another_pose() -> None:
 def test_behind_the_camera_is_nan() -> None:
     cam = PtzCamera.from_reading(PtzReading(0, 0.0, 0.0, 0, 0), LENS)
     assert np.isnan(cam.project_directions(np.array([[-1.0, 0.0, 0.0]]))).all()
+
+
+def test_pose_homography_moves_pixels_between_poses_and_zoom_area_ratio() -> None:
+    from trackreplay.trackers.geometry.homography import apply_homography
+    from trackreplay.trackers.geometry.ptz import pose_homography, zoom_area_ratio
+
+    a = PtzCamera.from_reading(PtzReading(0, 20.0, 3.0, 10, 0), LENS)
+    b = PtzCamera.from_reading(PtzReading(0, 22.0, 2.0, 60, 0), LENS)
+    world = np.array([[80.0, 30.0, 4.0], [60.0, 20.0, 1.0]])
+    assert apply_homography(pose_homography(a, b), a.project_points(world)) == pytest.approx(b.project_points(world), abs=1e-6)
+    assert zoom_area_ratio(a, b) == pytest.approx(b.intrinsics.fx * b.intrinsics.fy / (a.intrinsics.fx * a.intrinsics.fy))
+
+
+def test_rotation_and_matrices_are_computed_once_per_camera() -> None:
+    cam = PtzCamera.from_reading(PtzReading(0, 25.0, 5.0, 60, 3), LENS)
+    assert cam.R is cam.R and cam.K is cam.intrinsics.K
+    assert cam.R == pytest.approx(rotation_world_from_camera(25.0, 5.0))

@@ -1,0 +1,49 @@
+"""The generic 256³ colour LUT: counts, smoothing, the two-class decision, lookup."""
+
+import numpy as np
+import pytest
+
+from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut, coarse_counts, expand_table, flat_index, smooth3
+
+
+def test_flat_index_and_lookup_agree_with_the_table():
+    rng = np.random.default_rng(0)
+    pixels = rng.integers(0, 256, size=(7, 9, 3), dtype=np.uint8)
+    table = rng.random((256, 256, 256)) < 0.5
+    lut = ColourLut(table)
+    assert np.array_equal(lut.lookup(pixels), table[pixels[..., 0], pixels[..., 1], pixels[..., 2]])
+    assert flat_index(np.array([[1, 2, 3]], np.uint8))[0] == 65536 + 2 * 256 + 3
+
+
+def test_coarse_counts_and_expansion():
+    px = np.array([[0, 0, 0], [3, 3, 3], [4, 0, 255]], np.uint8)
+    c = coarse_counts(px, 4)
+    assert c.shape == (64, 64, 64) and c[0, 0, 0] == 2 and c[1, 0, 63] == 1 and c.sum() == 3
+    big = expand_table(c > 1, 4)
+    assert big.shape == (256, 256, 256) and big[3, 2, 1] and not big[4, 0, 0]
+    assert big.sum() == 64
+
+
+def test_smoothing_keeps_mass_inside_and_spreads_it():
+    v = np.zeros((16, 16, 16))
+    v[8, 8, 8] = 1.0
+    s = smooth3(v, 1.0)
+    assert s.sum() == pytest.approx(1.0)
+    assert s[8, 8, 8] < 0.1 and s[9, 8, 8] > 0 and s[8, 8, 8] == s.max()
+    assert smooth3(v, 0.0) is v
+
+
+def test_two_classes_from_samples_with_the_count_prior():
+    ball = np.tile(np.array([[240, 128, 128]], np.uint8), (50, 1))  # white
+    sky = np.tile(np.array([[150, 160, 100]], np.uint8), (5000, 1))
+    shared = np.tile(np.array([[200, 128, 128]], np.uint8), (10, 1))  # a grey both have
+    counts = ColourCounts(4)
+    counts.add(np.concatenate([ball, shared]), np.concatenate([sky, np.tile(shared, (200, 1))]))
+    lut = counts.lut(smooth=0.0, foreground_weight=10.0, min_count=0.5)
+    assert lut.lookup(np.array([240, 128, 128], np.uint8))  # ball colour
+    assert lut.lookup(np.array([243, 130, 129], np.uint8))  # same coarse cell
+    assert not lut.lookup(np.array([150, 160, 100], np.uint8))  # sky
+    assert not lut.lookup(np.array([200, 128, 128], np.uint8))  # 10 x 10 ball < 2000 background
+    assert lut.table.shape == (256, 256, 256)
+    with pytest.raises(ValueError):
+        ColourCounts(3)

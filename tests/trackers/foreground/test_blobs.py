@@ -1,0 +1,61 @@
+"""Connected blobs measured into named fields: centroid, area, circularity, box."""
+
+import cv2
+import numpy as np
+import pytest
+
+from trackreplay.trackers.foreground.blobs import Blobs, chain_length, measure_blobs, nearest
+
+
+def test_fields_of_a_disc_in_a_crop_are_in_frame_pixels():
+    m = np.zeros((60, 80), np.uint8)
+    cv2.circle(m, (30, 20), 5, 1, -1)  # area 81, box 11 x 11
+    blobs = measure_blobs(m, (100, 200))
+    assert isinstance(blobs, Blobs) and len(blobs) == 1
+    assert blobs.centroid[0] == pytest.approx([130.0, 220.0])
+    assert blobs.area[0] == 81
+    assert blobs.bbox[0].tolist() == [125, 215, 11, 11]
+    assert blobs.size[0].tolist() == [11, 11]
+    assert 0.8 < blobs.circularity[0] < 1.05 and blobs.measured[0]
+
+
+def test_circularity_of_discs_bars_and_single_pixels():
+    for r in (2, 3, 5, 8, 15):
+        m = np.zeros((60, 60), np.uint8)
+        cv2.circle(m, (30, 30), r, 1, -1)
+        circ = measure_blobs(m).circularity[0]
+        assert 0.75 < circ < 1.1, (r, circ)
+    m = np.zeros((60, 60), np.uint8)
+    m[10:12, 5:45] = 1
+    assert measure_blobs(m).circularity[0] < 0.35
+    m = np.zeros((5, 5), np.uint8)
+    m[2, 2] = 1
+    assert measure_blobs(m).circularity[0] == pytest.approx(4 * np.pi / np.pi**2)  # perimeter pi: 1.27
+
+
+def test_kulpa_length_of_a_square_contour():
+    square = np.array([[0, 0], [1, 0], [2, 0], [2, 1], [2, 2], [1, 2], [0, 2], [0, 1]])
+    assert chain_length(square) == pytest.approx(8 * 0.948)
+    assert chain_length(np.array([[0, 0], [1, 1]])) == pytest.approx(2 * 1.343)
+
+
+def test_small_and_far_blobs_keep_no_shape():
+    m = np.zeros((100, 400), np.uint8)
+    for k in range(60):
+        m[10 + (k // 30) * 40 : 13 + (k // 30) * 40, 5 + 12 * (k % 30) : 8 + 12 * (k % 30)] = 1
+    m[90, 390] = 1  # one pixel: below min_area
+    blobs = measure_blobs(m, (10, 20), min_area=2, max_measured=8, near=np.array([15.0, 30.0]))
+    assert len(blobs) == 61
+    assert blobs.measured.sum() == 8
+    d = np.hypot(blobs.centroid[:, 0] - 15.0, blobs.centroid[:, 1] - 30.0)
+    big = blobs.area >= 2
+    assert d[blobs.measured].max() <= d[big & ~blobs.measured].min()
+    assert not blobs.measured[blobs.area < 2].any()
+
+
+def test_empty_masks_and_nearest():
+    assert len(measure_blobs(np.zeros((0, 0), np.uint8))) == 0
+    assert len(measure_blobs(np.zeros((10, 10), np.uint8))) == 0
+    points = np.array([[0.0, 0.0], [10.0, 0.0], [5.0, 5.0]])
+    assert nearest(points, np.array([True, True, False]), np.array([6.0, 4.0])) == 1
+    assert nearest(points, np.zeros(3, bool), np.zeros(2)) == -1

@@ -1,0 +1,112 @@
+"""Colour lookup tables: a 256 × 256 × 256 boolean per colour, learnt from sample pixels.
+
+A table answers "foreground or not?" for a pixel with one index (``c0·65536 + c1·256 + c2``),
+so segmenting a region is a single fancy index however complex the colour boundary is.
+
+Learning (:class:`ColourCounts`): foreground and background sample pixels are counted on a coarse
+grid (``256 / bin`` levels per channel), both counts are smoothed in colour space (a colour near a
+foreground colour counts as foreground too), and a colour is foreground where
+``foreground_weight × smoothed foreground count > background_scale × smoothed background count``
+and the smoothed foreground count exceeds ``min_count`` (:func:`two_class_table`). Counts, not
+densities: the prior that foreground samples are few is kept, so a colour the background shares
+with the target stays background unless the target dominates it. The coarse decision is then
+expanded to the full table once (:func:`expand_table`). The channel order is the caller's (the
+golf tracker uses Y, Cb, Cr).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def flat_index(pixels: np.ndarray) -> np.ndarray:
+    """Flat index ``c0*65536 + c1*256 + c2`` of ``(..., 3)`` uint8 pixels into a C-ordered 256³ table."""
+    c0 = pixels[..., 0].astype(np.int32)
+    return (c0 << 16) | (pixels[..., 1].astype(np.int32) << 8) | pixels[..., 2].astype(np.int32)
+
+
+def coarse_counts(pixels: np.ndarray, bin_: int) -> np.ndarray:
+    """Counts of ``(..., 3)`` uint8 pixels on a ``(256/bin_)³`` grid (float64)."""
+    q = 256 // bin_
+    c = pixels.reshape(-1, 3).astype(np.int64) // bin_
+    return np.bincount((c[:, 0] * q + c[:, 1]) * q + c[:, 2], minlength=q**3).astype(np.float64).reshape(q, q, q)
+
+
+def smooth3(values: np.ndarray, sigma: float) -> np.ndarray:
+    """Separable Gaussian smoothing of a 3-D array (``sigma`` in cells, zero outside the array)."""
+    if sigma <= 0:
+        return values
+    r = int(np.ceil(3 * sigma))
+    k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
+    k /= k.sum()
+    out = values
+    for axis in range(3):  # a loop over axes and kernel taps, each a whole-array operation
+        acc = np.zeros_like(out)
+        n = out.shape[axis]
+        for off, wgt in zip(range(-r, r + 1), k):
+            src = [slice(None)] * 3
+            dst = [slice(None)] * 3
+            if off >= 0:
+                src[axis], dst[axis] = slice(0, n - off), slice(off, n)
+            else:
+                src[axis], dst[axis] = slice(-off, n), slice(0, n + off)
+            acc[tuple(dst)] += wgt * out[tuple(src)]
+        out = acc
+    return out
+
+
+def expand_table(coarse: np.ndarray, bin_: int) -> np.ndarray:
+    """Coarse ``(q, q, q)`` booleans -> the 256³ table (each coarse cell repeated ``bin_³`` times)."""
+    if bin_ == 1:
+        return np.ascontiguousarray(coarse)
+    q = coarse.shape[0]
+    big = np.broadcast_to(coarse[:, None, :, None, :, None], (q, bin_, q, bin_, q, bin_))
+    return np.ascontiguousarray(big).reshape(256, 256, 256)
+
+
+def two_class_table(foreground: np.ndarray, background: np.ndarray, *, smooth: float, foreground_weight: float,
+                    min_count: float, background_scale: float = 1.0) -> np.ndarray:
+    """The coarse decision: ``w·smooth(fg) > s·smooth(bg)`` and ``smooth(fg) > min_count``.
+
+    ``background_scale`` puts subsampled background counts back on the foreground's footing
+    (e.g. ``stride²`` when every ``stride``-th pixel per axis was counted).
+    """
+    fg = smooth3(foreground, smooth)
+    bg = smooth3(background, smooth) * background_scale
+    return (foreground_weight * fg > bg) & (fg > min_count)
+
+
+@dataclass(frozen=True, eq=False)
+class ColourLut:
+    """One 256³ boolean table over three uint8 channels."""
+
+    table: np.ndarray
+
+    def lookup(self, pixels: np.ndarray) -> np.ndarray:
+        """Boolean mask (the pixels' leading shape): one fancy index into the table."""
+        return self.table.reshape(-1)[flat_index(pixels)]
+
+
+class ColourCounts:
+    """Foreground and background sample counts on the coarse grid, accumulated over many images."""
+
+    def __init__(self, bin_: int) -> None:
+        if bin_ < 1 or 256 % bin_:
+            raise ValueError(f"the LUT bin must divide 256, not {bin_}")
+        q = 256 // bin_
+        self.bin = bin_
+        self.foreground = np.zeros((q, q, q))
+        self.background = np.zeros((q, q, q))
+
+    def add(self, foreground: np.ndarray, background: np.ndarray) -> None:
+        """Count ``(..., 3)`` uint8 foreground and background sample pixels."""
+        self.foreground += coarse_counts(foreground, self.bin)
+        self.background += coarse_counts(background, self.bin)
+
+    def lut(self, *, smooth: float, foreground_weight: float, min_count: float, background_scale: float = 1.0) -> ColourLut:
+        """The 256³ table of the counts so far (see :func:`two_class_table`)."""
+        coarse = two_class_table(self.foreground, self.background, smooth=smooth, foreground_weight=foreground_weight,
+                                 min_count=min_count, background_scale=background_scale)
+        return ColourLut(expand_table(coarse, self.bin))

@@ -1,0 +1,108 @@
+"""Connected foreground blobs of a binary mask, measured into named fields.
+
+Each 8-connected blob gets its centroid, pixel area and bounding box (frame pixels: the mask's
+``offset`` added) and, for the blobs worth it, its circularity ``4 π A / P²``. The perimeter ``P``
+is the length of the blob's outer 8-connected contour through pixel centres with Kulpa's chain-code
+weights (0.948 per straight, 1.343 per diagonal step: unbiased over edge orientations) plus ``π``
+(the half-pixel ring the centre line misses). Digital discs of radius 1-20 px then score 0.8-0.96,
+squares about 0.9, a single pixel 1.27 and a 2 × 20 bar 0.3.
+
+Tracing contours costs; :func:`measure_blobs` measures the shape of blobs of at least
+``min_area`` only, and of those only the ``max_measured`` nearest to a point (the prediction).
+The others keep a NaN circularity.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+
+@dataclass(frozen=True, eq=False)
+class Blobs:
+    """K blobs as parallel arrays (row k of every field is blob k, in label order)."""
+
+    centroid: np.ndarray  # (K, 2) float64 x, y in frame pixels
+    area: np.ndarray  # (K,) float64 pixels
+    circularity: np.ndarray  # (K,) float64 4 pi A / P^2; NaN where not measured
+    bbox: np.ndarray  # (K, 4) int64 x0, y0, w, h in frame pixels
+
+    def __len__(self) -> int:
+        return len(self.area)
+
+    @property
+    def size(self) -> np.ndarray:
+        """(K, 2) bounding-box width and height."""
+        return self.bbox[:, 2:]
+
+    @property
+    def measured(self) -> np.ndarray:
+        """(K,) bool: the shape was measured (finite circularity)."""
+        return np.isfinite(self.circularity)
+
+    @classmethod
+    def empty(cls) -> Blobs:
+        return cls(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros((0, 4), np.int64))
+
+
+def chain_length(points: np.ndarray) -> float:
+    """Kulpa's length estimate of a closed 8-connected contour given as (n, 2) points."""
+    if len(points) < 2:
+        return 0.0
+    steps = np.abs(np.diff(np.vstack([points, points[:1]]), axis=0))
+    diagonal = int(np.count_nonzero((steps[:, 0] > 0) & (steps[:, 1] > 0)))
+    return 0.948 * (len(points) - diagonal) + 1.343 * diagonal
+
+
+def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_area: float = 0.0,
+                  max_measured: int | None = None, near: np.ndarray | None = None) -> Blobs:
+    """Every 8-connected blob of the uint8 ``mask`` (a crop whose top-left is ``offset`` in the frame).
+
+    Circularity is measured for blobs with ``area >= min_area``; when more than ``max_measured``
+    qualify, only those nearest to ``near`` (frame pixels) are measured (ties by label order).
+    """
+    if mask.size == 0:
+        return Blobs.empty()
+    n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8, ltype=cv2.CV_32S)
+    if n <= 1:
+        return Blobs.empty()
+    stats, centroids = stats[1:], centroids[1:]
+    centre = np.stack([centroids[:, 0] + offset[0], centroids[:, 1] + offset[1]], axis=1)
+    area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
+    bbox = stats[:, :4].astype(np.int64) + np.array([offset[0], offset[1], 0, 0], np.int64)
+    circularity = np.full(n - 1, np.nan)
+    big = np.flatnonzero(~(area < min_area))
+    if max_measured is not None and big.size > max_measured:
+        target = np.zeros(2) if near is None else near
+        d2 = (centre[big, 0] - target[0]) ** 2 + (centre[big, 1] - target[1]) ** 2
+        big = np.sort(big[np.argsort(d2, kind="stable")][:max_measured])
+    if big.size:
+        if big.size == n - 1:
+            measured = mask
+        else:
+            keep = np.zeros(n, np.uint8)
+            keep[big + 1] = 1
+            measured = keep[labels]
+        contours, _ = cv2.findContours(measured, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+        perimeter = np.full(n - 1, np.nan)
+        for contour in contours:  # one contour per measured blob (a loop over blobs, not pixels)
+            px, py = contour[0, 0]
+            label = labels[py, px] - 1
+            if label >= 0:
+                perimeter[label] = chain_length(contour[:, 0, :]) + np.pi
+        circularity[big] = 4.0 * np.pi * area[big] / perimeter[big] ** 2
+    return Blobs(centre, area, circularity, bbox)
+
+
+def nearest(points: np.ndarray, candidates: np.ndarray, to: np.ndarray) -> int:
+    """Index (into ``points``) of the candidate nearest to ``to``, -1 without candidates.
+
+    ``candidates`` is a boolean mask over the ``(K, 2)`` ``points``; ties go to the lower index.
+    """
+    ok = np.flatnonzero(candidates)
+    if not ok.size:
+        return -1
+    d2 = (points[ok, 0] - to[0]) ** 2 + (points[ok, 1] - to[1]) ** 2
+    return int(ok[int(np.argmin(d2))])
