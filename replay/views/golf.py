@@ -1,11 +1,19 @@
-"""Rerun view of the golf-ball tracker (seed 000): every intermediate of a step.
+"""Rerun view of the golf-ball tracker (seed 000): every stage's intermediates, under its own path.
 
-Camera view: the search region I_s, the blobs labelled "area/circularity/reason" (green accepted,
-red rejected, the ball ringed), the particles coloured and sized by weight, the estimate, the
-trajectory so far (stored lines of sight drawn into the current pose) and the predicted landing.
-Region view: the crop of I_s with the silhouette I_c over it. World view: the EKF's 3-D ball,
-its past positions, the line of sight and the predicted landing point. Text: the active LUT and
-re-initialisations. Time series: gating targets, spread, EKF height and time to landing.
+``trackers/<name>/…`` per stage, in pipeline order:
+
+- ``reinit``: where the samples started again (point, spread ellipse, label) and an event line;
+- ``search``: the search region ``I_s``, labelled with the LUT in use; ``search/spread/{x,y}`` series;
+- ``silhouette``: the crop of ``I_s`` with ``I_c`` over it, placed at the crop's offset (so it also
+  overlays the camera image; the silhouette view shows it alone); ``silhouette/blobs`` the centres;
+- ``blobs``: boxes labelled area/circularity/reason (green accepted, red rejected, the ball larger);
+  ``blobs/targets/…`` the gate's targets and widening;
+- ``particles``: the samples, coloured and sized by weight;
+- ``ekf``: the predicted landing in the image; ``ekf/world/…`` the 3-D ball with its 2σ covariance,
+  its path, the line of sight and the landing point; ``ekf/state|sigma/…``, ``ekf/nis`` and
+  ``ekf/time_to_landing_s`` series;
+- ``trail``: the measured trajectory drawn into the current pose (stored lines of sight);
+- ``events``: LUT choice, re-initialisations, notices. The track itself is ``tracks/1``.
 """
 
 from __future__ import annotations
@@ -16,15 +24,14 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
+from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views import parts
 from trackreplay.trackers.base import TrackState
 from trackreplay.trackers.frame import Frame
 
-from trackreplay.replay.rerun_sink import FrameLogger
-from trackreplay.replay.views.common import log_estimates, log_scalar
-
-ACCEPTED = (40, 230, 40)
-REJECTED = (235, 50, 50)
 BALL_CLASS = 1
+EKF_NAMES = ("X", "Y", "Z", "VX", "VY", "VZ")
+DRAWN = ("reinit", "search", "blobs", "particles", "ekf/landing", "trail")  # cleared when idle
 
 
 def blueprint(name: str) -> rrb.Blueprint:
@@ -34,18 +41,20 @@ def blueprint(name: str) -> rrb.Blueprint:
             rrb.Spatial2DView(
                 name="camera + search region + particles",
                 origin="/",
-                contents=["camera/**", f"{root}/search_region", f"{root}/region/silhouette", f"{root}/blobs",
-                          f"{root}/particles", f"{root}/estimate", f"{root}/trail", f"{root}/landing", f"{root}/reinit"],
+                contents=["camera/**", "tracks/**", f"{root}/search", f"{root}/silhouette/mask", f"{root}/blobs",
+                          f"{root}/particles", f"{root}/trail", f"{root}/ekf/landing", f"{root}/reinit/**"],
             ),
             rrb.Vertical(
-                rrb.Spatial2DView(name="I_s + silhouette I_c", origin=f"{root}/region"),
-                rrb.Spatial3DView(name="EKF world (Z up)", origin=f"{root}/world"),
+                rrb.Spatial2DView(name="I_s + silhouette I_c", origin=f"{root}/silhouette"),
+                rrb.Spatial3DView(name="EKF world (Z up)", origin=f"{root}/ekf/world"),
                 rrb.TextLogView(name="LUT / events", origin=f"{root}/events"),
             ),
             rrb.Vertical(
-                rrb.TimeSeriesView(name="gating targets", origin=f"{root}/targets"),
-                rrb.TimeSeriesView(name="particle spread (px)", origin=f"{root}/spread"),
-                rrb.TimeSeriesView(name="EKF height / time to landing", origin=f"{root}/ekf"),
+                rrb.TimeSeriesView(name="gating targets", origin=f"{root}/blobs/targets"),
+                rrb.TimeSeriesView(name="particle spread (px)", origin=f"{root}/search/spread"),
+                rrb.TimeSeriesView(name="EKF height / time to landing", origin=f"{root}/ekf",
+                                   contents=[f"{root}/ekf/state/Z", f"{root}/ekf/sigma/Z", f"{root}/ekf/nis",
+                                             f"{root}/ekf/time_to_landing_s"]),
             ),
             column_shares=[3, 2, 1],
         ),
@@ -53,99 +62,91 @@ def blueprint(name: str) -> rrb.Blueprint:
     )
 
 
-def _weight_colours(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Colour (blue -> yellow) and radius by weight relative to the largest."""
-    rel = w / w.max() if w.size and w.max() > 0 else np.zeros_like(w)
-    colours = np.stack([60 + 195 * rel, 80 + 175 * rel, 255 - 215 * rel], axis=1).astype(np.uint8)
-    return colours, (0.8 + 2.2 * rel).astype(np.float32)
-
-
 def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
     root = f"trackers/{name}"
-    if inter is None or inter.mode == "idle":
-        for part in ("search_region", "blobs", "particles", "trail", "landing", "reinit", "region"):
-            rec.log(f"{root}/{part}", rr.Clear(recursive=True))
-        log_estimates(rec, f"{root}/estimate", states)
-        if inter is not None and inter.notice:
-            rec.log(f"{root}/events", rr.TextLog(inter.notice, level=rr.TextLogLevel.WARN))
-        return
-
-    x0, y0, w, h = (float(v) for v in inter.search_box)
-    rec.log(f"{root}/search_region", rr.Boxes2D(array=[[x0, y0, w, h]], array_format=rr.Box2DFormat.XYWH,
-                                                colors=[(255, 255, 255)], labels=[f"I_s {inter.lut_name}"]))
-    log_estimates(rec, f"{root}/estimate", states)
-
-    # Blobs: label "area/circ/reason"; the selected one gets a larger box.
-    blobs = inter.blobs
-    if len(blobs):
-        reasons = inter.blob_reasons
-        labels = [f"{b[2]:.0f}/{b[3]:.2f}/{reasons[int(b[5])]}" for b in blobs]
-        colours = [ACCEPTED if b[4] > 0 else REJECTED for b in blobs]
-        sizes = np.maximum(blobs[:, 6:8], 2.0) + np.where(np.arange(len(blobs)) == inter.selected, 6.0, 2.0)[:, None]
-        rec.log(f"{root}/blobs", rr.Boxes2D(centers=blobs[:, :2], sizes=sizes, colors=colours, labels=labels))
-    else:
-        rec.log(f"{root}/blobs", rr.Clear(recursive=False))
-
-    if len(inter.particles):
-        colours, radii = _weight_colours(inter.weights)
-        rec.log(f"{root}/particles", rr.Points2D(inter.particles[:, :2], colors=colours, radii=radii))
-    if len(inter.trail_image) >= 2:
-        rec.log(f"{root}/trail", rr.LineStrips2D([inter.trail_image], colors=[(255, 200, 0)]))
-    else:
-        rec.log(f"{root}/trail", rr.Clear(recursive=False))
-    if np.all(np.isfinite(inter.landing_image)):
-        rec.log(f"{root}/landing", rr.Points2D([inter.landing_image], radii=4.0, colors=[(255, 0, 255)],
-                                               labels=[f"landing in {inter.landing_in_s:.2f} s"]))
-    else:
-        rec.log(f"{root}/landing", rr.Clear(recursive=False))
-    if inter.reinit:
-        rec.log(f"{root}/reinit", rr.Points2D([inter.reinit_point], radii=6.0, colors=[(0, 255, 255)], labels=[inter.reinit]))
-        rec.log(f"{root}/events", rr.TextLog(f"frame {frame.index}: particles re-initialised ({inter.reinit}) at "
-                                              f"({inter.reinit_point[0]:.1f}, {inter.reinit_point[1]:.1f})"))
-    else:
-        rec.log(f"{root}/reinit", rr.Clear(recursive=False))
-    if inter.notice:
+    parts.tracks(rec, states)
+    if inter is not None and inter.notice:
         rec.log(f"{root}/events", rr.TextLog(inter.notice, level=rr.TextLogLevel.WARN))
-    scores = ", ".join(f"{n} {s:.2f}" for n, s in zip(inter.lut_names, inter.lut_scores) if np.isfinite(s))
-    rec.log(f"{root}/events", rr.TextLog(f"LUT {inter.lut_name or '-'} ({scores})", level=rr.TextLogLevel.DEBUG))
+    if inter is None or inter.mode == "idle":
+        for stage in DRAWN:
+            parts.clear(rec, f"{root}/{stage}", recursive=stage == "reinit")
+        parts.clear(rec, f"{root}/silhouette", recursive=True)
+        return
+    _reinit(rec, f"{root}/reinit", f"{root}/events", frame, inter.reinit)
+    sil = inter.silhouette
+    parts.box_xywh(rec, f"{root}/search", inter.search.box, label=f"I_s {sil.lut_name}")
+    parts.scalar(rec, f"{root}/search/spread/x", inter.search.spread[0])
+    parts.scalar(rec, f"{root}/search/spread/y", inter.search.spread[1])
+    scores = ", ".join(f"{n} {s:.2f}" for n, s in zip(sil.lut_names, sil.lut_scores) if np.isfinite(s))
+    rec.log(f"{root}/events", rr.TextLog(f"LUT {sil.lut_name or '-'} ({scores})", level=rr.TextLogLevel.DEBUG))
+    _silhouette(rec, f"{root}/silhouette", frame, sil)
+    _blobs(rec, f"{root}/blobs", f"{root}/silhouette/blobs", inter.blobs, sil.offset)
+    parts.particles(rec, f"{root}/particles", inter.particles.particles, inter.particles.weights)
+    _ekf(rec, f"{root}/ekf", frame, inter.ekf, inter.trail.world)
+    if len(inter.trail.image) >= 2:
+        rec.log(f"{root}/trail", rr.LineStrips2D([inter.trail.image.astype(np.float32)], colors=[(255, 200, 0)]))
+    else:
+        parts.clear(rec, f"{root}/trail")
 
-    # The search region's crop and its silhouette, placed at the region's offset (so the silhouette
-    # also overlays the camera view) and shown alone in the region view.
-    ox, oy = (int(v) for v in inter.silhouette_offset)
-    sh, sw = inter.silhouette.shape[:2]
+
+def _reinit(rec: FrameLogger, path: str, events: str, frame: Frame, reinit) -> None:
+    if not reinit.kind:
+        parts.clear(rec, path, recursive=True)
+        return
+    rec.log(f"{path}/point", rr.Points2D([reinit.point], radii=6.0, colors=[(0, 255, 255)], labels=[reinit.kind]))
+    parts.covariance_ellipses(rec, f"{path}/spread", reinit.point, np.diag(reinit.sigma**2), n_sigma=1.0,
+                              colors=[(0, 255, 255)])
+    rec.log(events, rr.TextLog(f"frame {frame.index}: particles re-initialised ({reinit.kind}) at "
+                               f"({reinit.point[0]:.1f}, {reinit.point[1]:.1f})"))
+
+
+def _silhouette(rec: FrameLogger, path: str, frame: Frame, sil) -> None:
+    """The crop of I_s and the silhouette I_c over it, at the crop's place in the camera image."""
+    ox, oy = (int(v) for v in sil.offset)
+    sh, sw = sil.mask.shape[:2]
     crop = frame.image[oy : oy + sh, ox : ox + sw]
-    if crop.size:
-        rec.log(f"{root}/region", rr.Transform3D(translation=[float(ox), float(oy), 0.0]))
-        rec.log(f"{root}/region", rr.AnnotationContext([(0, "background", (0, 0, 0, 0)), (BALL_CLASS, "ball", (255, 0, 255, 200))]))
-        rec.log(f"{root}/region/image", rr.Image(crop, color_model="L" if crop.ndim == 2 else "BGR"))
-        rec.log(f"{root}/region/silhouette", rr.SegmentationImage(inter.silhouette * np.uint8(BALL_CLASS), opacity=0.6))
-        if len(blobs):
-            rec.log(f"{root}/region/blobs", rr.Points2D(blobs[:, :2] - [ox, oy], radii=1.5,
-                                                        colors=[ACCEPTED if b[4] > 0 else REJECTED for b in blobs]))
-        else:
-            rec.log(f"{root}/region/blobs", rr.Clear(recursive=False))
+    if not crop.size:
+        parts.clear(rec, path, recursive=True)
+        return
+    parts.annotation_context(rec, path, [(0, "background", (0, 0, 0, 0)), (BALL_CLASS, "ball", (255, 0, 255, 200))])
+    parts.mask_over_crop(rec, path, sil.mask.astype(bool), (ox, oy), class_id=BALL_CLASS, image=crop)
 
-    # World view.
-    world = f"{root}/world"
+
+def _blobs(rec: FrameLogger, path: str, points_path: str, gated, offset: np.ndarray) -> None:
+    b = gated.blobs
+    reasons = np.array(gated.reasons, dtype=object)[gated.reason] if len(b) else np.zeros(0, dtype=object)
+    parts.blobs(rec, path, b.centroid, b.size, gated.accepted,
+                fields={"area": b.area, "circularity": b.circularity, "reason": reasons},
+                formats={"area": "{:.0f}", "circularity": "{:.2f}"}, selected=gated.selected,
+                points_path=points_path, offset=offset)
+    if np.all(np.isfinite(gated.targets)):
+        parts.scalar(rec, f"{path}/targets/area_px", gated.targets[0])
+        parts.scalar(rec, f"{path}/targets/circularity", gated.targets[1])
+    parts.scalar(rec, f"{path}/targets/gate_widen", gated.widen)
+
+
+def _ekf(rec: FrameLogger, path: str, frame: Frame, ekf, trail_world: np.ndarray) -> None:
+    world = f"{path}/world"
+    if np.all(np.isfinite(ekf.landing_image)):
+        rec.log(f"{path}/landing", rr.Points2D([ekf.landing_image], radii=4.0, colors=[(255, 0, 255)],
+                                               labels=[f"landing in {ekf.landing_in_s:.2f} s"]))
+    else:
+        parts.clear(rec, f"{path}/landing")
     if frame.camera is not None:
-        rec.log(f"{world}/camera", rr.Points3D([frame.camera.position], radii=0.5, colors=[(255, 255, 255)], labels=["camera"]))
-    if np.all(np.isfinite(inter.ekf_x)):
-        p = inter.ekf_x[:3]
+        rec.log(f"{world}/camera", rr.Points3D([frame.camera.position], radii=0.5, colors=[(255, 255, 255)],
+                                               labels=["camera"]))
+    if np.all(np.isfinite(ekf.x)):
+        p = ekf.x[:3]
         rec.log(f"{world}/ball", rr.Points3D([p], radii=0.4, colors=[(255, 255, 0)]))
+        parts.covariance_ellipsoids(rec, f"{world}/covariance", p, ekf.P[:3, :3], colors=[(255, 255, 0)])
         if frame.camera is not None:
             rec.log(f"{world}/line_of_sight", rr.LineStrips3D([[frame.camera.position, p]], colors=[(120, 120, 255)]))
-        if len(inter.trail_world) >= 2:
-            rec.log(f"{world}/trajectory", rr.LineStrips3D([inter.trail_world], colors=[(255, 200, 0)]))
-        log_scalar(rec, f"{root}/ekf/height_m", float(p[2]))
-        log_scalar(rec, f"{root}/ekf/nis", inter.ekf_nis)
-    if np.all(np.isfinite(inter.landing_world)):
-        rec.log(f"{world}/landing", rr.Points3D([inter.landing_world], radii=0.8, colors=[(255, 0, 255)]))
-        log_scalar(rec, f"{root}/ekf/time_to_landing_s", inter.landing_in_s)
+        if len(trail_world) >= 2:
+            rec.log(f"{world}/trajectory", rr.LineStrips3D([trail_world], colors=[(255, 200, 0)]))
+        parts.kalman_series(rec, path, ekf.x, ekf.P, EKF_NAMES)
+        parts.scalar(rec, f"{path}/nis", ekf.nis)
+    if np.all(np.isfinite(ekf.landing_world)):
+        rec.log(f"{world}/landing", rr.Points3D([ekf.landing_world], radii=0.8, colors=[(255, 0, 255)]))
+        parts.scalar(rec, f"{path}/time_to_landing_s", ekf.landing_in_s)
     else:
-        rec.log(f"{world}/landing", rr.Clear(recursive=False))
-
-    log_scalar(rec, f"{root}/targets/area_px", float(inter.targets[0]))
-    log_scalar(rec, f"{root}/targets/circularity", float(inter.targets[1]))
-    log_scalar(rec, f"{root}/targets/gate_widen", inter.gate_widen)
-    log_scalar(rec, f"{root}/spread/x", float(inter.spread[0]))
-    log_scalar(rec, f"{root}/spread/y", float(inter.spread[1]))
+        parts.clear(rec, f"{world}/landing")

@@ -1,25 +1,25 @@
-"""Foreground blobs of the silhouette, gated by area and circularity (seed 000, §2.1).
+"""Blob gating: which foreground blobs may be the ball (seed 000, §2.1).
 
-Each blob gets its pixel area and circularity ``4 pi A / P^2``. The perimeter ``P`` is the
-length of the blob's outer 8-connected contour through pixel centres with Kulpa's chain-code
-weights (0.948 per straight, 1.343 per diagonal step: unbiased over edge orientations) plus
-``pi`` (the half-pixel ring the centre line misses). Digital discs of radius 1-20 px then score
-0.8-0.96, squares about 0.9, a single pixel 1.27, and a 2 x 20 bar 0.3. Blobs far from the target values are dropped; the
-targets follow the blobs selected as the ball in past frames (an exponential moving average of
-log-area and circularity), so a zoom change is followed. Among the survivors the one nearest to
-the predicted position is the ball.
+The silhouette's blobs (:func:`trackreplay.trackers.foreground.blobs.measure_blobs`: centroid,
+area, circularity, box) are compared with *target* values of area and circularity; blobs far from
+them are dropped. The targets follow the blobs selected as the ball in past frames (an exponential
+moving average of log-area and circularity), so a zoom change is followed; the area gate widens
+while the ball is missed. Among the survivors the one nearest to the predicted position is the
+ball; all survivors' centroids are the particle filter's observation ``z_t``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
+
+from trackreplay.trackers.foreground.blobs import Blobs, measure_blobs, nearest
+from trackreplay.trackers.golf.config import BlobConfig
 
 REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess")
 OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS = range(len(REASONS))
-BLOB_COLUMNS = ("cx", "cy", "area", "circularity", "accepted", "reason", "w", "h")
 
 
 @dataclass(frozen=True)
@@ -29,130 +29,95 @@ class BlobTargets:
     area: float
     circularity: float
 
+    @property
+    def diameter(self) -> float:
+        """Diameter (px) of a disc of the target area."""
+        return 2.0 * math.sqrt(self.area / math.pi)
+
     def follow(self, area: float, circularity: float, rate: float) -> BlobTargets:
         """EMA towards a newly selected ball blob (log domain for the area: zoom is multiplicative)."""
         log_area = (1 - rate) * np.log(self.area) + rate * np.log(max(area, 1e-6))
         return BlobTargets(float(np.exp(log_area)), float((1 - rate) * self.circularity + rate * circularity))
 
-
-def chain_length(points: np.ndarray) -> float:
-    """Kulpa's length estimate of a closed 8-connected contour given as (n, 2) points."""
-    if len(points) < 2:
-        return 0.0
-    steps = np.abs(np.diff(np.vstack([points, points[:1]]), axis=0))
-    diagonal = int(np.count_nonzero((steps[:, 0] > 0) & (steps[:, 1] > 0)))
-    return 0.948 * (len(points) - diagonal) + 1.343 * diagonal
+    def zoomed(self, ratio: float) -> BlobTargets:
+        """The same ball after a zoom that multiplies areas by ``ratio``."""
+        return BlobTargets(self.area * ratio, self.circularity)
 
 
-def measure_blobs(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, *,
-                  min_area: float, max_blobs: int) -> np.ndarray:
-    """Rows ``BLOB_COLUMNS`` for every 8-connected blob of ``mask`` (frame coordinates).
+@dataclass(frozen=True, eq=False)
+class GatedBlobs:
+    """The blob stage's intermediates: every blob, why it was kept or dropped, and the ball."""
 
-    Blobs smaller than ``min_area`` are marked ``tiny``; of the rest only the ``max_blobs``
-    nearest to ``predicted`` are measured (circularity), the others are marked ``excess``.
-    ``accepted`` is 0 here; :func:`gate` fills it.
-    """
-    if mask.size == 0:
-        return np.zeros((0, len(BLOB_COLUMNS)))
-    n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8, ltype=cv2.CV_32S)
-    if n <= 1:
-        return np.zeros((0, len(BLOB_COLUMNS)))
-    stats, centroids = stats[1:], centroids[1:]
-    rows = np.zeros((n - 1, len(BLOB_COLUMNS)))
-    rows[:, 0] = centroids[:, 0] + offset[0]
-    rows[:, 1] = centroids[:, 1] + offset[1]
-    rows[:, 2] = stats[:, cv2.CC_STAT_AREA]
-    rows[:, 3] = np.nan
-    rows[:, 5] = OK
-    rows[:, 6] = stats[:, cv2.CC_STAT_WIDTH]
-    rows[:, 7] = stats[:, cv2.CC_STAT_HEIGHT]
-    tiny = rows[:, 2] < min_area
-    rows[tiny, 5] = TINY
-    big = np.flatnonzero(~tiny)
-    if big.size > max_blobs:
-        d2 = (rows[big, 0] - predicted[0]) ** 2 + (rows[big, 1] - predicted[1]) ** 2
-        order = big[np.argsort(d2, kind="stable")]
-        rows[order[max_blobs:], 5] = EXCESS
-        big = np.sort(order[:max_blobs])
-    if big.size == 0:
-        return rows
-    if big.size == n - 1:
-        measured = mask
-    else:
-        keep = np.zeros(n, np.uint8)
-        keep[big + 1] = 1
-        measured = keep[labels]
-    contours, _ = cv2.findContours(measured, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    perimeter = np.full(n - 1, np.nan)
-    for contour in contours:
-        px, py = contour[0, 0]
-        label = labels[py, px] - 1
-        if label >= 0:
-            perimeter[label] = chain_length(contour[:, 0, :]) + np.pi
-    rows[big, 3] = 4.0 * np.pi * rows[big, 2] / perimeter[big] ** 2
-    return rows
+    blobs: Blobs
+    reason: np.ndarray  # (K,) int64 index into REASONS
+    selected: int  # the ball's row, -1 if none
+    targets: np.ndarray  # (2,) target area (px) and circularity the gate used
+    widen: float  # area-gate widening after misses
+    reasons: tuple[str, ...] = REASONS
+
+    @property
+    def accepted(self) -> np.ndarray:
+        return self.reason == OK
+
+    @property
+    def candidates(self) -> np.ndarray:
+        """(M, 2) centroids of the accepted blobs: the observation ``z_t`` of eq. (2)."""
+        return self.blobs.centroid[self.accepted]
+
+    @classmethod
+    def empty(cls) -> GatedBlobs:
+        return cls(Blobs.empty(), np.zeros(0, np.int64), -1, np.full(2, np.nan), 1.0)
 
 
-def gate(rows: np.ndarray, targets: BlobTargets, *, area_tolerance: float, circularity_tolerance: float,
-         widen: float = 1.0, area_slack: float = 0.0) -> np.ndarray:
-    """Fill ``accepted`` and ``reason`` of measured rows in place; returns ``rows``.
+def find_blobs(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, cfg: BlobConfig, scale: float) -> Blobs:
+    """The silhouette's blobs; shapes measured for the ``max_blobs`` nearest to the prediction."""
+    return measure_blobs(mask, offset, min_area=cfg.min_area_px * scale * scale, max_measured=cfg.max_blobs, near=predicted)
 
-    Area passes when ``(target+s)/tol' <= area+s <= (target+s)*tol'`` with ``log tol' = widen * log tol``
-    and ``s = area_slack`` (which keeps a 1-2 px ball from failing against a 3 px target)
-    (the tracker widens after misses: the ball may have changed size while unseen);
+
+def start_targets(mask: np.ndarray, offset: tuple[int, int], near: np.ndarray, cfg: BlobConfig, scale: float) -> BlobTargets | None:
+    """Targets from the marked ball's own silhouette: its biggest measured blob, circularity
+    clamped to [0.6, 1]; None when the silhouette has no measured blob."""
+    blobs = find_blobs(mask, offset, near, cfg, scale)
+    measured = np.flatnonzero(blobs.measured)
+    if not measured.size:
+        return None
+    biggest = measured[int(np.argmax(blobs.area[measured]))]
+    return BlobTargets(float(blobs.area[biggest]), float(min(max(blobs.circularity[biggest], 0.6), 1.0)))
+
+
+def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, widen: float = 1.0) -> np.ndarray:
+    """The reason code of each blob (``OK`` = accepted).
+
+    ``tiny`` below ``min_area_px``; ``excess`` when not measured (beyond ``max_blobs``). Area passes
+    when ``(target+s)/tol' <= area+s <= (target+s)*tol'`` with ``log tol' = widen * log tol`` and
+    ``s = area_slack_px`` (which keeps a 1-2 px ball from failing against a 3 px target);
     circularity passes when ``circ >= target - circularity_tolerance`` (shape does not change with zoom).
     """
-    if not len(rows):
-        return rows
-    live = rows[:, 5] == OK
-    lim = widen * np.log(area_tolerance)
-    ratio = np.log((rows[:, 2] + area_slack) / (targets.area + area_slack))
+    reason = np.full(len(blobs), OK, np.int64)
+    if not len(blobs):
+        return reason
+    tiny = blobs.area < cfg.min_area_px * scale * scale
+    reason[tiny] = TINY
+    reason[~tiny & ~blobs.measured] = EXCESS
+    live = reason == OK
+    slack = cfg.area_slack_px * scale * scale
+    lim = widen * np.log(cfg.area_tolerance)
+    ratio = np.log((blobs.area + slack) / (targets.area + slack))
     small = live & (ratio < -lim)
     large = live & (ratio > lim)
-    rows[small, 5] = AREA_SMALL
-    rows[large, 5] = AREA_LARGE
+    reason[small] = AREA_SMALL
+    reason[large] = AREA_LARGE
     live &= ~(small | large)
-    round_enough = rows[:, 3] >= targets.circularity - circularity_tolerance
-    rows[live & ~round_enough, 5] = CIRCULARITY
-    rows[:, 4] = (rows[:, 5] == OK).astype(np.float64)
-    return rows
+    round_enough = blobs.circularity >= targets.circularity - cfg.circularity_tolerance
+    reason[live & ~round_enough] = CIRCULARITY
+    return reason
 
 
-def nearest(rows: np.ndarray, predicted: np.ndarray) -> int:
-    """Index of the accepted blob nearest to the prediction, or -1."""
-    if not len(rows):
-        return -1
-    ok = np.flatnonzero(rows[:, 4] > 0)
-    if not ok.size:
-        return -1
-    d2 = (rows[ok, 0] - predicted[0]) ** 2 + (rows[ok, 1] - predicted[1]) ** 2
-    return int(ok[int(np.argmin(d2))])
-
-
-def photometric_area(y: np.ndarray, cx: float, cy: float, radius: float, ball_luminance: float) -> float:
-    """Apparent area of a small bright ball from the light it adds, robust to blur and sub-pixel size.
-
-    The silhouette of a 2-4 px ball keeps only its brightest pixels (the LUT cannot tell a blended
-    edge pixel from a cloud), so its pixel count says little about its size. The luminance it adds
-    over the local background, ``sum(Y - bg)`` inside ``radius`` of ``(cx, cy)`` (crop pixels), is
-    preserved by blur and JPEG; divided by the contrast of a fully covered pixel
-    (``ball_luminance - bg``, learnt from the large marked ball at the start) it is the area.
-    ``bg`` is the median of a 3 px ring outside ``radius``. NaN when there is no usable contrast.
-    """
-    r_out = radius + 3.0
-    h, w = y.shape
-    x0, x1 = max(0, int(np.floor(cx - r_out))), min(w, int(np.ceil(cx + r_out)) + 1)
-    y0, y1 = max(0, int(np.floor(cy - r_out))), min(h, int(np.ceil(cy + r_out)) + 1)
-    if x1 <= x0 or y1 <= y0:
-        return float("nan")
-    win = y[y0:y1, x0:x1].astype(np.float64)
-    ys, xs = np.mgrid[y0:y1, x0:x1]
-    d2 = (xs - cx) ** 2 + (ys - cy) ** 2
-    inner, ring = d2 <= radius * radius, (d2 > radius * radius) & (d2 <= r_out * r_out)
-    if not ring.any() or not inner.any():
-        return float("nan")
-    bg = float(np.median(win[ring]))
-    contrast = ball_luminance - bg
-    if contrast < 10.0:
-        return float("nan")
-    return float(np.maximum(win[inner] - bg, 0.0).sum() / contrast)
+def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, targets: BlobTargets, misses: int,
+                cfg: BlobConfig, scale: float) -> GatedBlobs:
+    """Blobs of the silhouette, gated (widened by ``misses``), and the accepted one nearest ``predicted``."""
+    widen = min(1.0 + cfg.widen_per_miss * misses, cfg.widen_max)
+    blobs = find_blobs(mask, offset, predicted, cfg, scale)
+    reason = gate(blobs, targets, cfg, scale, widen=widen)
+    selected = nearest(blobs.centroid, reason == OK, predicted)
+    return GatedBlobs(blobs, reason, selected, np.array([targets.area, targets.circularity]), float(widen))

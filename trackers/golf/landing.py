@@ -1,17 +1,20 @@
 """3-D extended Kalman filter of the ball and its landing (seed 000, §2.3).
 
-State ``x = (X, Y, Z, VX, VY, VZ)`` in world metres (Z up) and m/s. Motion: gravity and
+State ``x = (X, Y, Z, VX, VY, VZ)`` in world metres (Z up) and m/s. Motion ``f``: gravity and
 quadratic drag ``a = g - k |v| v`` (``k = rho C_d A / 2m``), integrated with Heun's method; the
-unmodelled rest (Magnus lift, wind) is white acceleration noise. Measurement: the ball's image
-position through the frame's posed PTZ camera, and its range ``r = f D / d`` from the apparent
-diameter ``d = 2 sqrt(area / pi)`` of a ball of known diameter ``D`` (the paper's "position and
-area"), so ``z = (u, v, r)`` and ``h(x) = (project(X, Y, Z), |X - C|)``.
+unmodelled rest (Magnus lift, wind) is white acceleration noise ``Q``. Measurement
+``z = (u, v, r)``: the ball's image position through the frame's PTZ camera and its range from the
+apparent area (:mod:`trackreplay.trackers.golf.range`; the paper's "position and area"), so
+``h(x) = (project(X, Y, Z), |X - C|)`` with Jacobian ``H``.
 
-The ball touches the ground when its centre comes down to Z = D/2. When the *predicted* state
-crosses that height the tracker re-initialises its particles at the projected contact point
-(paper: "the moment the ball meets the plane assumed to be the ground"); the filter itself then
-bounces (vertical speed reversed with restitution, horizontal speed reduced) and goes on.
-Plain numpy with textbook names (x, P, F, Q, H, R), as filterpy would have them.
+The ball touches the ground when its centre comes down to ``Z = D/2``. When the *predicted*
+state crosses that height (:meth:`BallisticEkf.advance`) the tracker re-initialises its particles
+at the projected contact point (paper: "the moment the ball meets the plane assumed to be the
+ground"; see :mod:`trackreplay.trackers.golf.reinit`); the filter itself bounces (vertical speed
+reversed with restitution, horizontal speed reduced) and goes on.
+
+The filter is filterpy's EKF (:class:`~trackreplay.trackers.filters.kalman.MotionModelEkf`, the
+project's one Kalman vocabulary: ``x, P, F, Q, H, R``), with a NIS gate in front of each update.
 """
 
 from __future__ import annotations
@@ -21,8 +24,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackreplay.trackers.filters.gating import innovation
+from trackreplay.trackers.filters.kalman import MotionModelEkf
 from trackreplay.trackers.geometry.ptz import PtzCamera
-from trackreplay.trackers.golf.config import GolfConfig
+from trackreplay.trackers.golf.config import EkfConfig
 
 NIS_GATE = 30.0  # chi-square, 3 dof: beyond 99.999 %; a selected blob that far is not our ball
 MAX_REJECTIONS = 3  # consecutive gated measurements before the filter restarts from the measurement
@@ -33,23 +38,6 @@ MAX_SUBSTEP_S = 1.0 / 60.0
 class GroundContact:
     point: np.ndarray  # (3,) world position of the ball centre at contact
     fraction: float  # where in the last step, 0 = previous frame, 1 = this frame
-
-
-def range_from_area(area_px: float, camera: PtzCamera, diameter_m: float) -> float:
-    """Distance to a ball of diameter ``diameter_m`` that covers ``area_px`` pixels."""
-    k = camera.intrinsics
-    d = 2.0 * math.sqrt(max(area_px, 1e-9) / math.pi)
-    return math.sqrt(k.fx * k.fy) * diameter_m / d
-
-
-def range_rel_sigma(area_px: float, rel: float) -> float:
-    """Relative range uncertainty: a floor ``rel`` plus +-0.7 px on the apparent diameter.
-
-    The filter multiplies it by its *predicted* range: scaling by the measured range would
-    trust short measurements more than long ones and pull the estimate short.
-    """
-    d = 2.0 * math.sqrt(max(area_px, 1e-9) / math.pi)
-    return math.sqrt(rel * rel + (0.7 / d) ** 2)
 
 
 def _accel(v: np.ndarray, g: float, k: float) -> np.ndarray:
@@ -66,7 +54,7 @@ def _accel_jacobian(v: np.ndarray, k: float) -> np.ndarray:
 
 
 def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
-    """Heun (RK2) step of the state mean."""
+    """``f(x)``: one Heun (RK2) step of the state mean."""
     p, v = x[:3], x[3:]
     a1 = _accel(v, g, k)
     v1 = v + dt * a1
@@ -100,7 +88,7 @@ def predict_landing(x: np.ndarray, contact_z: float, g: float, k: float, horizon
 
 
 def measurement_jacobian(camera: PtzCamera, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``h(x)`` = (u, v, r) and its 3 x 6 Jacobian at world position ``p``."""
+    """``h(x)`` = (u, v, r) and its 3 x 6 Jacobian ``H`` at world position ``p``."""
     k = camera.intrinsics
     Rt = camera.R.T
     rel = p - camera.position
@@ -116,129 +104,166 @@ def measurement_jacobian(camera: PtzCamera, p: np.ndarray) -> tuple[np.ndarray, 
 
 
 class BallisticEkf:
-    """The landing predictor; ``x``/``P`` are None until the first measurement with a camera."""
+    """The landing predictor; ``x``/``P`` are None until the first measurement with a camera.
 
-    def __init__(self, config: GolfConfig) -> None:
+    ``contact_z`` is the height of the ball's centre on the ground (half its diameter).
+    """
+
+    def __init__(self, config: EkfConfig, contact_z: float) -> None:
         self.config = config
-        self.contact_z = config.ball_diameter_m / 2.0
-        self.x: np.ndarray | None = None
-        self.P: np.ndarray | None = None
+        self.contact_z = contact_z
+        self.kf = MotionModelEkf(6, 3, lambda x, dt: propagate(x, dt, config.gravity, config.drag_k))
+        self.initialised = False
         self.armed = False  # set once the ball has been high enough for a landing to mean something
         self.rejections = 0
         self.last_nis = math.nan
 
     @property
-    def initialised(self) -> bool:
-        return self.x is not None
+    def x(self) -> np.ndarray | None:
+        return self.kf.x if self.initialised else None
+
+    @property
+    def P(self) -> np.ndarray | None:  # noqa: N802 (the textbook symbol)
+        return self.kf.P if self.initialised else None
 
     def initialise(self, camera: PtzCamera, uv: np.ndarray, range_m: float, rel_sigma: float) -> None:
+        """Start at the measured line of sight and range; velocity unknown (``init_velocity_sigma``)."""
         sigma_r = rel_sigma * range_m
         los = camera.line_of_sight(np.asarray(uv, dtype=np.float64).reshape(1, 2))[0]
         f = math.sqrt(camera.intrinsics.fx * camera.intrinsics.fy)
-        across = range_m * self.config.ekf_pixel_sigma / f
-        self.x = np.concatenate([camera.position + range_m * los, np.zeros(3)])
-        self.P = np.zeros((6, 6))
+        across = range_m * self.config.pixel_sigma / f
+        self.kf.x = np.concatenate([camera.position + range_m * los, np.zeros(3)])
+        P = np.zeros((6, 6))
         along = np.outer(los, los)
-        self.P[:3, :3] = sigma_r**2 * along + across**2 * (np.eye(3) - along)
-        self.P[3:, 3:] = self.config.ekf_init_velocity_sigma**2 * np.eye(3)
+        P[:3, :3] = sigma_r**2 * along + across**2 * (np.eye(3) - along)
+        P[3:, 3:] = self.config.init_velocity_sigma**2 * np.eye(3)
+        self.kf.P = P
+        self.initialised = True
         self.rejections = 0
 
     def predict(self, dt: float) -> None:
         """Propagate ``x`` and ``P`` by ``dt`` seconds (substeps of at most 1/60 s)."""
-        if self.x is None or dt <= 0:
+        if not self.initialised or dt <= 0:
             return
         cfg = self.config
         steps = max(1, int(math.ceil(dt / MAX_SUBSTEP_S)))
         h = dt / steps
-        q = cfg.ekf_accel_noise**2
         G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
-        Q = q * G @ G.T
+        self.kf.Q = cfg.accel_noise**2 * G @ G.T
         for _ in range(steps):
             F = np.eye(6)
             F[:3, 3:] = h * np.eye(3)
-            F[3:, 3:] += h * _accel_jacobian(self.x[3:], cfg.drag_k)
-            self.x = propagate(self.x, h, cfg.gravity, cfg.drag_k)
-            self.P = F @ self.P @ F.T + Q
-        self.P = 0.5 * (self.P + self.P.T)
+            F[3:, 3:] += h * _accel_jacobian(self.kf.x[3:], cfg.drag_k)
+            self.kf.F = F
+            self.kf.predict(u=h)
+        self.kf.P = 0.5 * (self.kf.P + self.kf.P.T)
 
     def ground_contact(self, previous: np.ndarray) -> GroundContact | None:
         """The contact point if the state went from above the contact height to at/below it."""
-        if self.x is None:
+        if not self.initialised:
             return None
-        z0, z1 = previous[2] - self.contact_z, self.x[2] - self.contact_z
-        if z0 > 0.0 >= z1 and self.x[5] < 0:
+        x = self.kf.x
+        z0, z1 = previous[2] - self.contact_z, x[2] - self.contact_z
+        if z0 > 0.0 >= z1 and x[5] < 0:
             f = z0 / (z0 - z1)
-            point = previous[:3] + f * (self.x[:3] - previous[:3])
+            point = previous[:3] + f * (x[:3] - previous[:3])
             return GroundContact(point, float(f))
         if z0 <= 0.0 and z1 < 0.0:  # resting or rolling: stay on the ground
-            return GroundContact(self.x[:3].copy(), 1.0)
+            return GroundContact(x[:3].copy(), 1.0)
         return None
 
     def bounce(self, contact: GroundContact) -> None:
         """Put the ball back on the ground: reversed vertical speed, slower horizontal speed."""
         cfg = self.config
-        self.x[2] = self.contact_z
-        if self.x[5] < 0:
-            self.x[5] = -cfg.restitution * self.x[5]
-        self.x[3:5] *= cfg.bounce_friction if self.armed else 1.0
+        x = self.kf.x
+        x[2] = self.contact_z
+        if x[5] < 0:
+            x[5] = -cfg.restitution * x[5]
+        x[3:5] *= cfg.bounce_friction if self.armed else 1.0
         if self.armed:
-            self.P[3:, 3:] += np.diag([4.0, 4.0, 4.0]) ** 2  # the bounce is poorly known
+            self.kf.P[3:, 3:] += np.diag([4.0, 4.0, 4.0]) ** 2  # the bounce is poorly known
+
+    def advance(self, dt: float) -> np.ndarray | None:
+        """Predict by ``dt``; the ground contact point when this is the flight's landing (§2.3).
+
+        A contact counts as the landing once, after the ball was seen high enough (``armed``) and
+        when it happened within the step; the filter bounces at every contact.
+        """
+        if not self.initialised:
+            return None
+        previous = self.kf.x.copy()
+        self.predict(dt)
+        contact = self.ground_contact(previous)
+        if contact is None:
+            return None
+        landing = contact.point if self.armed and contact.fraction < 1.0 else None
+        self.bounce(contact)
+        if landing is not None:
+            self.armed = False
+        return landing
 
     def update(self, camera: PtzCamera, uv: np.ndarray, range_m: float, rel_sigma: float) -> bool:
         """EKF update with ``z = (u, v, r)``; returns False when the measurement was gated out.
 
-        ``rel_sigma`` is the range's relative uncertainty (see :func:`range_rel_sigma`).
+        ``rel_sigma`` is the range's relative uncertainty (see :func:`range.range_rel_sigma`); it
+        scales the *predicted* range.
         """
-        if self.x is None:
+        if not self.initialised:
             self.initialise(camera, uv, range_m, rel_sigma)
             return True
-        h, H = measurement_jacobian(camera, self.x[:3])
+        h, H = measurement_jacobian(camera, self.kf.x[:3])
         sigma_r = rel_sigma * h[2]
         z = np.array([uv[0], uv[1], range_m])
-        R = np.diag([self.config.ekf_pixel_sigma**2, self.config.ekf_pixel_sigma**2, sigma_r**2])
-        y = z - h
-        S = H @ self.P @ H.T + R
-        Sinv = np.linalg.inv(S)
-        self.last_nis = float(y @ Sinv @ y)
+        R = np.diag([self.config.pixel_sigma**2, self.config.pixel_sigma**2, sigma_r**2])
+        self.last_nis = innovation(self.kf.P, H, R, z, h).nis
         if self.last_nis > NIS_GATE:
             self.rejections += 1
             if self.rejections >= MAX_REJECTIONS:
                 self.initialise(camera, uv, range_m, rel_sigma)
             return False
         self.rejections = 0
-        K = self.P @ H.T @ Sinv
-        self.x = self.x + K @ y
-        IKH = np.eye(6) - K @ H
-        self.P = IKH @ self.P @ IKH.T + K @ R @ K.T  # Joseph form
-        if self.x[2] >= self.config.landing_arm_height_m + self.contact_z:
+        self.kf.update(z, lambda _x: H, lambda _x: h, R=R)  # Joseph form (filterpy)
+        if self.kf.x[2] >= self.config.landing_arm_height_m + self.contact_z:
             self.armed = True
         return True
 
+    def image_covariance(self, camera: PtzCamera) -> np.ndarray:
+        """2 x 2 pixel covariance of the position estimate seen through ``camera`` (``H P Hᵀ``)."""
+        _, H = measurement_jacobian(camera, self.kf.x[:3])
+        return H[:2, :3] @ self.kf.P[:3, :3] @ H[:2, :3].T
+
     def landing(self) -> tuple[float, np.ndarray] | None:
         """Predicted time (s from now) and point of the next ground contact."""
-        if self.x is None or self.x[2] <= self.contact_z + 1e-3:
+        if not self.initialised or self.kf.x[2] <= self.contact_z + 1e-3:
             return None
         cfg = self.config
-        return predict_landing(self.x, self.contact_z, cfg.gravity, cfg.drag_k, cfg.landing_horizon_s, cfg.landing_step_s)
+        return predict_landing(self.kf.x, self.contact_z, cfg.gravity, cfg.drag_k, cfg.landing_horizon_s, cfg.landing_step_s)
 
 
-def image_parabola_landing(history: np.ndarray, now: float, min_points: int = 5) -> tuple[np.ndarray, np.ndarray] | None:
-    """Where the descent ends, from the image track alone (no encoders, no 3-D filter).
+@dataclass(frozen=True, eq=False)
+class EkfState:
+    """The EKF stage's intermediates (NaN before the filter starts)."""
 
-    ``history`` rows are ``(frame, x, y)`` of past measurements. A parabola ``y(t)`` and a line
-    ``x(t)`` are fitted; if the ball was descending (image y growing) the positions at the last
-    measurement and at ``now`` bound where it met the ground and bounced. Returns the midpoint of
-    the two and the half-distance between them per axis (the re-initialisation centre and spread),
-    or None when the track was not descending or is too short.
-    """
-    if len(history) < min_points:
-        return None
-    t = history[:, 0] - history[-1, 0]
-    cy = np.polyfit(t, history[:, 2], 2)
-    cx = np.polyfit(t, history[:, 1], 1)
-    if cy[1] <= 0.0:  # dy/dt at the last measurement: not descending
-        return None
-    dt = float(now - history[-1, 0])
-    end = np.array([np.polyval(cx, dt), np.polyval(cy, dt)])
-    last = np.array([np.polyval(cx, 0.0), np.polyval(cy, 0.0)])
-    return 0.5 * (last + end), 0.5 * np.abs(end - last)
+    x: np.ndarray  # (6,) world X, Y, Z, VX, VY, VZ
+    P: np.ndarray  # (6, 6)
+    nis: float  # of the last update (NaN: none yet)
+    landing_world: np.ndarray  # (3,) predicted next ground contact (NaN if none)
+    landing_image: np.ndarray  # (2,) ... projected into this frame
+    landing_in_s: float  # seconds until that contact
+
+    @classmethod
+    def empty(cls) -> EkfState:
+        return cls(np.full(6, np.nan), np.full((6, 6), np.nan), math.nan, np.full(3, np.nan), np.full(2, np.nan), math.nan)
+
+    @classmethod
+    def of(cls, ekf: BallisticEkf, camera: PtzCamera | None) -> EkfState:
+        """The filter now, with its predicted landing (:meth:`BallisticEkf.landing`)."""
+        world, image, seconds = np.full(3, np.nan), np.full(2, np.nan), math.nan
+        prediction = ekf.landing()
+        if prediction is not None:
+            seconds, world = prediction
+            if camera is not None:
+                image = camera.project_points(world.reshape(1, 3))[0]
+        x = ekf.x.copy() if ekf.initialised else np.full(6, np.nan)
+        P = ekf.P.copy() if ekf.initialised else np.full((6, 6), np.nan)
+        return cls(x, P, float(ekf.last_nis), np.asarray(world, float), np.asarray(image, float), float(seconds))

@@ -1,99 +1,104 @@
-"""CONDENSATION over the ball's image position and velocity (seed 000, §2.2, eq. (1)-(3)).
+"""The golf tracker's CONDENSATION models (seed 000, §2.2), for the shared particle filter.
 
-State ``s = (x, y, vx, vy)`` in frame pixels and pixels per frame; N weighted samples.
-Each frame: *select* (systematic resampling by weight, one uniform draw from the engine's
-Generator and ``searchsorted``), *predict* ``s = F s' + G w`` with constant-velocity ``F`` and
-Gaussian ``w`` (eq. (1)), *measure* ``pi ∝ alpha + 1/(sqrt(2 pi) sigma) sum_m exp(-d_m^2 / 2 sigma^2)``
-over the M candidate centroids (eq. (2)), normalise, and estimate ``E[x] = sum pi s`` (eq. (3)).
-Everything is vectorised over the N samples; nothing draws from numpy's global RNG.
+State ``s = (x, y, vx, vy)`` in frame pixels and pixels per frame, N weighted samples in a
+:class:`~trackreplay.trackers.filters.particles.ParticleFilter`. Per frame the filter *selects*
+(systematic resampling), *predicts* with :func:`motion` and *measures* with :func:`likelihood`:
+
+- eq. (1) ``s = F s' + G w``: constant velocity ``F``, ``G = I``, Gaussian ``w`` with standard
+  deviations ``(pos, pos, vel, vel)``. Ours on top: after a miss the velocities are damped (an
+  unseen ball's velocity is ever less known; without this the cloud drifts away), and ``k``
+  dropped frames coast ``k`` more constant-velocity steps with the noise grown by ``√(k+1)``.
+- eq. (2) ``π ∝ α + 1/(√(2π) σ) Σ_m exp(−d(z_m, x)² / 2σ²)`` over the M candidate centroids
+  (the printed formula shows ``1 +``; ``α`` is the constant the text names).
+- eq. (3) ``E[x] = Σ π s``: ``ParticleFilter.estimate``.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
-F = np.array([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+from trackreplay.trackers.filters.particles import Likelihood, Transition, constant_velocity, linear_gaussian
+from trackreplay.trackers.geometry.homography import apply_homography, transfer_velocities
+from trackreplay.trackers.golf.config import ParticleConfig
+
+DIM = 4  # x, y, vx, vy
+F = constant_velocity(2)
 SQRT_2PI = float(np.sqrt(2.0 * np.pi))
 
 
-def systematic_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-    """Indices drawn by systematic resampling: one offset ``u ~ U[0, 1/N)``, N evenly spaced pointers."""
-    n = len(weights)
-    cumulative = np.cumsum(weights)
-    cumulative /= cumulative[-1]
-    cumulative[-1] = 1.0
-    pointers = (rng.random() + np.arange(n)) / n
-    return np.minimum(np.searchsorted(cumulative, pointers, side="right"), n - 1)
+def state(position: np.ndarray, velocity: np.ndarray | None = None) -> np.ndarray:
+    """``(x, y, vx, vy)`` from a position (velocity 0 unless given)."""
+    s = np.zeros(DIM)
+    s[:2] = position
+    if velocity is not None:
+        s[2:] = velocity
+    return s
 
 
-def likelihood(positions: np.ndarray, candidates: np.ndarray, sigma: float, alpha: float) -> np.ndarray:
-    """Eq. (2), unnormalised, for every sample position ``(N, 2)`` against candidates ``(M, 2)``."""
-    out = np.full(len(positions), alpha, dtype=np.float64)
-    if len(candidates):
-        d2 = ((positions[:, None, :] - candidates[None, :, :]) ** 2).sum(axis=2)
-        out += np.exp(-d2 / (2.0 * sigma * sigma)).sum(axis=1) / (SQRT_2PI * sigma)
-    return out
+def spread_sigma(position: float | np.ndarray, velocity: float) -> np.ndarray:
+    """Per-component standard deviations ``(px, py, v, v)`` for ``ParticleFilter.initialise``."""
+    sig = np.empty(DIM)
+    sig[:2] = position
+    sig[2:] = velocity
+    return sig
 
 
-def warp_states(states: np.ndarray, H: np.ndarray) -> np.ndarray:
-    """Move samples through the image homography ``H`` (a pure camera rotation/zoom).
+def motion(cfg: ParticleConfig, scale: float, *, damp: bool, steps: int) -> Transition:
+    """Eq. (1) over ``steps`` frames (1 = the next frame), with velocity damping after a miss."""
+    root = math.sqrt(steps)
+    noise = linear_gaussian(F, np.array([cfg.noise_pos_px * scale * root] * 2 + [cfg.noise_vel_px * scale * root] * 2))
 
-    Positions map through ``H``; a velocity maps as the difference of the images of ``p`` and
-    ``p + v``, so it is expressed in the new pose's pixels.
-    """
-    def apply(p: np.ndarray) -> np.ndarray:
-        q = p @ H[:, :2].T + H[:, 2]
-        return q[:, :2] / q[:, 2:3]
+    def transition(particles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        if damp or steps > 1:
+            particles = particles.copy()
+        if damp:
+            particles[:, 2:] *= cfg.miss_velocity_damping
+        if steps > 1:  # dropped frames: constant velocity over the gap
+            particles[:, :2] += (steps - 1) * particles[:, 2:]
+        return noise(particles, rng)
 
-    p = states[:, :2]
-    p2 = apply(p)
-    v2 = apply(p + states[:, 2:4]) - p2
-    return np.concatenate([p2, v2], axis=1)
+    return transition
 
 
-class CondensationFilter:
-    """N weighted samples of ``(x, y, vx, vy)``; the Generator is the engine's, passed in."""
+def warp(particles: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """Samples moved through the pose-change homography ``H`` (positions, and velocities as the
+    difference of the images of ``p`` and ``p + v``): a camera that rotates or zooms."""
+    p, v = transfer_velocities(H, particles[:, :2], particles[:, 2:])
+    return np.concatenate([p, v], axis=1)
 
-    def __init__(self, n: int, rng: np.random.Generator) -> None:
-        self.n = n
-        self.rng = rng
-        self.s = np.zeros((n, 4))
-        self.w = np.full(n, 1.0 / n)
 
-    def initialise(self, mean: np.ndarray, pos_sigma: float | np.ndarray, vel_sigma: float) -> None:
-        """Samples around ``mean`` = (x, y[, vx, vy]) with uniform weights (§2.3)."""
-        m = np.zeros(4)
-        m[: len(mean)] = mean
-        sig = np.empty(4)
-        sig[:2] = pos_sigma
-        sig[2:] = vel_sigma
-        self.s = m + self.rng.standard_normal((self.n, 4)) * sig
-        self.w = np.full(self.n, 1.0 / self.n)
+def with_camera_motion(velocity: tuple[float, float], position: tuple[float, float], H: np.ndarray) -> tuple[float, float]:
+    """An image velocity of samples that live in camera-independent directions (camera motion
+    compensated by the pose-change homography ``H``, previous -> this pose), plus the camera's own motion."""
+    before = apply_homography(np.linalg.inv(H), np.array([position]))[0]
+    return velocity[0] + position[0] - float(before[0]), velocity[1] + position[1] - float(before[1])
 
-    def select(self) -> None:
-        """Selection step: resample N times by weight; weights become uniform."""
-        self.s = self.s[systematic_resample(self.w, self.rng)]
-        self.w = np.full(self.n, 1.0 / self.n)
 
-    def warp(self, H: np.ndarray) -> None:
-        self.s = warp_states(self.s, H)
+def likelihood(candidates: np.ndarray, sigma: float, alpha: float) -> Likelihood:
+    """Eq. (2), unnormalised, of each particle's position against the candidates ``(M, 2)``."""
+    candidates = np.asarray(candidates, dtype=np.float64).reshape(-1, 2)
 
-    def predict(self, pos_sigma: float, vel_sigma: float) -> None:
-        """Eq. (1): ``s = F s' + G w``, G = I, w ~ N(0, diag(pos, pos, vel, vel)^2)."""
-        noise = self.rng.standard_normal((self.n, 4)) * np.array([pos_sigma, pos_sigma, vel_sigma, vel_sigma])
-        self.s = self.s @ F.T + noise
+    def weigh(particles: np.ndarray) -> np.ndarray:
+        out = np.full(len(particles), alpha, dtype=np.float64)
+        if len(candidates):
+            d2 = ((particles[:, None, :2] - candidates[None, :, :]) ** 2).sum(axis=2)
+            out += np.exp(-d2 / (2.0 * sigma * sigma)).sum(axis=1) / (SQRT_2PI * sigma)
+        return out
 
-    def measure(self, candidates: np.ndarray, sigma: float, alpha: float) -> None:
-        """Eq. (2) then normalisation. With no candidate (and alpha > 0) the weights stay uniform."""
-        lik = likelihood(self.s[:, :2], np.asarray(candidates, dtype=np.float64).reshape(-1, 2), sigma, alpha)
-        total = lik.sum()
-        self.w = lik / total if total > 0 else np.full(self.n, 1.0 / self.n)
+    return weigh
 
-    def estimate(self) -> np.ndarray:
-        """Eq. (3): the weighted mean ``(x, y, vx, vy)``."""
-        return self.w @ self.s
 
-    def spread(self) -> np.ndarray:
-        """Weighted standard deviation of x and y (sets the search region's size and aspect)."""
-        mean = self.w @ self.s[:, :2]
-        return np.sqrt(np.maximum(self.w @ (self.s[:, :2] - mean) ** 2, 0.0))
+@dataclass(frozen=True, eq=False)
+class ParticleSet:
+    """The CONDENSATION stage's intermediates: the weighted samples after the measurement."""
+
+    particles: np.ndarray  # (N, 4) x, y, vx, vy
+    weights: np.ndarray  # (N,) eq. (2), normalised
+    estimate: np.ndarray  # (4,) eq. (3)
+
+    @classmethod
+    def empty(cls) -> ParticleSet:
+        return cls(np.zeros((0, DIM)), np.zeros(0), np.full(DIM, np.nan))

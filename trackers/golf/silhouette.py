@@ -1,37 +1,47 @@
-"""The binary silhouette I_c inside the search region I_s only (seed 000, §2.1)."""
+"""The LUT silhouette stage: ``I_c`` inside ``I_s`` (seed 000, §2.1).
+
+The search region's pixels are converted to (Y, Cb, Cr) (only the crop: the HD frame is never
+converted whole), the sky or ground LUT is chosen from the crop's luminance histogram
+(:meth:`GolfLuts.choose`), and one lookup gives the binary silhouette.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from trackreplay.trackers.golf.lut import ColourLut, to_ycc
+from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.appearance.lut import ColourLut
+from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
+from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
 
 
-def region_slice(box: np.ndarray, width: int, height: int) -> tuple[int, int, int, int]:
-    """Integer ``x0, y0, x1, y1`` of an ``(x0, y0, w, h)`` box, clipped to the image."""
-    x0, y0, w, h = (float(v) for v in box)
-    a = int(np.clip(np.floor(x0), 0, width))
-    b = int(np.clip(np.floor(y0), 0, height))
-    c = int(np.clip(np.ceil(x0 + w), a, width))
-    d = int(np.clip(np.ceil(y0 + h), b, height))
-    return a, b, c, d
+@dataclass(frozen=True, eq=False)
+class LutSilhouette:
+    """The silhouette stage's intermediates."""
+
+    lut_name: str  # the LUT applied ("sky" / "ground"; "" if none)
+    lut_scores: np.ndarray  # (2,) share of I_s's luminance histogram per name in lut_names (NaN: not built)
+    mask: np.ndarray  # (h, w) uint8 0/1, I_c inside I_s
+    offset: np.ndarray  # (2,) int64 top-left of the mask in the frame
+    lut_names: tuple[str, ...] = LUT_NAMES
+
+    @classmethod
+    def empty(cls) -> LutSilhouette:
+        return cls("", np.full(len(LUT_NAMES), np.nan), np.zeros((0, 0), np.uint8), np.zeros(2, np.int64))
 
 
-def crop_ycc(image: np.ndarray, box: np.ndarray) -> tuple[np.ndarray, tuple[int, int]]:
-    """The search region of ``image`` in (Y, Cb, Cr) and its top-left offset in the frame.
-
-    Only the crop is converted: the full HD frame is never touched.
-    """
-    height, width = image.shape[:2]
-    x0, y0, x1, y1 = region_slice(box, width, height)
-    crop = image[y0:y1, x0:x1]
-    if crop.size == 0:
-        return np.zeros((0, 0, 3), np.uint8), (x0, y0)
-    return to_ycc(crop), (x0, y0)
+def box_silhouette(image: np.ndarray, box: np.ndarray, lut: ColourLut | None) -> tuple[np.ndarray, tuple[int, int], np.ndarray]:
+    """The (Y, Cb, Cr) pixels of ``box`` (x0, y0, w, h), their offset in the frame and their silhouette under ``lut``."""
+    ycc, offset = crop_pixels(image, box, to_ycbcr)
+    return ycc, offset, silhouette(ycc, lut)
 
 
-def silhouette(ycc: np.ndarray, lut: ColourLut | None) -> np.ndarray:
-    """``I_c``: 1 where the LUT says ball, 0 elsewhere (uint8, the crop's shape)."""
-    if lut is None or ycc.size == 0:
-        return np.zeros(ycc.shape[:2], np.uint8)
-    return lut.lookup(ycc).view(np.uint8)
+def lut_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, current: str) -> tuple[LutSilhouette, np.ndarray]:
+    """The silhouette in ``box`` (x0, y0, w, h) with the LUT chosen there (``current`` kept unless
+    another fits clearly better), and the crop's (Y, Cb, Cr) pixels."""
+    ycc, offset = crop_pixels(image, box, to_ycbcr)
+    name, scores = luts.choose(ycc[..., 0], current)
+    mask = silhouette(ycc, luts.lut(name))
+    return LutSilhouette(name, scores, mask, np.array(offset, np.int64)), ycc

@@ -1,18 +1,22 @@
+"""Blob gating (§2.1): reasons, widening, the ball nearest the prediction, targets that follow zoom."""
+
 import cv2
 import numpy as np
 import pytest
 
-from trackreplay.trackers.golf.blobs import REASONS, BlobTargets, gate, measure_blobs, nearest
+from trackreplay.trackers.golf.blobs import REASONS, BlobTargets, find_blobs, gate, select_ball, start_targets
+from trackreplay.trackers.golf.config import BlobConfig
+
+CFG = BlobConfig(area_slack_px=0.0)
 
 
-def rows_for(mask, targets, predicted=(100.0, 100.0), widen=1.0):
-    rows = measure_blobs(mask, (0, 0), np.array(predicted), min_area=2.0, max_blobs=48)
-    return gate(rows, targets, area_tolerance=3.0, circularity_tolerance=0.35, widen=widen)
+def gated(mask, targets, predicted=(100.0, 100.0), misses=0, cfg=CFG):
+    return select_ball(mask, (0, 0), np.array(predicted), targets, misses, cfg, 1.0)
 
 
-def reason_at(rows, x, y):
-    i = int(np.argmin((rows[:, 0] - x) ** 2 + (rows[:, 1] - y) ** 2))
-    return REASONS[int(rows[i, 5])], bool(rows[i, 4])
+def reason_at(g, x, y):
+    i = int(np.argmin((g.blobs.centroid[:, 0] - x) ** 2 + (g.blobs.centroid[:, 1] - y) ** 2))
+    return REASONS[int(g.reason[i])], bool(g.accepted[i])
 
 
 @pytest.fixture
@@ -27,36 +31,35 @@ def shapes():
 
 
 def test_each_shape_gets_its_reason(shapes):
-    rows = rows_for(shapes, BlobTargets(area=80.0, circularity=0.85))
-    assert len(rows) == 5
-    assert reason_at(rows, 50, 50) == ("ok", True)
-    assert reason_at(rows, 39.5, 100.5) == ("circularity", False)
-    assert reason_at(rows, 200, 100) == ("area_large", False)
-    assert reason_at(rows, 250, 30) == ("area_small", False)
-    assert reason_at(rows, 280, 180) == ("tiny", False)
-    disc = rows[int(np.argmin((rows[:, 0] - 50) ** 2 + (rows[:, 1] - 50) ** 2))]
-    assert disc[0] == pytest.approx(50.0) and disc[1] == pytest.approx(50.0)
-    assert disc[2] == 81 and 0.8 < disc[3] < 1.05
+    g = gated(shapes, BlobTargets(area=80.0, circularity=0.85))
+    assert len(g.blobs) == 5 and g.reasons == REASONS
+    assert reason_at(g, 50, 50) == ("ok", True)
+    assert reason_at(g, 39.5, 100.5) == ("circularity", False)
+    assert reason_at(g, 200, 100) == ("area_large", False)
+    assert reason_at(g, 250, 30) == ("area_small", False)
+    assert reason_at(g, 280, 180) == ("tiny", False)
+    assert g.candidates == pytest.approx(np.array([[50.0, 50.0]]))
+    assert g.targets.tolist() == [80.0, 0.85] and g.widen == 1.0
 
 
-def test_circularity_of_discs_bars_and_ellipses():
-    for r in (2, 3, 5, 8, 15):
-        m = np.zeros((60, 60), np.uint8)
-        cv2.circle(m, (30, 30), r, 1, -1)
-        circ = measure_blobs(m, (0, 0), np.zeros(2), min_area=0, max_blobs=4)[0, 3]
-        assert 0.75 < circ < 1.1, (r, circ)
-    m = np.zeros((60, 60), np.uint8)
-    m[10:12, 5:45] = 1
-    assert measure_blobs(m, (0, 0), np.zeros(2), min_area=0, max_blobs=4)[0, 3] < 0.35
-
-
-def test_widening_lets_a_zoomed_ball_through(shapes):
+def test_widening_lets_a_zoomed_ball_through():
     """After misses the gates widen: a ball 3.5x the target area passes at widen 1.5, not at 1."""
     m = np.zeros((100, 100), np.uint8)
     cv2.circle(m, (50, 50), 6, 1, -1)  # area 113
     t = BlobTargets(area=113 / 3.5, circularity=0.9)
-    assert reason_at(rows_for(m, t), 50, 50)[0] == "area_large"
-    assert reason_at(rows_for(m, t, widen=1.5), 50, 50)[0] == "ok"
+    assert reason_at(gated(m, t), 50, 50)[0] == "area_large"
+    two_misses = gated(m, t, misses=2)
+    assert two_misses.widen == 1.5 and reason_at(two_misses, 50, 50)[0] == "ok"
+    assert gated(m, t, misses=100).widen == CFG.widen_max
+
+
+def test_slack_keeps_a_tiny_ball_against_a_larger_target():
+    m = np.zeros((20, 20), np.uint8)
+    m[5:7, 5:6] = 1  # a 2 px ball, target 9 px
+    t = BlobTargets(area=9.0, circularity=0.5)
+    blobs = find_blobs(m, (0, 0), np.zeros(2), BlobConfig(min_area_px=1.0), 1.0)
+    assert REASONS[gate(blobs, t, BlobConfig(min_area_px=1.0, area_slack_px=0.0, area_tolerance=3.0), 1.0)[0]] == "area_small"
+    assert REASONS[gate(blobs, t, BlobConfig(min_area_px=1.0, area_slack_px=4.0, area_tolerance=3.0), 1.0)[0]] == "ok"
 
 
 def test_nearest_accepted_blob_to_the_prediction_is_the_ball():
@@ -64,23 +67,26 @@ def test_nearest_accepted_blob_to_the_prediction_is_the_ball():
     cv2.circle(m, (30, 50), 4, 1, -1)
     cv2.circle(m, (150, 50), 4, 1, -1)
     m[10:12, 90:130] = 1  # a bar nearer to the prediction, rejected
-    rows = rows_for(m, BlobTargets(49.0, 0.9), predicted=(110.0, 15.0))
-    i = nearest(rows, np.array([110.0, 15.0]))
-    assert rows[i, 0] == pytest.approx(150.0)
-    assert nearest(rows[:0], np.zeros(2)) == -1
+    g = gated(m, BlobTargets(49.0, 0.9), predicted=(110.0, 15.0))
+    assert g.blobs.centroid[g.selected, 0] == pytest.approx(150.0)
+    assert gated(np.zeros((10, 10), np.uint8), BlobTargets(49.0, 0.9)).selected == -1
 
 
-def test_excess_blobs_keep_the_nearest():
+def test_excess_blobs_are_the_far_ones():
     m = np.zeros((100, 400), np.uint8)
     for k in range(60):
         m[10 + (k // 30) * 40 : 13 + (k // 30) * 40, 5 + 12 * (k % 30) : 8 + 12 * (k % 30)] = 1
-    rows = measure_blobs(m, (10, 20), np.array([15.0, 30.0]), min_area=2, max_blobs=8)
-    assert len(rows) == 60
-    measured = rows[:, 5] == 0
-    assert measured.sum() == 8 and (rows[~measured, 5] == REASONS.index("excess")).all()
-    d = np.hypot(rows[:, 0] - 15.0, rows[:, 1] - 30.0)
-    assert d[measured].max() <= d[~measured].min()
-    assert np.isnan(rows[~measured, 3]).all()
+    g = select_ball(m, (10, 20), np.array([15.0, 30.0]), BlobTargets(9.0, 0.9), 0, BlobConfig(max_blobs=8), 1.0)
+    assert (g.reason == REASONS.index("excess")).sum() == 52
+
+
+def test_start_targets_from_the_marked_ball():
+    m = np.zeros((40, 40), np.uint8)
+    cv2.circle(m, (20, 20), 5, 1, -1)
+    m[2, 2] = 1
+    t = start_targets(m, (0, 0), np.array([20.0, 20.0]), BlobConfig(), 1.0)
+    assert t.area == 81 and 0.8 < t.circularity <= 1.0
+    assert start_targets(np.zeros((40, 40), np.uint8), (0, 0), np.zeros(2), BlobConfig(), 1.0) is None
 
 
 def test_targets_follow_a_zoom_geometrically():
@@ -91,3 +97,5 @@ def test_targets_follow_a_zoom_geometrically():
     assert t.circularity == pytest.approx(0.8, abs=1e-3)
     half = BlobTargets(100.0, 0.9).follow(400.0, 0.9, 0.5)
     assert half.area == pytest.approx(200.0)  # geometric mean, not arithmetic
+    assert BlobTargets(100.0, 0.9).zoomed(4.0).area == 400.0
+    assert BlobTargets(np.pi, 0.9).diameter == pytest.approx(2.0)

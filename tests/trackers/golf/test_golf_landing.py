@@ -6,8 +6,10 @@ import pytest
 from trackreplay.recorder.synth.golf.flight import BallModel, Launch, simulate_shot
 from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
-from trackreplay.trackers.golf.config import GolfConfig
-from trackreplay.trackers.golf.landing import BallisticEkf, image_parabola_landing, predict_landing, range_from_area, range_rel_sigma
+from trackreplay.trackers.golf.config import EkfConfig, RangeConfig
+from trackreplay.trackers.golf.landing import BallisticEkf, EkfState, measurement_jacobian, predict_landing
+from trackreplay.trackers.golf.range import RangeFromArea, range_from_area, range_rel_sigma
+from trackreplay.trackers.golf.reinit import image_parabola_landing
 
 LENS = LensTable(1280, 720, (LensEntry(0, 0, 1000, 1000, 640, 360), LensEntry(100, 0, 9000, 9000, 640, 360)), (-12.0, 18.0, 4.0))
 FPS = 30.0
@@ -32,8 +34,7 @@ def observe(cam: PtzCamera, p: np.ndarray, rng: np.random.Generator) -> tuple[np
 @pytest.mark.parametrize("lift", [False, True])
 def test_predicted_landing_matches_the_simulated_flight(lift):
     traj = simulate_shot(Launch(speed=55.0, elevation=20.0, azimuth=3.0, backspin_rpm=3000.0), BallModel(lift=lift))
-    cfg = GolfConfig()
-    ekf = BallisticEkf(cfg)
+    ekf = BallisticEkf(EkfConfig(), D / 2)
     rng = np.random.default_rng(0)
     times = np.arange(0.1, traj.landing_time, 1 / FPS)
     flight = traj.sample(times)
@@ -44,7 +45,7 @@ def test_predicted_landing_matches_the_simulated_flight(lift):
         cam = follow(flight.position[k])
         uv, area = observe(cam, flight.position[k], rng)
         r = range_from_area(area, cam, D)
-        ekf.update(cam, uv, r, range_rel_sigma(area, cfg.ekf_range_rel_sigma))
+        ekf.update(cam, uv, r, range_rel_sigma(area, RangeConfig().rel_sigma))
     assert ekf.armed
     t_land, point = ekf.landing()
     true_t = traj.landing_time - times[stop - 1]
@@ -86,8 +87,7 @@ def test_landing_of_a_vacuum_shot_is_analytic():
 
 
 def test_a_wild_measurement_is_gated_then_the_filter_restarts():
-    cfg = GolfConfig()
-    ekf = BallisticEkf(cfg)
+    ekf = BallisticEkf(EkfConfig(), D / 2)
     cam = follow(np.array([50.0, 0.0, 10.0]))
     p = np.array([50.0, 0.0, 10.0])
     uv = cam.project_points(p.reshape(1, 3))[0]
@@ -110,3 +110,46 @@ def test_image_parabola_brackets_the_bounce():
     rising = history.copy()
     rising[:, 2] = 300 - 20 * t
     assert image_parabola_landing(rising, 12.0) is None
+
+
+def test_measurement_jacobian_by_finite_differences():
+    cam = follow(np.array([60.0, 10.0, 15.0]))
+    p = np.array([61.0, 9.0, 14.0])
+    h, H = measurement_jacobian(cam, p)
+    assert h[:2] == pytest.approx(cam.project_points(p.reshape(1, 3))[0])
+    assert h[2] == pytest.approx(np.linalg.norm(p - cam.position))
+    eps = 1e-5
+    numeric = np.stack([(measurement_jacobian(cam, p + eps * e)[0] - measurement_jacobian(cam, p - eps * e)[0]) / (2 * eps)
+                        for e in np.eye(3)], axis=1)
+    assert H[:, :3] == pytest.approx(numeric, rel=1e-5, abs=1e-6)
+    assert not H[:, 3:].any()
+
+
+def test_advance_reports_the_landing_once_and_bounces():
+    ekf = BallisticEkf(EkfConfig(drag_k=0.0), D / 2)
+    cam = follow(np.array([40.0, 0.0, 3.0]))
+    ekf.update(cam, cam.project_points(np.array([[40.0, 0.0, 3.0]]))[0], 40.0, 0.05)
+    ekf.kf.x = np.array([40.0, 0.0, 3.0, 10.0, 0.0, -5.0])
+    ekf.armed = True
+    landings = [ekf.advance(1 / FPS) for _ in range(30)]
+    hits = [k for k, p in enumerate(landings) if p is not None]
+    assert len(hits) == 1 and not ekf.armed
+    assert landings[hits[0]][2] == pytest.approx(D / 2)
+    assert ekf.x[2] >= D / 2 - 1e-9  # never below the ground
+    state = EkfState.of(ekf, cam)
+    assert state.x.shape == (6,) and state.P.shape == (6, 6)
+    empty = EkfState.of(BallisticEkf(EkfConfig(), D / 2), cam)
+    assert np.isnan(empty.x).all() and np.isnan(empty.landing_world).all()
+
+
+def test_range_calibration_on_a_ball_resting_on_the_ground():
+    point = np.array([60.0, 5.0, D / 2])
+    cam = follow(point, diameter_px=8.0)
+    uv = cam.project_points(point.reshape(1, 3))[0]
+    true_area = math.pi / 4 * (cam.intrinsics.fx * D / np.linalg.norm(point - cam.position)) ** 2
+    ranging = RangeFromArea(RangeConfig(), D)
+    ranging.calibrate(cam, uv, 0.64 * true_area)  # a silhouette that lost the ball's edge
+    assert ranging.scale == pytest.approx(0.8, rel=1e-3)
+    r, rel = ranging.measure(0.64 * true_area, cam)
+    assert r == pytest.approx(np.linalg.norm(point - cam.position), rel=1e-3)
+    assert rel > RangeConfig().rel_sigma

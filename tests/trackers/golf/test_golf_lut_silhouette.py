@@ -2,9 +2,16 @@ import numpy as np
 import pytest
 
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.golf.config import GolfConfig
+from trackreplay.trackers.golf.config import LutConfig
 from trackreplay.trackers.golf.lut import build_luts, region_samples
-from trackreplay.trackers.golf.silhouette import crop_ycc, silhouette
+from trackreplay.trackers.golf.silhouette import box_silhouette, lut_silhouette
+
+CONTEXT_PX = 64.0 * 720 / 1080  # the smallest search region on these 720-line images
+
+
+def crop_ycc(image, box):
+    ycc, offset, _ = box_silhouette(image, box, None)
+    return ycc, offset
 
 
 def disc_mask(shape, centre, radius):
@@ -23,26 +30,28 @@ def marked(backdrop, draw_ball):
 
 def test_unlabelled_boxes_are_sorted_into_sky_and_ground(marked):
     img, regions = marked
-    cfg = GolfConfig()
-    assert region_samples(img, regions[0], cfg).name == "sky"
-    assert region_samples(img, regions[1], cfg).name == "ground"
+    cfg = LutConfig()
+    assert region_samples(img, regions[0], cfg, CONTEXT_PX).name == "sky"
+    assert region_samples(img, regions[1], cfg, CONTEXT_PX).name == "ground"
     luts = build_luts([(img, regions)], cfg)
     assert luts.names == ("sky", "ground")
     assert luts.luts["sky"].table.shape == (256, 256, 256) and luts.luts["sky"].table.dtype == bool
+    assert luts.start_names(img, regions[0]) == ("sky", "sky")
 
 
 @pytest.mark.parametrize("where, name", [((640.0, 200.0), "sky"), ((300.0, 600.0), "ground")])
 def test_silhouette_of_a_new_ball_in_the_search_region(marked, where, name, backdrop, draw_ball):
     """A ball at a place the LUT never saw is segmented; the background around it is not."""
     img, regions = marked
-    luts = build_luts([(img, regions)], GolfConfig())
+    luts = build_luts([(img, regions)], LutConfig())
     frame = draw_ball(backdrop(seed=7), where, 5.0)
     box = np.array([where[0] - 40, where[1] - 30, 80, 60])
-    ycc, offset = crop_ycc(frame, box)
+    sil, ycc = lut_silhouette(frame, box, luts, "")
+    offset = tuple(sil.offset)
     assert offset == (int(where[0] - 40), int(where[1] - 30))
-    chosen, scores = luts.choose(ycc[..., 0], "")
-    assert chosen == name
-    mask = silhouette(ycc, luts.luts[chosen])
+    assert sil.lut_name == name and ycc.shape == (60, 80, 3)
+    assert sil.lut_scores[sil.lut_names.index(name)] > 0.9
+    mask = sil.mask
     assert mask.dtype == np.uint8 and mask.shape == (60, 80)
     truth = disc_mask(mask.shape, (where[0] - offset[0], where[1] - offset[1]), 4.0)  # the disc's solid core
     assert mask[truth].mean() > 0.95
@@ -52,7 +61,7 @@ def test_silhouette_of_a_new_ball_in_the_search_region(marked, where, name, back
 
 def test_switch_follows_the_region_with_hysteresis(marked, backdrop):
     img, regions = marked
-    cfg = GolfConfig()
+    cfg = LutConfig()
     luts = build_luts([(img, regions)], cfg)
     frame = backdrop(seed=3)
     ycc, _ = crop_ycc(frame, np.array([600, 250, 80, 80]))  # all sky
@@ -64,7 +73,7 @@ def test_switch_follows_the_region_with_hysteresis(marked, backdrop):
     for top in range(300, 361):
         ycc, _ = crop_ycc(frame, np.array([600, top, 80, 80]))
         _, scores = luts.choose(ycc[..., 0], "")
-        if abs(scores[0] - scores[1]) < cfg.lut_switch_margin:
+        if abs(scores[0] - scores[1]) < cfg.switch_margin:
             close += 1
             assert luts.choose(ycc[..., 0], "sky")[0] == "sky"
             assert luts.choose(ycc[..., 0], "ground")[0] == "ground"
@@ -74,4 +83,4 @@ def test_switch_follows_the_region_with_hysteresis(marked, backdrop):
 def test_labels_override_the_colour_guess(marked):
     img, regions = marked
     relabelled = (InitRegion(0, 0, 400.0, 150.0, 14, 14, "ball ground"),)
-    assert region_samples(img, relabelled[0], GolfConfig()).name == "ground"
+    assert region_samples(img, relabelled[0], LutConfig(), CONTEXT_PX).name == "ground"

@@ -1,19 +1,27 @@
+"""The golf tracker's CONDENSATION models (eqs. (1)-(3)) on the shared particle filter."""
+
 import numpy as np
 import pytest
 
-from trackreplay.trackers.golf.particles import CondensationFilter, likelihood, systematic_resample, warp_states
+from trackreplay.trackers.filters.particles import ParticleFilter
+from trackreplay.trackers.golf.config import ParticleConfig
+from trackreplay.trackers.golf.particles import DIM, likelihood, motion, spread_sigma, state, warp, with_camera_motion
+
+
+def noise_config(pos: float, vel: float) -> ParticleConfig:
+    return ParticleConfig(noise_pos_px=pos, noise_vel_px=vel)
 
 
 def run(truth, detections, *, sigma=3.0, alpha=1e-4, pos=1.0, vel=0.5, seed=0, known_velocity=True):
-    pf = CondensationFilter(1000, np.random.default_rng(seed))
+    pf = ParticleFilter(1000, DIM, np.random.default_rng(seed))
     v0 = truth[1] - truth[0] if known_velocity else np.zeros(2)
-    pf.initialise(np.concatenate([truth[0], v0]), 2.0, 1.0)
+    pf.initialise(state(truth[0], v0), spread_sigma(2.0, 1.0))
     estimates = []
     for k, z in enumerate(detections):
         if k:
-            pf.select()
-            pf.predict(pos, vel)
-        pf.measure(z, sigma, alpha)
+            pf.resample()
+            pf.predict(motion(noise_config(pos, vel), 1.0, damp=False, steps=1))
+        pf.weigh(likelihood(z, sigma, alpha))
         estimates.append(pf.estimate())
     return np.array(estimates)
 
@@ -60,36 +68,51 @@ def test_a_far_false_candidate_does_not_capture_the_track():
 
 
 def test_without_candidates_the_weights_stay_uniform_and_the_cloud_spreads():
-    pf = CondensationFilter(1000, np.random.default_rng(1))
-    pf.initialise(np.array([50.0, 50.0, 2.0, 0.0]), 1.0, 0.2)
-    before = pf.spread()
+    pf = ParticleFilter(1000, DIM, np.random.default_rng(1))
+    pf.initialise(np.array([50.0, 50.0, 2.0, 0.0]), spread_sigma(1.0, 0.2))
+    before = pf.spread(slice(0, 2))
     for _ in range(10):
-        pf.select()
-        pf.predict(1.0, 0.5)
-        pf.measure(np.zeros((0, 2)), 3.0, 1e-4)
-    assert np.allclose(pf.w, 1e-3)
-    assert (pf.spread() > 3 * before).all()
+        pf.resample()
+        pf.predict(motion(noise_config(1.0, 0.5), 1.0, damp=False, steps=1))
+        pf.weigh(likelihood(np.zeros((0, 2)), 3.0, 1e-4))
+    assert np.allclose(pf.weights, 1e-3)
+    assert (pf.spread(slice(0, 2)) > 3 * before).all()
     assert pf.estimate()[0] == pytest.approx(70.0, abs=2.0)  # drifted at constant velocity
 
 
+def test_with_alpha_zero_and_no_candidate_the_weights_stay_uniform():
+    pf = ParticleFilter(100, DIM, np.random.default_rng(1))
+    pf.initialise(np.zeros(DIM), spread_sigma(1.0, 1.0))
+    pf.weigh(likelihood(np.zeros((0, 2)), 3.0, 0.0))
+    assert np.array_equal(pf.weights, np.full(100, 0.01))
+
+
 def test_likelihood_is_equation_2():
-    pos = np.array([[0.0, 0.0], [3.0, 4.0]])
+    particles = np.array([[0.0, 0.0, 9.0, 9.0], [3.0, 4.0, -1.0, 0.0]])
     z = np.array([[0.0, 0.0], [6.0, 8.0]])
     sigma, alpha = 2.0, 0.1
     expected = alpha + (np.exp(-np.array([0.0, 25.0]) / 8) + np.exp(-np.array([100.0, 25.0]) / 8)) / (np.sqrt(2 * np.pi) * sigma)
-    assert likelihood(pos, z, sigma, alpha) == pytest.approx(expected)
+    assert likelihood(z, sigma, alpha)(particles) == pytest.approx(expected)
 
 
-def test_systematic_resampling_is_proportional_and_seeded():
-    w = np.array([0.5, 0.25, 0.125, 0.125, 0.0])
-    counts = np.bincount(systematic_resample(np.repeat(w, 200) / 200, np.random.default_rng(3)) // 200, minlength=5)
-    assert counts.tolist() == [500, 250, 125, 125, 0]
-    a = systematic_resample(np.random.default_rng(0).random(1000), np.random.default_rng(9))
-    b = systematic_resample(np.random.default_rng(0).random(1000), np.random.default_rng(9))
-    assert np.array_equal(a, b)
+def test_motion_damps_after_a_miss_and_coasts_over_dropped_frames():
+    s = np.array([[10.0, 20.0, 2.0, -1.0]])
+    still = ParticleConfig(noise_pos_px=0.0, noise_vel_px=0.0, miss_velocity_damping=0.5)
+    rng = np.random.default_rng(0)
+    assert motion(still, 1.0, damp=False, steps=1)(s, rng) == pytest.approx(np.array([[12.0, 19.0, 2.0, -1.0]]))
+    assert motion(still, 1.0, damp=True, steps=1)(s, rng) == pytest.approx(np.array([[11.0, 19.5, 1.0, -0.5]]))
+    assert motion(still, 1.0, damp=False, steps=3)(s, rng) == pytest.approx(np.array([[16.0, 17.0, 2.0, -1.0]]))
+    assert s.tolist() == [[10.0, 20.0, 2.0, -1.0]]  # the input is not modified
+    # The noise grows with the square root of the frames covered.
+    n = np.zeros((20000, 4))
+    spread = motion(ParticleConfig(noise_pos_px=2.0, noise_vel_px=1.0), 0.5, damp=False, steps=4)(n, rng).std(axis=0)
+    assert spread == pytest.approx([2.0, 2.0, 1.0, 1.0], rel=0.03)
 
 
 def test_warp_moves_positions_and_velocities_through_the_homography():
     s = np.array([[10.0, 20.0, 1.0, -2.0]])
     shift_zoom = np.array([[2.0, 0.0, 5.0], [0.0, 2.0, -3.0], [0.0, 0.0, 1.0]])
-    assert warp_states(s, shift_zoom) == pytest.approx(np.array([[25.0, 37.0, 2.0, -4.0]]))
+    assert warp(s, shift_zoom) == pytest.approx(np.array([[25.0, 37.0, 2.0, -4.0]]))
+    # A sample still in the world, at (25, 37) now, was at (10, 20) under the previous pose: the
+    # camera's own motion moved it by (15, 17) pixels this frame.
+    assert with_camera_motion((1.0, 0.0), (25.0, 37.0), shift_zoom) == pytest.approx((16.0, 17.0))

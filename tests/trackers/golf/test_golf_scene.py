@@ -13,6 +13,7 @@ scene = pytest.importorskip("trackreplay.recorder.synth.golf.scene")
 from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
 from trackreplay.recorder.synth.golf.operator import OperatorConfig  # noqa: E402
 from trackreplay.replay import registry  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
 from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
@@ -34,19 +35,11 @@ def teeshot(tmp_path_factory):
     return path, summary
 
 
-def replay_with_prepare(path, config=None, seed=0):
-    """What the engine does, plus building the colour LUTs from every marked frame first."""
-    reader = LogReader(path)
-    topics = FrameTopics.detect(reader)
-    frames = list(iter_frames(reader, topics))
-    tracker = GolfTracker(config or GolfConfig(), np.random.default_rng(seed))
-    marked = sorted({r.frame for r in frames[0].all_hints})
-    tracker.prepare([(frames[k].image, [r for r in frames[0].all_hints if r.frame == k]) for k in marked])
-    out = []
-    for f in frames:
-        states = tracker.step(f)
-        out.append((f, states, tracker.intermediates))
-    gt = {r["frame"]: r for r in read_groundtruth(reader).filter(id=1).iter_rows(named=True)}
+def replay_steps(path, config=None, seed=0):
+    """The engine's own loop (LUTs built from every marked frame first), with the ground truth."""
+    steps = iter_steps(ReplayRequest(log=path, tracker="golf", config=config, seed=seed))
+    out = [(step.frame, list(step.states), step.intermediates) for step in steps]
+    gt = {r["frame"]: r for r in read_groundtruth(LogReader(path)).filter(id=1).iter_rows(named=True)}
     return out, gt
 
 
@@ -69,13 +62,13 @@ def scores(out, gt, frames=None):
 
 def test_tee_shot_detection_landing_and_reacquisition(teeshot):
     path, summary = teeshot
-    out, gt = replay_with_prepare(path)
+    out, gt = replay_steps(path)
     rate, errors = scores(out, gt)
     assert rate >= 0.65, rate  # the climb right after the launch is a blurred streak: not detectable
     assert np.median(errors) < 1.0
     assert all(inter.notice == "" for _, _, inter in out)  # encoders present: no notice
     # The EKF's ground contact re-initialises the particles at the landing ...
-    landings = [f.index for f, _, inter in out if inter.reinit == "ekf_landing"]
+    landings = [f.index for f, _, inter in out if inter.reinit.kind == "ekf_landing"]
     assert any(abs(k - summary.landing_frame) <= 3 for k in landings), (landings, summary.landing_frame)
     # ... and the ball is followed again once it rolls: nearly every frame from a second after it.
     after = set(range(summary.landing_frame + int(summary.fps), summary.frames))
@@ -96,6 +89,7 @@ def test_tee_shot_detection_landing_and_reacquisition(teeshot):
 
 
 def test_without_encoders_it_still_tracks_in_the_image(teeshot):
+    """The same log with the camera poses taken out of the frames (so stepped by hand, not by the engine)."""
     import dataclasses
 
     path, _ = teeshot

@@ -9,7 +9,8 @@ import pytest
 from trackreplay.replay.digest import ReplayDigest
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
-from trackreplay.trackers.golf.tracker import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
+from trackreplay.trackers.golf.config import EkfConfig
+from trackreplay.trackers.golf.notices import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
 
 BIG = 0.4  # m, the ball of the PTZ sequence (see conftest)
 
@@ -37,7 +38,7 @@ def test_image_mode_tracks_and_says_so_once(image_sequence):
             errors.append(math.hypot(s.x - track[k, 0], s.y - track[k, 1]))
     assert measured >= 0.9 * len(frames)
     assert np.median(errors) < 0.5 and max(errors) < 2.0
-    assert {inter.lut_name for _, inter in results} == {"sky", "ground"}  # switched on the way up
+    assert {inter.silhouette.lut_name for _, inter in results} == {"sky", "ground"}  # switched on the way up
 
 
 def test_nothing_marked_nothing_tracked(backdrop, draw_ball):
@@ -45,6 +46,7 @@ def test_nothing_marked_nothing_tracked(backdrop, draw_ball):
     tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
     assert tracker.step(frame) == []
     assert NO_HINTS_NOTICE in tracker.intermediates.notice
+    assert tracker.intermediates.mode == "idle" and len(tracker.intermediates.particles.particles) == 0
     assert tracker.step(dataclasses.replace(frame, index=1)) == []
     assert tracker.intermediates.notice == ""
 
@@ -63,17 +65,17 @@ def test_same_inputs_and_seed_give_identical_intermediates(image_sequence):
     c = run(GolfTracker(GolfConfig(), np.random.default_rng(8)), frames)
     assert digest_of(a) == digest_of(b)
     assert digest_of(a) != digest_of(c)
-    assert np.array_equal(a[-1][1].particles, b[-1][1].particles)
+    assert np.array_equal(a[-1][1].particles.particles, b[-1][1].particles.particles)
 
 
 def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
     world, uv, landing, frames = ptz_sequence()
-    cfg = GolfConfig(ball_diameter_m=BIG, drag_k=0.0)
+    cfg = GolfConfig(ball_diameter_m=BIG, ekf=EkfConfig(drag_k=0.0))
     tracker = GolfTracker(cfg, np.random.default_rng(0))
     tracker.prepare([(frames[r.frame].image, [r]) for r in frames[0].all_hints])
     results = run(tracker, frames)
     assert all(inter.notice == "" for _, inter in results)
-    events = [k for k, (_, inter) in enumerate(results) if inter.reinit == "ekf_landing"]
+    events = [k for k, (_, inter) in enumerate(results) if inter.reinit.kind == "ekf_landing"]
     assert len(events) >= 1 and abs(events[0] - landing) <= 2
     measured = [k for k, (states, _) in enumerate(results) if states[0].status == "measured"]
     assert len(measured) >= 0.9 * len(frames)
@@ -91,13 +93,30 @@ def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
     assert np.linalg.norm(np.array([s.X, s.Y, s.Z]) - world[k]) < 0.08 * rng
 
 
-def test_config_loads_from_a_dict_and_rejects_nonsense():
+def test_config_loads_nested_from_a_dict_or_toml_and_rejects_nonsense(tmp_path):
+    from trackreplay.replay.config import config_from_dict, load_config
     from trackreplay.schemas.errors import TrackreplayError
-    from trackreplay.replay.config import config_from_dict
 
-    cfg = config_from_dict(GolfConfig, {"n_particles": 500, "sigma_px": 4.0, "lost_search": "stay"})
-    assert cfg.n_particles == 500 and cfg.lost_search == "stay"
-    with pytest.raises(TrackreplayError, match="lost_search"):
-        config_from_dict(GolfConfig, {"lost_search": "everywhere"})
+    cfg = config_from_dict(GolfConfig, {"particles": {"n": 500, "sigma_px": 4.0}, "reinit": {"lost": "stay"}})
+    assert cfg.particles.n == 500 and cfg.particles.sigma_px == 4.0 and cfg.reinit.lost == "stay"
+    assert cfg.particles.alpha == GolfConfig().particles.alpha and cfg.lut == GolfConfig().lut
+    toml = tmp_path / "golf.toml"
+    toml.write_text("[golf]\nmax_predicted_frames = 3\n[golf.lut]\nball_weight = 500.0\n[golf.reinit]\nlanding = false\n")
+    cfg = load_config(GolfConfig, toml, table="golf")
+    assert (cfg.max_predicted_frames, cfg.lut.ball_weight, cfg.reinit.landing) == (3, 500.0, False)
+    with pytest.raises(TrackreplayError, match="lost"):
+        config_from_dict(GolfConfig, {"reinit": {"lost": "everywhere"}})
+    with pytest.raises(TrackreplayError, match="unknown key particles.count"):
+        config_from_dict(GolfConfig, {"particles": {"count": 10}})
     with pytest.raises(TrackreplayError, match="unknown"):
-        config_from_dict(GolfConfig, {"particles": 10})
+        config_from_dict(GolfConfig, {"n_particles": 10})  # the flat names of before are gone
+
+
+def test_each_stage_gets_its_own_table():
+    """A stage never holds the whole config (ARCHITECTURE: shared parts take only their parameters)."""
+    tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
+    cfg = tracker.config
+    assert tracker.luts.config is cfg.lut and tracker.ekf.config is cfg.ekf and tracker.range.config is cfg.range
+    assert tracker.reinit.cfg is cfg.reinit and tracker.reinit.search is cfg.search
+    for part in (tracker.luts, tracker.ekf, tracker.range, tracker.reinit):
+        assert not any(isinstance(v, GolfConfig) for v in vars(part).values())

@@ -1,0 +1,113 @@
+"""Where the particles start again: the re-initialisation policy (seed 000, §2.3 and ours).
+
+Checked in this order before each frame's select + predict; the first that applies replaces it:
+
+1. **EKF landing** (paper §2.3): the 3-D filter's prediction crossed the ground plane
+   (:meth:`BallisticEkf.advance`); the samples are spread around the contact point projected into
+   this frame, as wide as the EKF's own uncertainty there and wide enough to still cover where the
+   samples had the ball (a contact predicted a few frames early must not lose it).
+2. **Image parabola** (ours, no encoders: no 3-D filter): once the ball has been missed for a few
+   frames while descending, a parabola ``y(t)`` and a line ``x(t)`` through the last measurements
+   bracket where it met the ground and bounced (:func:`image_parabola_landing`). Once per loss.
+3. **Lost centre** (ours, ``lost = "centre"``): after ``max_predicted_frames`` misses the ball is
+   "lost"; a broadcast operator keeps following it, so the samples are spread over the middle of
+   the picture each frame (the search region is then the largest allowed).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.golf.config import ReinitConfig, SearchConfig
+from trackreplay.trackers.golf.landing import BallisticEkf
+from trackreplay.trackers.golf.search_region import filling_sigma
+
+NAN2 = np.full(2, np.nan)
+
+
+@dataclass(frozen=True, eq=False)
+class Reinit:
+    """The re-initialisation stage's intermediates (also what the particles are reset to)."""
+
+    kind: str  # "", "start", "ekf_landing", "image_parabola" or "lost_centre"
+    point: np.ndarray  # (2,) centre of the new samples (NaN: none this frame)
+    sigma: np.ndarray  # (2,) their position spread in x and y (NaN: none)
+
+    @classmethod
+    def none(cls) -> Reinit:
+        return cls("", NAN2, NAN2)
+
+
+def image_parabola_landing(history: np.ndarray, now: float, min_points: int = 5) -> tuple[np.ndarray, np.ndarray] | None:
+    """Where the descent ends, from the image track alone (no encoders, no 3-D filter).
+
+    ``history`` rows are ``(frame, x, y)`` of past measurements. A parabola ``y(t)`` and a line
+    ``x(t)`` are fitted; if the ball was descending (image y growing) the positions at the last
+    measurement and at ``now`` bound where it met the ground and bounced. Returns the midpoint of
+    the two and the half-distance between them per axis (the re-initialisation centre and spread),
+    or None when the track was not descending or is too short.
+    """
+    if len(history) < min_points:
+        return None
+    t = history[:, 0] - history[-1, 0]
+    cy = np.polyfit(t, history[:, 2], 2)
+    cx = np.polyfit(t, history[:, 1], 1)
+    if cy[1] <= 0.0:  # dy/dt at the last measurement: not descending
+        return None
+    dt = float(now - history[-1, 0])
+    end = np.array([np.polyval(cx, dt), np.polyval(cy, dt)])
+    last = np.array([np.polyval(cx, 0.0), np.polyval(cy, 0.0)])
+    return 0.5 * (last + end), 0.5 * np.abs(end - last)
+
+
+class ReinitPolicy:
+    """Decides, once per frame, whether and where the particles start again.
+
+    ``lost_after`` is the number of misses after which the track is "lost"; ``search`` is the
+    search region's table (the largest region bounds the spread).
+    """
+
+    def __init__(self, cfg: ReinitConfig, search: SearchConfig, lost_after: int) -> None:
+        self.cfg = cfg
+        self.search = search
+        self.lost_after = lost_after
+        self.history: deque = deque(maxlen=cfg.parabola_history)  # (frame, x, y) of past measurements
+        self.parabola_used = False
+
+    def measured(self, index: int, x: float, y: float) -> None:
+        """The ball was measured at ``(x, y)`` in frame ``index``."""
+        self.history.append((index, x, y))
+        self.parabola_used = False
+
+    def choose(self, *, index: int, size: tuple[int, int], scale: float, misses: int, landing: np.ndarray | None,
+               camera: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
+        """The re-initialisation for frame ``index`` of ``size`` (w, h) px, or ``Reinit.none()``.
+
+        ``landing`` is the EKF's ground contact this frame (None: none), ``estimate`` the
+        particles' last estimate (x, y).
+        """
+        cfg = self.cfg
+        width, height = size
+        if landing is not None and camera is not None and cfg.landing:
+            centre = camera.project_points(landing.reshape(1, 3))[0]
+            if np.all(np.isfinite(centre)):
+                centre = np.clip(centre, 0, [width - 1, height - 1])
+                cov = ekf.image_covariance(camera)
+                sigma = np.maximum(np.sqrt(np.maximum(np.diag(cov), 0.0)), 0.5 * np.abs(estimate - centre))
+                sigma = np.clip(sigma, cfg.min_sigma_px * scale, filling_sigma(self.search.max_px * scale, self.search))
+                return Reinit("ekf_landing", centre, sigma)
+        if cfg.landing and not ekf.initialised and not self.parabola_used and misses >= cfg.parabola_misses:
+            found = image_parabola_landing(np.array(self.history, float).reshape(-1, 3), float(index))
+            if found is not None:
+                centre, half = found
+                self.parabola_used = True
+                return Reinit("image_parabola", centre, np.maximum(half, cfg.min_sigma_px * scale))
+        if cfg.lost == "centre" and misses > self.lost_after:
+            centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
+            sigma = filling_sigma(min(self.search.max_px * scale, width, height), self.search)
+            return Reinit("lost_centre", centre, np.full(2, sigma))
+        return Reinit.none()
