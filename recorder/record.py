@@ -18,6 +18,7 @@ from tqdm import tqdm
 from trackreplay.recorder.image_codec import ENCODINGS, compressed_image, image_message
 from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_timestamps
 from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
+from trackreplay.recorder.sources.ground_plane import read_ground_plane
 from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
 from trackreplay.recorder.sources.images import check_count, list_images, read_images
 from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration
@@ -25,6 +26,7 @@ from trackreplay.recorder.sources.video import frame_count_hint, read_video, vid
 from trackreplay.recorder.writer import LogWriter
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
+from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.schemas.records import GroundTruthFrame, PtzReading
 
 
@@ -41,6 +43,7 @@ class RecordTopics:
     encoders: str = T.PTZ_ENCODERS
     lens_table: str = T.PTZ_LENS_TABLE
     groundtruth: str = T.GROUNDTRUTH
+    ground_plane: str = T.CAMERA_GROUND_PLANE
 
     @classmethod
     def keys(cls) -> tuple[str, ...]:
@@ -104,6 +107,7 @@ def record(
     lens_table: str | Path | None = None,
     groundtruth: str | Path | None = None,
     gt_format: str = "auto",
+    ground_plane: str | Path | None = None,
     encoding: str = "jpeg",
     flush_every: int = 30,
     topics: RecordTopics = RecordTopics(),
@@ -144,7 +148,8 @@ def record(
     if lens_table is not None:
         read_lens_table(lens_table)
     gt = read_groundtruth(groundtruth, gt_format) if groundtruth is not None else None
-    inputs = {Path(p).resolve() for p in (video, images, timestamps, calibration, encoders, lens_table, groundtruth, *(stereo or ())) if p is not None}
+    plane, plane_warnings = read_ground_plane(ground_plane) if ground_plane is not None else (None, ())
+    inputs = {Path(p).resolve() for p in (video, images, timestamps, calibration, encoders, lens_table, groundtruth, ground_plane, *(stereo or ())) if p is not None}
     if out.resolve() in inputs:
         raise SourceError(f"output {out} is also an input; choose another output path")
     if not out.parent.is_dir():
@@ -172,7 +177,7 @@ def record(
                     rec.write(topics.encoders, pending.to_pb(), pending.t_ns)
                     pending = next(ptz, None)
                 if frames == 0:
-                    _write_once(rec, topics, left, right is not None, calib, lens_table)
+                    _write_once(rec, topics, left, right is not None, calib, lens_table, plane)
                 if right is None:
                     rec.write(topics.camera_image, _image_pb(left, encoding, "camera"), t)
                 else:
@@ -195,11 +200,13 @@ def record(
         out.unlink(missing_ok=True)  # a half-recorded log of a broken source would mislead
         raise
     writer.close()
-    return RecordReport(out, frames, writer.messages_written, dict(rec.counts), rec.start, rec.end, _warnings(gt, frames))
+    return RecordReport(out, frames, writer.messages_written, dict(rec.counts), rec.start, rec.end,
+                        plane_warnings + _warnings(gt, frames))
 
 
-def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo: bool, calib: Calibration | None, lens_table) -> None:
-    """Calibration and lens table, at the first frame's time."""
+def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo: bool, calib: Calibration | None, lens_table,
+                plane: GroundPlaneCalibration | None = None) -> None:
+    """Calibration, lens table and ground plane, at the first frame's time."""
     t = first.t_ns
     w, h = first.size
     if calib is not None:
@@ -212,6 +219,10 @@ def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo
             rec.write(topics.camera_calibration, calib.left.to_pb(t, "camera"), t)
     if lens_table is not None:
         rec.write(topics.lens_table, read_lens_table(lens_table, w, h).to_pb(t), t)
+    if plane is not None:
+        if (plane.width, plane.height) != (w, h):
+            raise SourceError(f"the ground plane is for {plane.width}x{plane.height} images but {first.where} is {w}x{h}")
+        rec.write(topics.ground_plane, plane.to_pb(t), t)
 
 
 def _warnings(gt: GroundTruthTable | None, frames: int) -> tuple[str, ...]:

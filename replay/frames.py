@@ -7,8 +7,10 @@ from dataclasses import dataclass, field
 
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import LogError
+from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
 
 from trackreplay.replay.decode import decode_image
@@ -24,6 +26,7 @@ class FrameTopics:
     ptz: str | None = None
     lens: str = T.PTZ_LENS_TABLE
     hints: str = T.ANNOTATIONS_INIT
+    ground_plane: str = T.CAMERA_GROUND_PLANE
 
     @classmethod
     def detect(cls, reader: LogReader, image: str | None = None) -> FrameTopics:
@@ -94,6 +97,17 @@ def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
     return tuple(regions)
 
 
+def read_ground_plane(reader: LogReader, topic: str) -> GroundPlaneCalibration | None:
+    """The log's ground-plane calibration (its first message on ``topic``), None when absent."""
+    pb = reader.first(topic)
+    if pb is None:
+        return None
+    try:
+        return GroundPlaneCalibration.from_pb(pb)
+    except ValueError as err:
+        raise LogError(f"{reader.path}: topic {topic} holds an unusable ground plane ({err})") from None
+
+
 def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
     """``(image, regions)`` for every frame the log's init annotations mark, in frame order.
 
@@ -135,6 +149,9 @@ def iter_frames(
     hints_by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
         hints_by_frame.setdefault(region.frame, []).append(region)
+    calibration = read_ground_plane(reader, topics.ground_plane)
+    ground = None if calibration is None else GroundPlane(
+        calibration.matrix, calibration.camera_ground, calibration.camera_height)
     ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, start_ns), ptz_tolerance_ns) if topics.ptz else None
 
     shape: tuple[int, ...] | None = None
@@ -146,6 +163,9 @@ def iter_frames(
         image, encoded, encoding = decode_image(item.decode(), item.schema, where)
         if shape is None:
             shape = image.shape
+            if calibration is not None and (calibration.width, calibration.height) != (image.shape[1], image.shape[0]):
+                raise LogError(f"{reader.path}: topic {topics.ground_plane} is for {calibration.width}x{calibration.height} "
+                               f"images but {where} is {image.shape[1]}x{image.shape[0]}")
         elif image.shape != shape:
             raise LogError(f"{where} is {image.shape[1]}x{image.shape[0]} but earlier images are {shape[1]}x{shape[0]}")
         return image, encoded, encoding
@@ -169,6 +189,7 @@ def iter_frames(
             all_hints=hints,
             encoded=encoded,
             encoding=encoding,
+            ground_plane=ground,
         )
 
     if topics.right is None:

@@ -5,6 +5,7 @@ from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
 from foxglove_schemas_protobuf.FrameTransform_pb2 import FrameTransform
 from foxglove_schemas_protobuf.RawImage_pb2 import RawImage
 
+from trackreplay.schemas._gen.GroundPlane_pb2 import GroundPlane
 from trackreplay.schemas._gen.GroundTruth_pb2 import GroundTruthFrame, GroundTruthObject
 from trackreplay.schemas._gen.InitAnnotations_pb2 import InitAnnotations, InitRegion
 from trackreplay.schemas._gen.LensTable_pb2 import LensEntry, LensTable
@@ -14,6 +15,7 @@ __all__ = [
     "CameraCalibration",
     "CompressedImage",
     "FrameTransform",
+    "GroundPlane",
     "GroundTruthFrame",
     "GroundTruthObject",
     "InitAnnotations",

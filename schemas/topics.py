@@ -2,6 +2,7 @@
 
 CAMERA_IMAGE = "/camera/image"
 CAMERA_CALIBRATION = "/camera/calibration"
+CAMERA_GROUND_PLANE = "/camera/ground_plane"
 STEREO_LEFT_IMAGE = "/stereo/left/image"
 STEREO_RIGHT_IMAGE = "/stereo/right/image"
 STEREO_LEFT_CALIBRATION = "/stereo/left/calibration"

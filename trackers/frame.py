@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
+from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
 
 
@@ -29,6 +30,7 @@ class Frame:
     all_hints: tuple[InitRegion, ...] = field(default_factory=tuple)  # every region the log marks
     encoded: bytes | None = None
     encoding: str | None = None
+    ground_plane: GroundPlane | None = None  # a fixed camera's image <-> ground homography (/camera/ground_plane)
 
     @property
     def grey(self) -> np.ndarray:

@@ -30,6 +30,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--encoders", type=Path, metavar="CSV", help="PTZ encoder CSV with header t_ns,pan,tilt,zoom,focus")
     p.add_argument("--lens-table", type=Path, metavar="CSV", help="zoom,focus,fx,fy,cx,cy rows; '# width: W', '# height: H', '# camera_position: X, Y, Z' comments")
     p.add_argument("--groundtruth", type=Path, metavar="FILE", help="MOTChallenge txt or OTB groundtruth_rect.txt")
+    p.add_argument("--ground-plane", type=Path, metavar="FILE",
+                   help="fixed camera over flat ground: JSON with width, height, image_to_ground (3x3) or points [[u,v,X,Y],...], "
+                        "camera_ground [X,Y], camera_height (see recorder/sources/ground_plane.py)")
     p.add_argument("--gt-format", choices=FORMATS, default="auto", help="annotation format (default: detect)")
     p.add_argument("--encoding", choices=ENCODINGS, default="jpeg", help="encoding of decoded frames (default jpeg)")
     p.add_argument("--flush-every", type=int, default=30, metavar="N", help="flush a chunk every N messages (default 30): a crash loses at most N")
@@ -57,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
         args.out, video=args.video, images=args.images, stereo=tuple(args.stereo) if args.stereo else None,
         fps=args.fps, t0_ns=args.t0, timestamps=args.timestamps, calibration=args.calibration,
         encoders=args.encoders, lens_table=args.lens_table, groundtruth=args.groundtruth, gt_format=args.gt_format,
+        ground_plane=args.ground_plane,
         encoding=args.encoding, flush_every=args.flush_every, topics=parse_topics(args.topic), quiet=args.quiet,
     )
     for warning in report.warnings:

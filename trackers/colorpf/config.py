@@ -1,0 +1,133 @@
+"""Parameters of the colour particle filter (seed 002), one frozen table per stage.
+
+The paper's values are the defaults where it gives them: N = 40 particles, T = 10 bins per axis,
+k = 20 (eq. 5), r_S = 0.2 (eq. 9), the aspect threshold l = 25. The rest are ours and explained per
+field. The ablation switches reproduce the paper's comparisons: ``likelihood.histogram``
+``"hs"`` | ``"hsv"`` (Table 1), ``reference.mode`` ``"mixed"`` | ``"target"`` (Table 2),
+``size.mode`` ``"geometry"`` | ``"noise"`` | ``"fixed"`` (Table 3).
+
+TOML (every table and key optional; ``trackreplay replay LOG --tracker colorpf --config c.toml``)::
+
+    [colorpf]
+    n_particles = 40
+    [colorpf.likelihood]
+    histogram = "hs"
+    [colorpf.reference]
+    mode = "mixed"
+    [colorpf.size]
+    mode = "geometry"
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+HISTOGRAMS = ("hs", "hsv")
+REFERENCES = ("mixed", "target")
+BACKGROUNDS = ("auto", "before", "early", "none")
+SIZES = ("geometry", "noise", "fixed")
+
+
+@dataclass(frozen=True)
+class LikelihoodConfig:
+    """Colour likelihood, eqs. (4)-(5); ``[colorpf.likelihood]``."""
+
+    histogram: str = "hs"  # "hs": 2-D H-S (§3.1); "hsv": Pérez et al.'s H-S of coloured pixels + V of the rest
+    bins: int = 10  # T, bins per axis (H, S and, for "hsv", V)
+    k: float = 20.0  # L = exp(k S^2)
+    s_min: float = 0.1  # "hsv" only: Pérez's thresholds (fractions of the S and V ranges) for a coloured pixel
+    v_min: float = 0.2
+    # Sample at most this many pixels per particle box (a regular grid; None = every pixel). The
+    # paper counts every pixel; the default keeps large boxes (a walker close to the camera) cheap.
+    max_pixels: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.histogram not in HISTOGRAMS:
+            raise ValueError(f"likelihood.histogram must be one of {', '.join(HISTOGRAMS)}, not {self.histogram!r}")
+        if self.bins < 1 or self.k <= 0:
+            raise ValueError("likelihood.bins must be >= 1 and likelihood.k positive")
+        if self.max_pixels is not None and self.max_pixels < 1:
+            raise ValueError("likelihood.max_pixels must be >= 1 (or absent)")
+
+
+@dataclass(frozen=True)
+class ReferenceConfig:
+    """Reference histogram from background subtraction at initialisation, eq. (7); ``[colorpf.reference]``."""
+
+    mode: str = "mixed"  # "mixed": eq. (7) with the whole background; "target": the target's pixels only
+    # Where the background comes from. "before": the median of the frames before the marked one (the
+    # paper's background subtraction at initialisation; needs min_frames of them). "early": the median
+    # of the first `frames` frames from the marked one on; until then the marked box's own histogram
+    # is the reference. "auto": "before" when there are enough frames before the mark, else "early".
+    background: str = "auto"
+    frames: int = 30  # frames in the median
+    min_frames: int = 5  # fewest frames before the mark for "before"
+    threshold: float = 25.0  # foreground: a channel differs from the background by more (grey levels)
+    open_px: int = 3  # opening of the foreground mask (drops sensor-noise specks)
+    # A background is unusable when the foreground fills less than min_fill of the marked box (it
+    # still holds the target, or the mark is on nothing that moved) or more than max_fill.
+    min_fill: float = 0.1
+    max_fill: float = 0.98
+
+    def __post_init__(self) -> None:
+        if self.mode not in REFERENCES:
+            raise ValueError(f"reference.mode must be one of {', '.join(REFERENCES)}, not {self.mode!r}")
+        if self.background not in BACKGROUNDS:
+            raise ValueError(f"reference.background must be one of {', '.join(BACKGROUNDS)}, not {self.background!r}")
+        if self.frames < 1 or self.min_frames < 1 or not 0.0 <= self.min_fill < self.max_fill <= 1.0:
+            raise ValueError("reference.frames and min_frames must be >= 1 and 0 <= min_fill < max_fill <= 1")
+
+
+@dataclass(frozen=True)
+class SizeConfig:
+    """Box area from the ground-plane distance, eq. (9); ``[colorpf.size]``."""
+
+    mode: str = "geometry"  # "geometry": eq. (9); "noise": a random walk on w and h (the paper's baseline); "fixed"
+    r_s: float = 0.2  # eq. (9): std of omega_S relative to S
+    noise: float = 0.05  # "noise" mode: std of the per-frame change of w and h, relative
+    min_px: float = 4.0  # smallest width or height
+
+    def __post_init__(self) -> None:
+        if self.mode not in SIZES:
+            raise ValueError(f"size.mode must be one of {', '.join(SIZES)}, not {self.mode!r}")
+        if self.r_s < 0 or self.noise < 0 or self.min_px <= 0:
+            raise ValueError("size.r_s and size.noise must be >= 0 and size.min_px positive")
+
+
+@dataclass(frozen=True)
+class AspectConfig:
+    """Aspect ratio from the likelihood distribution, eqs. (10)-(12); ``[colorpf.aspect]``."""
+
+    threshold: float = 25.0  # l: particles whose likelihood exceeds it span the target (paper: 25)
+    near: float = 1.0  # "d_i small": within near * sqrt(S') of the estimate (eq. 10)
+    max_jump: float = 1.5  # R_t more than this factor away from R_{t-1} is a wrong estimate: keep R_{t-1}
+    min_particles: int = 3  # fewer qualifying particles: keep R_{t-1}
+
+    def __post_init__(self) -> None:
+        if self.threshold < 1 or self.near <= 0 or self.max_jump <= 1 or self.min_particles < 2:
+            raise ValueError("aspect.threshold >= 1, aspect.near > 0, aspect.max_jump > 1, aspect.min_particles >= 2")
+
+
+@dataclass(frozen=True)
+class ColorPfConfig:
+    """The whole tracker (``[colorpf]``); each stage gets only its own table."""
+
+    n_particles: int = 40  # N (paper: 40)
+    # Position noise omega_x, omega_y (eq. 2): std as a fraction of the box's side sqrt(w h), at least
+    # min_noise_px. Relative, so a walker coming closer (larger, faster in the image) is followed.
+    noise: float = 0.2
+    min_noise_px: float = 2.0
+    # "measured" when the best particle's likelihood reaches this (the aspect threshold l = 25, i.e.
+    # S > 0.40); otherwise "predicted", and after lost_after such frames in a row "lost" (no position).
+    measured_likelihood: float = 25.0
+    lost_after: int = 15
+    likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
+    reference: ReferenceConfig = field(default_factory=ReferenceConfig)
+    size: SizeConfig = field(default_factory=SizeConfig)
+    aspect: AspectConfig = field(default_factory=AspectConfig)
+
+    def __post_init__(self) -> None:
+        if self.n_particles < 1:
+            raise ValueError("n_particles must be at least 1")
+        if self.noise < 0 or self.min_noise_px < 0 or self.lost_after < 1 or self.measured_likelihood < 1:
+            raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, measured_likelihood >= 1")
