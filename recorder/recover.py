@@ -1,9 +1,10 @@
 """Salvage a truncated or damaged MCAP log into a valid one.
 
-The source is read as a stream of records (``mcap.stream_reader.StreamReader``, the layer
-under ``NonSeekingReader``, so that attachments and metadata come along in the same pass):
-every complete chunk is kept, and reading stops at the first incomplete or damaged record.
-Chunk CRCs are checked, so a chunk cut short is dropped rather than half-read.
+The source is walked record by record (:mod:`.mcap_scan`): every chunk whose CRC checks out is
+kept, a damaged stretch is skipped and reading resumes at the next intact chunk, so one flipped
+byte costs the chunk it sits in and nothing after it. Schemas and channels lost with a damaged chunk
+come from the summary section when the file still has one. The output is written under a temporary
+name and renamed when complete, so it is always a valid log (possibly empty).
 
 A file that does not start with the MCAP magic raises ``LogError`` and nothing is written.
 """
@@ -11,130 +12,146 @@ A file that does not start with the MCAP magic raises ``LogError`` and nothing i
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO
 
-from mcap.records import Attachment, Channel, Footer, Header, McapRecord, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader
+from mcap.records import Attachment, Channel, Footer, Header, Message, Metadata, Schema
 from mcap.writer import CompressionType, Writer
 
+from trackreplay.recorder.atomic import replace_when_done
+from trackreplay.recorder.mcap_scan import MCAP_MAGIC, ChunkRecords, Damage, open_mapped, scan, summary_definitions
 from trackreplay.schemas.errors import LogError
 
-MCAP_MAGIC = b"\x89MCAP0\r\n"
+# `trackreplay recover` exit statuses
+COMPLETE, PARTIAL, NOTHING = 0, 1, 2
 
 
 @dataclass(frozen=True)
 class RecoverReport:
     messages_saved: int
-    complete: bool  # the source ended with a valid footer: nothing was lost
-    error: str | None  # why reading stopped early, when it did
+    complete: bool  # the source was intact and ended with a valid footer: nothing was lost
+    error: str | None  # what was damaged or missing, when anything was
     attachments_saved: int = 0
     metadata_saved: int = 0
+    damage: tuple[Damage, ...] = field(default_factory=tuple)  # byte ranges skipped
+    messages_orphaned: int = 0  # intact messages whose channel definition was lost with no summary to recover it
 
-
-class RecordStream:
-    """Records of an MCAP file up to the first damage; afterwards ``complete``/``error`` tell why it stopped."""
-
-    def __init__(self, fh: BinaryIO, name: str) -> None:
-        self._fh = fh
-        self.name = name
-        self.complete = False
-        self.error: str | None = None
-        self.header: Header | None = None
-
-    def __iter__(self) -> Iterator[McapRecord]:
-        start = self._fh.tell()
-        if self._fh.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
-            raise LogError(f"{self.name} is not an MCAP file (bad magic bytes)")
-        self._fh.seek(start)
-        reader = StreamReader(self._fh, validate_crcs=True)
-        try:
-            for record in reader.records:
-                if isinstance(record, Header):
-                    self.header = record
-                if isinstance(record, Footer):
-                    self.complete = True  # StreamReader still checks the closing magic after this
-                yield record
-        except Exception as err:  # any damage: EndOfFile, bad lengths, CRC, decompression, struct errors
-            self.complete = False
-            self.error = self._describe(err)
-
-    def _describe(self, err: Exception) -> str:
-        pos, size = self._fh.tell(), os.fstat(self._fh.fileno()).st_size
-        if pos >= size:
-            what = "the file ends in the middle of a record"
-        else:
-            what = f"damaged record ({type(err).__name__}{': ' + str(err) if str(err) else ''})"
-        return f"{what}, near byte {pos} of {size}"
+    @property
+    def exit_code(self) -> int:
+        if self.complete:
+            return COMPLETE
+        return PARTIAL if self.messages_saved or self.attachments_saved or self.metadata_saved else NOTHING
 
 
 def truncation_message(path: str | Path) -> str:
     return (
         f"{path} is truncated or damaged (no valid MCAP end); "
-        f"run `trackreplay recover {path} OUT.mcap` to salvage every complete chunk"
+        f"run `trackreplay recover {path} OUT.mcap` to salvage every intact chunk"
     )
 
 
 def recover(broken: str | Path, out: str | Path) -> RecoverReport:
-    """Rewrite every readable schema, channel, message, attachment and metadata record of ``broken`` to ``out``."""
+    """Rewrite every intact schema, channel, message, attachment and metadata record of ``broken`` to ``out``."""
     broken, out = Path(broken), Path(out)
     if not broken.is_file():
         raise LogError(f"{broken} does not exist or is not a file")
     if out.exists() and os.path.samefile(broken, out):
         raise LogError(f"recover needs a new output path, not the input {broken} itself")
-    with open(broken, "rb") as src:
-        if src.read(len(MCAP_MAGIC)) != MCAP_MAGIC:
+    data = open_mapped(broken)
+    try:
+        if bytes(data[:len(MCAP_MAGIC)]) != MCAP_MAGIC:
             raise LogError(f"{broken} is not an MCAP file (bad magic bytes); nothing to recover")
-        src.seek(0)
-        try:
-            dst = open(out, "wb")
-        except OSError as err:
-            raise LogError(f"cannot write {out} ({err.strerror})") from None
-        with dst:
-            return _rewrite(RecordStream(src, str(broken)), dst)
+        with replace_when_done(out) as dst:
+            return _rewrite(data, dst)
+    finally:
+        if hasattr(data, "close"):
+            data.close()
 
 
-def _rewrite(stream: RecordStream, dst: BinaryIO) -> RecoverReport:
-    writer = Writer(dst, compression=CompressionType.ZSTD)
-    started = False
-    schemas: dict[int, int] = {}  # source id -> output id
-    channels: dict[int, int] = {}
-    messages = attachments = metadata = 0
+class _Copy:
+    """The output writer and the id maps from source to output schemas and channels."""
 
-    def start(profile: str = "") -> None:
-        nonlocal started
-        if not started:
-            writer.start(profile=profile, library="trackreplay recover")
-            started = True
+    def __init__(self, dst: BinaryIO, summary: tuple[dict[int, Schema], dict[int, Channel]]) -> None:
+        self.writer = Writer(dst, compression=CompressionType.ZSTD)
+        self.summary_schemas, self.summary_channels = summary
+        self.started = False
+        self.schemas: dict[int, int] = {}
+        self.channels: dict[int, int] = {}
+        self.messages = self.attachments = self.metadata = self.orphaned = 0
 
-    for record in stream:
+    def start(self, profile: str = "") -> None:
+        if not self.started:
+            self.writer.start(profile=profile, library="trackreplay recover")
+            self.started = True
+
+    def schema(self, record: Schema) -> None:
+        if record.id not in self.schemas:
+            self.schemas[record.id] = self.writer.register_schema(record.name, record.encoding, record.data)
+
+    def channel(self, record: Channel) -> int | None:
+        if record.id not in self.channels:
+            if record.schema_id != 0 and record.schema_id not in self.schemas:
+                lost = self.summary_schemas.get(record.schema_id)
+                if lost is None:
+                    return None  # its schema was lost: the channel's messages cannot be decoded
+                self.schema(lost)
+            self.channels[record.id] = self.writer.register_channel(
+                record.topic, record.message_encoding, self.schemas.get(record.schema_id, 0), dict(record.metadata))
+        return self.channels[record.id]
+
+    def message(self, record: Message) -> None:
+        cid = self.channels.get(record.channel_id)
+        if cid is None and record.channel_id in self.summary_channels:
+            cid = self.channel(self.summary_channels[record.channel_id])
+        if cid is None:
+            self.orphaned += 1
+            return
+        self.writer.add_message(cid, record.log_time, record.data, record.publish_time, record.sequence)
+        self.messages += 1
+
+    def add(self, record) -> None:
         if isinstance(record, Header):
-            start(record.profile)
-            continue
-        start()
+            self.start(record.profile)
+            return
+        self.start()
         if isinstance(record, Schema):
-            if record.id not in schemas:
-                schemas[record.id] = writer.register_schema(record.name, record.encoding, record.data)
+            self.schema(record)
         elif isinstance(record, Channel):
-            if record.id not in channels:
-                if record.schema_id != 0 and record.schema_id not in schemas:
-                    continue  # its schema was lost: the channel's messages cannot be decoded
-                channels[record.id] = writer.register_channel(
-                    record.topic, record.message_encoding, schemas.get(record.schema_id, 0), dict(record.metadata)
-                )
+            self.channel(record)
         elif isinstance(record, Message):
-            cid = channels.get(record.channel_id)
-            if cid is not None:
-                writer.add_message(cid, record.log_time, record.data, record.publish_time, record.sequence)
-                messages += 1
+            self.message(record)
         elif isinstance(record, Attachment):
-            writer.add_attachment(record.create_time, record.log_time, record.name, record.media_type, record.data)
-            attachments += 1
+            self.writer.add_attachment(record.create_time, record.log_time, record.name, record.media_type, record.data)
+            self.attachments += 1
         elif isinstance(record, Metadata):
-            writer.add_metadata(record.name, dict(record.metadata))
-            metadata += 1
-    start()
-    writer.finish()
-    return RecoverReport(messages, stream.complete and stream.error is None, stream.error, attachments, metadata)
+            self.writer.add_metadata(record.name, dict(record.metadata))
+            self.metadata += 1
+
+
+def _rewrite(data, dst: BinaryIO) -> RecoverReport:
+    copy = _Copy(dst, summary_definitions(data))
+    damage: list[Damage] = []
+    ended = False
+    for item in scan(data):
+        if isinstance(item, Damage):
+            damage.append(item)
+        elif isinstance(item, ChunkRecords):
+            for record in item.records:
+                copy.add(record)
+        elif isinstance(item, Footer):
+            ended = True
+        else:
+            copy.add(item)
+    copy.start()
+    copy.writer.finish()
+    error = None
+    if damage:
+        error = "; ".join(f"{d.reason} at bytes {d.start}-{d.end} of {len(data)}" for d in damage[:3])
+        if len(damage) > 3:
+            error += f"; and {len(damage) - 3} more damaged stretch(es)"
+    elif not ended:
+        error = f"the file ends without a footer after byte {len(data)}"
+    if copy.orphaned:
+        error = (error + "; " if error else "") + f"{copy.orphaned} intact message(s) dropped: their channel definition was lost"
+    return RecoverReport(copy.messages, error is None, error, copy.attachments, copy.metadata, tuple(damage), copy.orphaned)

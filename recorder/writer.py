@@ -1,17 +1,23 @@
 """Protobuf MCAP writer that flushes complete chunks periodically.
 
-A recording killed at any point leaves every message up to the last flush readable
-(``trackreplay recover`` turns such a file into a valid one).
+The log is written as ``NAME.partial`` (its header on disk from the first moment) and renamed to
+``NAME`` when closed, so a file under the final name is always a complete log. A recording killed
+at any point, or stopped by a full disk, leaves every message up to the last flush readable in
+``NAME.partial`` (``trackreplay recover`` turns it into a valid log).
 """
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
 
 from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import register_schema
+
+from trackreplay.recorder.atomic import partial_path
+from trackreplay.schemas.errors import OutputError
 
 COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
 
@@ -35,16 +41,22 @@ class LogWriter:
         if compression not in COMPRESSION:
             raise ValueError(f"compression must be one of {sorted(COMPRESSION)}, not {compression!r}")
         self.path = Path(path)
-        self._fh: BinaryIO = open(self.path, "wb")
+        self.partial = partial_path(self.path)
+        self._closed = False
+        try:
+            self._fh: BinaryIO = open(self.partial, "wb")
+        except OSError as err:
+            raise OutputError(f"cannot write {self.path} ({err.strerror})") from None
         self._writer = Writer(self._fh, chunk_size=chunk_size, compression=COMPRESSION[compression])
-        self._writer.start(profile=profile, library="trackreplay")
+        with self._failing_as_output_error():
+            self._writer.start(profile=profile, library="trackreplay")
+            self._fh.flush()
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence: dict[str, int] = {}
         self._flush_every = max(1, flush_every)
         self._since_flush = 0
         self.messages_written = 0
-        self._closed = False
 
     def _channel_for(self, topic: str, message: Any) -> int:
         channel_id = self._channels.get(topic)
@@ -60,16 +72,20 @@ class LogWriter:
         self._sequence[topic] = 0
         return channel_id
 
+    def _failing_as_output_error(self):
+        return _OutputGuard(self)
+
     def write(self, topic: str, message: Any, log_time: int) -> None:
         """Append ``message`` on ``topic`` at capture time ``log_time`` (ns)."""
-        channel_id = self._channel_for(topic, message)
-        self._writer.add_message(
-            channel_id=channel_id,
-            log_time=int(log_time),
-            publish_time=int(log_time),
-            data=message.SerializeToString(),
-            sequence=self._sequence[topic],
-        )
+        with self._failing_as_output_error():
+            channel_id = self._channel_for(topic, message)
+            self._writer.add_message(
+                channel_id=channel_id,
+                log_time=int(log_time),
+                publish_time=int(log_time),
+                data=message.SerializeToString(),
+                sequence=self._sequence[topic],
+            )
         self._sequence[topic] += 1
         self.messages_written += 1
         self._since_flush += 1
@@ -77,22 +93,39 @@ class LogWriter:
             self.flush()
 
     def add_metadata(self, name: str, data: dict[str, str]) -> None:
-        self._writer.add_metadata(name, data)
+        with self._failing_as_output_error():
+            self._writer.add_metadata(name, data)
 
     def add_attachment(self, name: str, data: bytes, media_type: str, log_time: int = 0) -> None:
-        self._writer.add_attachment(create_time=log_time, log_time=log_time, name=name, media_type=media_type, data=data)
+        with self._failing_as_output_error():
+            self._writer.add_attachment(create_time=log_time, log_time=log_time, name=name, media_type=media_type, data=data)
 
     def flush(self) -> None:
         """Close the open chunk and push everything to the OS."""
-        self._writer.flush()
+        with self._failing_as_output_error():
+            self._writer.flush()
+            self._fh.flush()
         self._since_flush = 0
 
     def close(self) -> None:
+        """Finish the log (summary, footer) and give it its final name."""
         if self._closed:
             return
+        with self._failing_as_output_error():
+            self._writer.finish()
+            self._fh.flush()
+            os.fsync(self._fh.fileno())
         self._closed = True
-        self._writer.finish()
         self._fh.close()
+        os.replace(self.partial, self.path)
+
+    def _abandon(self) -> None:
+        """After a failed write: stop, keeping ``NAME.partial`` (every flushed chunk) for ``recover``."""
+        self._closed = True
+        try:
+            self._fh.close()
+        except OSError:
+            pass  # the buffered tail could not be written either; what was flushed stays
 
     def __enter__(self) -> LogWriter:
         return self
@@ -102,3 +135,23 @@ class LogWriter:
     ) -> None:
         # On an exception we still finish the file: what was written stays a valid log.
         self.close()
+
+
+class _OutputGuard:
+    """Turns an OSError while writing (disk full, quota, file too large) into one sentence, and
+    abandons the writer so that nothing more is attempted on the damaged file."""
+
+    def __init__(self, log: LogWriter) -> None:
+        self.log = log
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        if exc is None or not isinstance(exc, OSError):
+            return False
+        self.log._abandon()
+        raise OutputError(
+            f"cannot write {self.log.path} ({exc.strerror or exc}); every message up to the last flush is in "
+            f"{self.log.partial}: run `trackreplay recover {self.log.partial} {self.log.path}`"
+        ) from None

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
 import polars as pl
 from scipy.interpolate import CubicSpline
 
-from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.recorder.atomic import partial_path
+from trackreplay.schemas.errors import OutputError, TrackreplayError
 from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order
 
 METHODS = ("linear", "cubic")
@@ -120,12 +122,18 @@ def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
     if kind is None:
         raise TrackreplayError(f"{path}: unknown trajectory format; use .parquet, .csv or .txt (MOTChallenge)")
     path.parent.mkdir(parents=True, exist_ok=True)
-    if kind == "parquet":
-        df.write_parquet(path)
-    elif kind == "csv":
-        df.write_csv(path)
-    else:
-        write_mot(df, path)
+    tmp = partial_path(path)  # the final name appears only for a complete file
+    try:
+        if kind == "parquet":
+            df.write_parquet(tmp)
+        elif kind == "csv":
+            df.write_csv(tmp)
+        else:
+            write_mot(df, tmp)
+        os.replace(tmp, path)
+    except (OSError, pl.exceptions.PolarsError) as err:  # polars reports a full disk as ComputeError
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {path} ({err})") from None
     return path
 
 

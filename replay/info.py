@@ -12,9 +12,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from mcap.records import Attachment, Channel, Message, Metadata, Schema
+from mcap.records import Attachment, Channel, Footer, Header, Message, Metadata, Schema
 
-from trackreplay.recorder.recover import RecordStream, truncation_message
+from trackreplay.recorder.mcap_scan import MCAP_MAGIC, ChunkRecords, Damage, open_mapped, scan
+from trackreplay.recorder.recover import truncation_message
 from trackreplay.schemas.errors import LogError, TruncatedLogError
 from trackreplay.schemas.messages import IMAGE_SCHEMAS
 
@@ -41,9 +42,14 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
     times: dict[int, array] = {}
     attachments: list[str] = []
     metadata: list[str] = []
-    with open(path, "rb") as fh:
-        stream = RecordStream(fh, str(path))
-        for record in stream:
+    damage: list[Damage] = []
+    header: Header | None = None
+    ended = False
+    data = open_mapped(path)
+    if bytes(data[:len(MCAP_MAGIC)]) != MCAP_MAGIC:
+        raise LogError(f"{path} is not an MCAP file (bad magic bytes)")
+    try:
+        for record in _records(scan(data), damage):
             if isinstance(record, Message):
                 cid = record.channel_id
                 t = record.log_time
@@ -65,7 +71,20 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
                 attachments.append(record.name)
             elif isinstance(record, Metadata):
                 metadata.append(record.name)
-    truncated = not stream.complete or stream.error is not None
+            elif isinstance(record, Header):
+                header = record
+            elif isinstance(record, Footer):
+                ended = True
+        size = len(data)
+    finally:
+        if hasattr(data, "close"):
+            data.close()
+    truncated = bool(damage) or not ended
+    error = None
+    if damage:
+        error = "; ".join(f"{d.reason} at bytes {d.start}-{d.end} of {size}" for d in damage[:LIST_LIMIT])
+    elif not ended:
+        error = f"the file ends without a footer after byte {size}"
     if truncated and not partial_ok:
         raise TruncatedLogError(truncation_message(path))
 
@@ -97,8 +116,9 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
     return {
         "path": str(path),
         "truncated": truncated,
-        "error": stream.error if truncated else None,
-        "library": stream.header.library if stream.header else None,
+        "error": error,
+        "damaged": [{"start_byte": d.start, "end_byte": d.end, "reason": d.reason} for d in damage],
+        "library": header.library if header else None,
         "messages": sum(counts.values()),
         "start_ns": start,
         "end_ns": end,
@@ -115,6 +135,17 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
         "attachments": attachments,
         "metadata": metadata,
     }
+
+
+def _records(items, damage: list[Damage]):
+    """Records in file order with chunks opened; damaged stretches go to ``damage``."""
+    for item in items:
+        if isinstance(item, Damage):
+            damage.append(item)
+        elif isinstance(item, ChunkRecords):
+            yield from item.records
+        else:
+            yield item
 
 
 def time_gaps(t: np.ndarray, factor: float = GAP_FACTOR) -> dict[str, Any]:
@@ -212,6 +243,9 @@ def format_info(info: dict[str, Any]) -> str:
         lines.append(f"  attachments: {', '.join(info['attachments'])}")
     if info["metadata"]:
         lines.append(f"  metadata: {', '.join(info['metadata'])}")
-    if info["truncated"]:
+    if info["damaged"]:
+        lines.append(f"  DAMAGED: {len(info['damaged'])} unreadable stretch(es) skipped (their chunks' messages are not counted above)")
+        lines += _listed(info["damaged"], lambda d: f"bytes {d['start_byte']}-{d['end_byte']}: {d['reason']}")
+    elif info["truncated"]:
         lines.append(f"  stopped reading: {info['error']}")
     return "\n".join(lines)

@@ -14,6 +14,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 import rerun.chunk as rc
 
+from trackreplay.schemas.errors import OutputError
 from trackreplay.trackers.frame import Frame
 
 CAMERA = "camera/image"
@@ -113,6 +114,14 @@ class RerunSink:
             rec.log(RIGHT, rr.Image(frame.right, color_model=model))
 
     def close(self) -> None:
+        try:
+            self._close()
+        except (RuntimeError, OSError) as err:  # the SDK's file writer reports a full disk as RuntimeError
+            self.partial.unlink(missing_ok=True)
+            self.path.unlink(missing_ok=True)
+            raise OutputError(f"cannot write {self.path} ({err}); no .rrd was kept") from None
+
+    def _close(self) -> None:
         self.logger.flush_scalars()
         self.rec.flush()
         self.rec.disconnect()

@@ -19,3 +19,9 @@ class TruncatedLogError(LogError):
 
 class SourceError(TrackreplayError):
     """An input to ``record`` (video, image folder, CSV, annotation file) is malformed."""
+
+
+class OutputError(TrackreplayError):
+    """An output cannot be written (no space left, no permission, a missing folder)."""
+
+    exit_code = 5

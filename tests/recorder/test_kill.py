@@ -56,16 +56,17 @@ def test_sigkill_mid_recording_then_recover(tmp_path):
         cv2.imwrite(str(folder / f"f{i}.jpg"), img)
     files = list_images(folder)
     out = tmp_path / "live.mcap"
+    partial = tmp_path / "live.mcap.partial"  # the name a log has until it is complete
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     child = subprocess.Popen([sys.executable, "-c", CHILD, str(out), str(folder)], env=env, cwd=ROOT)
     try:
         deadline = time.monotonic() + 20
-        while not (out.exists() and out.stat().st_size > 8000):
+        while not (partial.exists() and partial.stat().st_size > 8000):
             assert child.poll() is None, "the recording ended before it could be killed"
             assert time.monotonic() < deadline, "the recording never flushed"
             time.sleep(0.02)
         snapshot = tmp_path / "snapshot.mcap"
-        shutil.copyfile(out, snapshot)  # what was certainly flushed before the kill
+        shutil.copyfile(partial, snapshot)  # what was certainly flushed before the kill
         child.send_signal(signal.SIGKILL)
         child.wait(timeout=10)
     finally:
@@ -73,9 +74,10 @@ def test_sigkill_mid_recording_then_recover(tmp_path):
             child.kill()
             child.wait()
     assert child.returncode == -signal.SIGKILL
+    assert not out.exists()  # no half log under the final name
 
     flushed = recover(snapshot, tmp_path / "flushed.mcap")
-    report = recover(out, tmp_path / "fixed.mcap")
+    report = recover(partial, tmp_path / "fixed.mcap")
     assert not report.complete and report.error
     assert 0 < flushed.messages_saved <= report.messages_saved < len(files)
     assert count_messages(tmp_path / "fixed.mcap") == report.messages_saved

@@ -53,6 +53,11 @@ def complete_chunk_counts(path):
         return out
 
 
+def chunk_starts(path):
+    with open(path, "rb") as fh:
+        return sorted(ci.chunk_start_offset for ci in make_reader(fh).get_summary().chunk_indexes)
+
+
 def test_intact_log_is_copied_completely(intact, tmp_path):
     report = recover(intact, tmp_path / "copy.mcap")
     assert report.complete and report.error is None
@@ -100,15 +105,58 @@ def test_recover_refuses_to_overwrite_its_input(intact):
         recover(intact, intact)
 
 
-def test_damaged_chunk_stops_salvage_there(intact, tmp_path):
+def test_damaged_chunk_costs_only_that_chunk(intact, tmp_path):
     chunks = complete_chunk_counts(intact)
+    original = messages_of(intact)
     data = bytearray(intact.read_bytes())
     pos = (chunks[2][0] + chunks[3][0]) // 2  # inside the fourth chunk
     data[pos:pos + 8] = b"\x00" * 8
     (tmp_path / "bad.mcap").write_bytes(bytes(data))
     report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
-    assert not report.complete and "damaged record" in report.error
-    assert report.messages_saved == sum(n for _, n in chunks[:3])
+    assert not report.complete and "crc" in report.error.lower() and report.exit_code == 1
+    lost = chunks[3][1]
+    before = sum(n for _, n in chunks[:3])
+    assert report.messages_saved == len(original) - lost
+    assert messages_of(tmp_path / "out.mcap") == original[:before] + original[before + lost:]
+    starts = chunk_starts(intact)
+    assert [(d.start, d.end) for d in report.damage] == [(starts[3], starts[4])]
+
+
+def test_damage_in_the_first_chunk_keeps_every_later_chunk(intact, tmp_path):
+    """The first chunk holds the channel and schema records: they come back from the summary."""
+    chunks = complete_chunk_counts(intact)
+    original = messages_of(intact)
+    data = bytearray(intact.read_bytes())
+    for k, pos in enumerate(range(chunk_starts(intact)[0], chunks[0][0], 97)):  # flips inside the first chunk
+        bad = bytearray(data)
+        bad[pos] ^= 0x5A
+        (tmp_path / "bad.mcap").write_bytes(bytes(bad))
+        report = recover(tmp_path / "bad.mcap", tmp_path / f"out{k}.mcap")
+        assert not report.complete, pos
+        assert messages_of(tmp_path / f"out{k}.mcap") == original[chunks[0][1]:], pos
+
+
+def test_truncated_and_damaged_keeps_intact_chunks_on_both_sides(intact, tmp_path):
+    """No summary to fall back on: chunks after the damage whose channels were defined before it survive."""
+    chunks = complete_chunk_counts(intact)
+    original = messages_of(intact)
+    data = bytearray(intact.read_bytes()[:chunks[6][0]])
+    pos = (chunks[2][0] + chunks[3][0]) // 2
+    data[pos] ^= 0xFF
+    (tmp_path / "bad.mcap").write_bytes(bytes(data))
+    report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
+    before, lost = sum(n for _, n in chunks[:3]), chunks[3][1]
+    after = sum(n for _, n in chunks[4:7])
+    assert report.messages_saved == before + after
+    assert messages_of(tmp_path / "out.mcap") == original[:before] + original[before + lost:before + lost + after]
+
+
+def test_zero_byte_and_magic_only_files(tmp_path):
+    (tmp_path / "magic.mcap").write_bytes(b"\x89MCAP0\r\n")
+    report = recover(tmp_path / "magic.mcap", tmp_path / "out.mcap")
+    assert report.messages_saved == 0 and report.exit_code == 2
+    assert messages_of(tmp_path / "out.mcap") == []
+    assert not (tmp_path / "out.mcap.partial").exists()
 
 
 def run_cli(*argv):

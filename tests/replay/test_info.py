@@ -112,3 +112,27 @@ def test_cli_json_and_truncated_exit(tmp_path, capsys):
     assert main(["info", str(cut)]) == 3
     captured = capsys.readouterr()
     assert "TRUNCATED" in captured.out and "trackreplay recover" in captured.err
+
+
+def test_info_names_damaged_stretches_and_counts_the_rest(flow_sim1, tmp_path, capsys):
+    """A flipped byte inside a chunk: info reads past it, says where, and fails with status 3."""
+    from mcap.reader import make_reader
+
+    from trackreplay.replay.cli import main
+    from trackreplay.replay.info import log_info
+
+    with open(flow_sim1, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+    first = min(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
+    data = bytearray(flow_sim1.read_bytes())
+    data[first.chunk_start_offset + first.chunk_length // 2] ^= 0x10
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    info = log_info(bad, partial_ok=True)
+    assert info["truncated"] and len(info["damaged"]) == 1
+    assert info["damaged"][0]["start_byte"] == first.chunk_start_offset
+    intact = log_info(flow_sim1)
+    assert 0 < info["messages"] < intact["messages"]
+    assert main(["info", str(bad)]) == 3
+    out = capsys.readouterr().out
+    assert f"bytes {first.chunk_start_offset}-" in out and "DAMAGED: 1 unreadable stretch" in out

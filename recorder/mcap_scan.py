@@ -1,0 +1,189 @@
+"""Walk an MCAP file record by record, checking every chunk's CRC, and resynchronise past damage.
+
+``mcap``'s own readers stop at the first bad record (and so does the ``mcap`` CLI, mcap#1390): one
+flipped byte in an early chunk would lose every later one. :func:`scan` instead reports the damaged
+byte range and looks for the next record it can trust — a chunk whose framing adds up and whose
+decompressed records match their CRC-32 — then carries on from there.
+
+Only chunks are trusted after damage: they are the only data-section records that carry a checksum,
+and every log trackreplay writes keeps its messages in chunks. Schema and channel records lost with
+a damaged chunk are taken from the summary section when the file still has an intact one
+(:func:`summary_definitions`), so the messages of later chunks stay decodable.
+"""
+
+from __future__ import annotations
+
+import mmap
+import struct
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from io import BytesIO
+from pathlib import Path
+
+from mcap.data_stream import ReadDataStream
+from mcap.opcode import Opcode
+from mcap.records import (Attachment, Channel, Chunk, DataEnd, Footer, Header, McapRecord, Message, Metadata,
+                          Schema)
+from mcap.stream_reader import breakup_chunk
+
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+FOOTER_SIZE = 1 + 8 + 8 + 8 + 4  # opcode, length, summary_start, summary_offset_start, summary_crc
+# A record claiming more than this is damage, not data: nothing we write comes near it, and
+# believing it would mean allocating it.
+MAX_RECORD_BYTES = 1 << 30
+COMPRESSIONS = (b"", b"zstd", b"lz4")
+
+_READERS = {
+    Opcode.HEADER: Header.read, Opcode.SCHEMA: Schema.read, Opcode.CHANNEL: Channel.read,
+    Opcode.CHUNK: Chunk.read, Opcode.ATTACHMENT: Attachment.read, Opcode.METADATA: Metadata.read,
+    Opcode.DATA_END: DataEnd.read, Opcode.FOOTER: Footer.read,
+}
+_KNOWN = frozenset(int(op) for op in Opcode)
+
+
+@dataclass(frozen=True)
+class Damage:
+    """Bytes ``[start, end)`` could not be read as records; ``reason`` says why the first one failed."""
+
+    start: int
+    end: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class ChunkRecords:
+    """The records of one chunk that passed its CRC check, and where the chunk sits in the file."""
+
+    offset: int
+    records: tuple[McapRecord, ...]
+
+
+Item = McapRecord | ChunkRecords | Damage
+
+
+class _Bad(Exception):
+    pass
+
+
+def _chunk_framing_ok(data: mmap.mmap | bytes, pos: int, length: int) -> bool:
+    """Do a chunk's fixed fields at ``pos`` add up to its record length? (cheap: no decompression)"""
+    body = pos + 9
+    if body + 36 > len(data):
+        return False
+    compression_len = struct.unpack_from("<I", data, body + 28)[0]
+    if compression_len > 4 or body + 32 + compression_len + 8 > len(data):
+        return False
+    if bytes(data[body + 32:body + 32 + compression_len]) not in COMPRESSIONS:
+        return False
+    records_len = struct.unpack_from("<Q", data, body + 32 + compression_len)[0]
+    return 8 + 8 + 8 + 4 + 4 + compression_len + 8 + records_len == length
+
+
+def _read(data: mmap.mmap | bytes, pos: int) -> tuple[int, McapRecord | ChunkRecords | None]:
+    """The record at ``pos`` and its total size; raises ``_Bad`` for anything that does not check out."""
+    if pos + 9 > len(data):
+        raise _Bad("the file ends in the middle of a record")
+    opcode = data[pos]
+    length = struct.unpack_from("<Q", data, pos + 1)[0]
+    if opcode not in _KNOWN:
+        raise _Bad(f"unknown record type 0x{opcode:02x}")
+    if length > MAX_RECORD_BYTES:
+        raise _Bad(f"a record claims {length} bytes")
+    end = pos + 9 + length
+    if end > len(data):
+        raise _Bad("the file ends in the middle of a record")
+    if opcode == Opcode.CHUNK and not _chunk_framing_ok(data, pos, length):
+        raise _Bad("a chunk's fields do not add up to its length")
+    stream = ReadDataStream(BytesIO(data[pos + 9:end]))
+    try:
+        if opcode == Opcode.MESSAGE:
+            record: McapRecord | None = Message.read(stream, length)
+        elif opcode in _READERS:
+            record = _READERS[opcode](stream)
+        else:
+            record = None  # indexes, statistics, summary offsets: rebuilt by any writer
+        if isinstance(record, Chunk):
+            if record.uncompressed_size > MAX_RECORD_BYTES:
+                raise _Bad(f"a chunk claims {record.uncompressed_size} bytes uncompressed")
+            return end - pos, ChunkRecords(pos, tuple(breakup_chunk(record, validate_crc=True)))
+    except _Bad:
+        raise
+    except Exception as err:  # CRC, zstd/lz4, struct, UTF-8, EOF inside the record: all mean damage
+        raise _Bad(f"{type(err).__name__}: {err}" if str(err) else type(err).__name__) from None
+    return end - pos, record
+
+
+def _resync(data: mmap.mmap | bytes, start: int) -> int:
+    """Offset of the next chunk after ``start`` that reads back intact (CRC included), else the file size."""
+    pos = start
+    while True:
+        pos = data.find(bytes([Opcode.CHUNK]), pos + 1)
+        if pos < 0 or pos + 9 > len(data):
+            return len(data)
+        length = struct.unpack_from("<Q", data, pos + 1)[0]
+        if length > MAX_RECORD_BYTES or pos + 9 + length > len(data) or not _chunk_framing_ok(data, pos, length):
+            continue
+        try:
+            _read(data, pos)
+        except _Bad:
+            continue
+        return pos
+
+
+def scan(data: mmap.mmap | bytes) -> Iterator[Item]:
+    """Every record of an MCAP image in file order (chunks as :class:`ChunkRecords`), with a
+    :class:`Damage` for each unreadable stretch; stops after the footer or at the end of the data.
+    The caller checks the leading magic."""
+    pos = len(MCAP_MAGIC)
+    while pos < len(data):
+        try:
+            size, record = _read(data, pos)
+        except _Bad as bad:
+            nxt = _resync(data, pos)
+            yield Damage(pos, nxt, str(bad))
+            pos = nxt
+            continue
+        pos += size
+        if isinstance(record, Footer) and bytes(data[pos:]) != MCAP_MAGIC:
+            yield Damage(pos, len(data), "the closing magic after the footer is missing or damaged")
+            return
+        if record is not None:
+            yield record
+        if isinstance(record, Footer):
+            return
+
+
+def summary_definitions(data: mmap.mmap | bytes) -> tuple[dict[int, Schema], dict[int, Channel]]:
+    """Schemas and channels from the file's summary section, when its footer and CRC are intact."""
+    end = len(data) - len(MCAP_MAGIC)
+    start = end - FOOTER_SIZE
+    if start < len(MCAP_MAGIC) or bytes(data[end:]) != MCAP_MAGIC or data[start] != Opcode.FOOTER:
+        return {}, {}
+    summary_start, _, summary_crc = struct.unpack_from("<QQI", data, start + 9)
+    if not len(MCAP_MAGIC) <= summary_start < start:
+        return {}, {}
+    if summary_crc and zlib.crc32(data[summary_start:start + 9 + 16]) != summary_crc:
+        return {}, {}
+    schemas: dict[int, Schema] = {}
+    channels: dict[int, Channel] = {}
+    pos = summary_start
+    while pos < start:
+        try:
+            size, record = _read(data, pos)
+        except _Bad:
+            return {}, {}
+        if isinstance(record, Schema):
+            schemas[record.id] = record
+        elif isinstance(record, Channel):
+            channels[record.id] = record
+        pos += size
+    return schemas, channels
+
+
+def open_mapped(path: Path) -> mmap.mmap | bytes:
+    """The file's bytes without reading them all into memory (an empty file maps to ``b""``)."""
+    with open(path, "rb") as fh:
+        if fh.seek(0, 2) == 0:
+            return b""
+        return mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ)
