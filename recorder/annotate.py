@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import os
 import tempfile
 from dataclasses import dataclass
@@ -13,6 +14,7 @@ from mcap.writer import Writer
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
+from trackreplay.recorder.sources.base import read_text
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -45,7 +47,7 @@ def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
     """Rows ``frame,x,y,w,h[,label]``; a header row is allowed."""
     marks: list[Mark] = []
     try:
-        with open(path, newline="") as fh:
+        with io.StringIO(read_text(path), newline="") as fh:
             for line_no, row in enumerate(csv.reader(fh), start=1):
                 cells = [c.strip() for c in row]
                 if not cells or not any(cells) or cells[0].startswith("#"):

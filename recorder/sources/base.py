@@ -11,6 +11,9 @@ import numpy as np
 
 from trackreplay.schemas.errors import SourceError
 
+# Log times are MCAP uint64 nanoseconds, but numpy, Polars and Rerun hold them as int64.
+MAX_T_NS = 2**63 - 1
+
 JPEG_MAGIC = b"\xff\xd8\xff"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -82,6 +85,29 @@ def encoded_format(data: bytes) -> str | None:
     return None
 
 
+def read_text(path: Path) -> str:
+    """A text input's content as UTF-8 (a BOM allowed); a byte that is not UTF-8 is one sentence naming the line."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as err:
+        line = data.count(b"\n", 0, err.start) + 1
+        raise SourceError(f"{path}:{line}: byte 0x{data[err.start]:02x} is not UTF-8 text; save the file as UTF-8") from None
+
+
+def parse_t_ns(text: str, where: str, name: str = "t_ns") -> int:
+    """A log time in ns: an integer in [0, 2**63)."""
+    try:
+        t = int(text)
+    except ValueError:
+        raise SourceError(f"{where}: {name} {text.strip()!r} is not an integer") from None
+    if t < 0:
+        raise SourceError(f"{where}: {name} {t} is negative (log times are unsigned)")
+    if t > MAX_T_NS:
+        raise SourceError(f"{where}: {name} {t} is beyond 2**63 - 1 ns (year 2262)")
+    return t
+
+
 def read_timestamps(path: str | Path) -> list[int]:
     """A timestamps file: one integer ``t_ns`` per line, strictly increasing.
 
@@ -90,20 +116,14 @@ def read_timestamps(path: str | Path) -> list[int]:
     """
     path = require_file(path, "timestamps file")
     out: list[int] = []
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, 1):
-            text = line.strip()
-            if not text or text.startswith("#"):
-                continue
-            try:
-                t = int(text)
-            except ValueError:
-                raise SourceError(f"{path}:{lineno}: {text!r} is not an integer t_ns") from None
-            if t < 0:
-                raise SourceError(f"{path}:{lineno}: t_ns {t} is negative (log times are unsigned)")
-            if out and t <= out[-1]:
-                raise SourceError(f"{path}:{lineno}: t_ns {t} is not after the previous line's {out[-1]}")
-            out.append(t)
+    for lineno, line in enumerate(read_text(path).split("\n"), 1):
+        text = line.strip()
+        if not text or text.startswith("#"):
+            continue
+        t = parse_t_ns(text, f"{path}:{lineno}")
+        if out and t <= out[-1]:
+            raise SourceError(f"{path}:{lineno}: t_ns {t} is not after the previous line's {out[-1]}")
+        out.append(t)
     if not out:
         raise SourceError(f"timestamps file {path} holds no timestamps")
     return out

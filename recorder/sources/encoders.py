@@ -13,11 +13,12 @@ to the origin.
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Iterator
 from pathlib import Path
 
-from trackreplay.recorder.sources.base import require_file
+from trackreplay.recorder.sources.base import parse_t_ns, read_text, require_file
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 
@@ -38,7 +39,7 @@ def _number(text: str, name: str, where: str) -> float:
 def read_encoders(path: str | Path) -> Iterator[PtzReading]:
     """Stream readings; any bad row raises ``SourceError('file:line: ...')``."""
     path = require_file(path, "encoder file")
-    with open(path, newline="", encoding="utf-8") as fh:
+    with io.StringIO(read_text(path), newline="") as fh:
         rows = csv.reader(fh)
         header = next(rows, None)
         names = [h.strip() for h in header] if header else []
@@ -53,12 +54,7 @@ def read_encoders(path: str | Path) -> Iterator[PtzReading]:
             if len(row) != len(ENCODER_COLUMNS):
                 raise SourceError(f"{where}: expected {len(ENCODER_COLUMNS)} columns, got {len(row)}")
             raw = [row[c] for c in cols]
-            try:
-                t_ns = int(raw[0])
-            except ValueError:
-                raise SourceError(f"{where}: t_ns {raw[0].strip()!r} is not an integer") from None
-            if t_ns < 0:
-                raise SourceError(f"{where}: t_ns {t_ns} is negative (log times are unsigned)")
+            t_ns = parse_t_ns(raw[0], where)
             if prev is not None and t_ns <= prev:
                 raise SourceError(f"{where}: t_ns {t_ns} is not after the previous reading's {prev}")
             prev = t_ns
@@ -84,7 +80,7 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
     path = require_file(path, "lens table")
     header: dict[str, str] = {}
     entries: list[LensEntry] = []
-    with open(path, newline="", encoding="utf-8") as fh:
+    with io.StringIO(read_text(path), newline="") as fh:
         for lineno, line in enumerate(fh, 1):
             where = f"{path}:{lineno}"
             text = line.strip()

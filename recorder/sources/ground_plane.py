@@ -31,7 +31,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from trackreplay.recorder.sources.base import require_file
+from trackreplay.recorder.sources.base import read_text, require_file
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.trackers.geometry.homography import apply_homography
@@ -67,7 +67,7 @@ def read_ground_plane(path: str | Path) -> tuple[GroundPlaneCalibration, tuple[s
     """The calibration in ``path`` and any warnings about it."""
     path = require_file(path, "ground-plane file")
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(read_text(path))
     except json.JSONDecodeError as err:
         raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None
     except UnicodeDecodeError:

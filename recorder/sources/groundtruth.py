@@ -15,12 +15,13 @@ image pixels; pixel coordinates are taken as they are, the same convention
 
 from __future__ import annotations
 
+import io
 import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from trackreplay.recorder.sources.base import require_file
+from trackreplay.recorder.sources.base import read_text, require_file
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.records import GroundTruthObject
 
@@ -62,7 +63,7 @@ def _float(text: str, name: str, where: str) -> float:
 def detect_format(path: Path) -> str:
     if path.name.lower().startswith("groundtruth_rect"):
         return "otb"
-    with open(path, encoding="utf-8") as fh:
+    with io.StringIO(read_text(path)) as fh:
         for lineno, line in enumerate(fh, 1):
             if line.strip():
                 n = len(_split(line))
@@ -77,7 +78,7 @@ def detect_format(path: Path) -> str:
 def read_mot(path: Path) -> GroundTruthTable:
     frames: dict[int, list[GroundTruthObject]] = {}
     seen: set[tuple[int, int]] = set()
-    with open(path, encoding="utf-8") as fh:
+    with io.StringIO(read_text(path)) as fh:
         for lineno, line in enumerate(fh, 1):
             where = f"{path}:{lineno}"
             if not line.strip():
@@ -113,7 +114,7 @@ def read_mot(path: Path) -> GroundTruthTable:
 def read_otb(path: Path) -> GroundTruthTable:
     frames: dict[int, tuple[GroundTruthObject, ...]] = {}
     frame = 0
-    with open(path, encoding="utf-8") as fh:
+    with io.StringIO(read_text(path)) as fh:
         for lineno, line in enumerate(fh, 1):
             where = f"{path}:{lineno}"
             if not line.strip():

@@ -23,7 +23,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from trackreplay.recorder.sources.base import FrameClock, ImageFrame, require_file
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_text, require_file
 from trackreplay.recorder.sources.images import check_count, list_images, read_image_files
 from trackreplay.recorder.sources.video import read_video
 from trackreplay.schemas import messages as m
@@ -71,7 +71,7 @@ class Calibration:
 
 def _load_json(path: Path) -> dict[str, Any]:
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
+        data = json.loads(read_text(path))
     except json.JSONDecodeError as err:
         raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None
     if not isinstance(data, dict):
@@ -80,6 +80,15 @@ def _load_json(path: Path) -> dict[str, Any]:
 
 
 def _load_opencv(path: Path) -> dict[str, Any]:
+    read_text(path)  # OpenCV's own parser reports bad bytes without a line
+    try:
+        return _read_file_storage(path)
+    except (cv2.error, SystemError) as err:  # OpenCV's parser errors; SystemError wraps them on open
+        reason = str(err.__cause__ or err).strip().splitlines()[-1] if str(err.__cause__ or err).strip() else type(err).__name__
+        raise SourceError(f"calibration {path} cannot be read as OpenCV YAML/XML ({reason})") from None
+
+
+def _read_file_storage(path: Path) -> dict[str, Any]:
     fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
     if not fs.isOpened():
         raise SourceError(f"calibration {path} cannot be read as OpenCV YAML/XML")

@@ -58,7 +58,7 @@ def test_timestamp_count_mismatch_is_checked_before_writing(tmp_path, make_image
     assert not (tmp_path / "out.mcap").exists()
 
 
-@pytest.mark.parametrize("text, match", [("1\nabc\n", r"ts\.txt:2: 'abc' is not an integer"),
+@pytest.mark.parametrize("text, match", [("1\nabc\n", r"ts\.txt:2: t_ns 'abc' is not an integer"),
                                          ("5\n5\n", r"ts\.txt:2: t_ns 5 is not after"),
                                          ("# nothing\n", "holds no timestamps")])
 def test_bad_timestamps_file(tmp_path, make_images, text, match):
