@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +12,7 @@ from mcap.writer import Writer
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
+from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.sources.base import read_text
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
@@ -92,38 +91,33 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
             raise SourceError(f"{src} has no frame {mk.frame} on {image_topic} (it has {len(times)} frames)")
         regions.append(InitRegion(mk.frame, times[mk.frame], mk.x + mk.w / 2, mk.y + mk.h / 2, mk.w, mk.h, mk.label))
     annotation = init_annotations_pb(regions, times[0])
-    fd, tmp_name = tempfile.mkstemp(prefix=".annotate-", suffix=".mcap", dir=Path(out).resolve().parent)
-    tmp = Path(tmp_name)
-    try:
-        with os.fdopen(fd, "wb") as dst, open(src, "rb") as fh:
-            source = make_reader(fh)
-            header = source.get_header()
-            writer = Writer(dst)
-            writer.start(profile=header.profile, library=header.library)
-            schema_ids: dict[int, int] = {}
-            channel_ids: dict[int, int] = {}
-            by_topic: dict[str, int] = {}
-            for schema, channel, msg in source.iter_messages(log_time_order=False):
-                if channel.id not in channel_ids:
-                    if schema is not None and schema.id not in schema_ids:
-                        schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-                    channel_ids[channel.id] = writer.register_channel(
-                        channel.topic, channel.message_encoding, schema_ids[schema.id] if schema else 0, dict(channel.metadata)
-                    )
-                    by_topic.setdefault(channel.topic, channel_ids[channel.id])
-                writer.add_message(channel_ids[channel.id], msg.log_time, msg.data, msg.publish_time, msg.sequence)
-            for att in source.iter_attachments():
-                writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
-            for meta in source.iter_metadata():
-                writer.add_metadata(meta.name, dict(meta.metadata))
-            cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
-            if cid is None:
-                cid = writer.register_channel(T.ANNOTATIONS_INIT, "protobuf", register_schema(writer, m.InitAnnotations))
-            sequence = topic_counts(summary).get(T.ANNOTATIONS_INIT, 0)
-            writer.add_message(cid, times[0], annotation.SerializeToString(), times[0], sequence)
-            writer.finish()
-        os.replace(tmp, out)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    # Written as OUT.partial and renamed when complete (so --in-place never damages the original);
+    # the file gets the usual permissions (umask), not a temporary file's 0600.
+    with replace_when_done(out) as dst, open(src, "rb") as fh:
+        source = make_reader(fh)
+        header = source.get_header()
+        writer = Writer(dst)
+        writer.start(profile=header.profile, library=header.library)
+        schema_ids: dict[int, int] = {}
+        channel_ids: dict[int, int] = {}
+        by_topic: dict[str, int] = {}
+        for schema, channel, msg in source.iter_messages(log_time_order=False):
+            if channel.id not in channel_ids:
+                if schema is not None and schema.id not in schema_ids:
+                    schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+                channel_ids[channel.id] = writer.register_channel(
+                    channel.topic, channel.message_encoding, schema_ids[schema.id] if schema else 0, dict(channel.metadata)
+                )
+                by_topic.setdefault(channel.topic, channel_ids[channel.id])
+            writer.add_message(channel_ids[channel.id], msg.log_time, msg.data, msg.publish_time, msg.sequence)
+        for att in source.iter_attachments():
+            writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
+        for meta in source.iter_metadata():
+            writer.add_metadata(meta.name, dict(meta.metadata))
+        cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
+        if cid is None:
+            cid = writer.register_channel(T.ANNOTATIONS_INIT, "protobuf", register_schema(writer, m.InitAnnotations))
+        sequence = topic_counts(summary).get(T.ANNOTATIONS_INIT, 0)
+        writer.add_message(cid, times[0], annotation.SerializeToString(), times[0], sequence)
+        writer.finish()
     return regions

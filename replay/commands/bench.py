@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from trackreplay.replay.commands.values import positive_int
 from trackreplay.replay import registry
 from trackreplay.replay.bench import format_timing, time_replay
 
@@ -15,7 +16,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("log", type=Path)
     p.add_argument("--tracker", default="flow", choices=registry.NAMES)
     p.add_argument("--config", type=Path)
-    p.add_argument("--repeats", type=int, default=3)
+    p.add_argument("--repeats", type=positive_int, default=3, help="timed runs of each kind (default 3)")
     p.add_argument("--json", type=Path, help="also write the timings as JSON")
     p.set_defaults(func=run)
     return p

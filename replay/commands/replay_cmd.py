@@ -7,6 +7,7 @@ import json
 import sys
 from pathlib import Path
 
+from trackreplay.replay.commands.values import non_negative_float, non_negative_int, positive_int
 from trackreplay.schemas.errors import TrackreplayError
 
 from trackreplay.replay import registry
@@ -21,11 +22,11 @@ class DigestMismatch(TrackreplayError):
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
     p.add_argument("--config", type=Path, help="tracker config TOML (keys of the tracker's config dataclass)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the tracker's random generator (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the tracker's random generator (default 0)")
     p.add_argument("--image-topic", help="image topic (default /camera/image, else the stereo left)")
-    p.add_argument("--start", type=float, help="start, seconds from the log's first message")
-    p.add_argument("--end", type=float, help="end (exclusive), seconds from the log's first message")
-    p.add_argument("--opencv-threads", type=int, default=1, help="OpenCV threads (results do not depend on it)")
+    p.add_argument("--start", type=non_negative_float, help="start, seconds from the log's first message")
+    p.add_argument("--end", type=non_negative_float, help="end (exclusive), seconds from the log's first message")
+    p.add_argument("--opencv-threads", type=positive_int, default=1, help="OpenCV threads (results do not depend on it)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -36,7 +37,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--rrd", type=Path, help="write every intermediate to this Rerun .rrd file")
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the export (default linear)")
-    p.add_argument("--max-gap", type=int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
+    p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
     p.add_argument("--summary", type=Path, help="write a JSON summary (digest, frames, timings)")
     p.add_argument("--expect-digest", help="fail unless the replay's digest equals this hex string")
     p.set_defaults(func=run)
@@ -44,6 +45,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayRequest:
+    if args.start is not None and args.end is not None and args.end <= args.start:
+        raise TrackreplayError(f"--end {args.end:g} must be after --start {args.start:g}")
     return ReplayRequest(
         log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from trackreplay.replay.commands.values import non_negative_float, non_negative_int, positive_float, positive_int
 from trackreplay.recorder.synth.flow_sims import SCENES as FLOW_SCENES
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
 from trackreplay.recorder.synth.golf.scene import CAMERA_PLACES, SCENE as GOLF_SCENE
@@ -26,23 +27,23 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("scene", choices=(*FLOW_SCENES, GOLF_SCENE),
                    help="flow-sim1|2|3: the gradient-flow paper's simulations; golf-teeshot: a broadcast tee shot with PTZ encoders")
     p.add_argument("out", type=Path, help="output .mcap")
-    p.add_argument("--seed", type=int, default=0, help="seed of the procedural scene (default 0)")
+    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the procedural scene (default 0)")
     flow = p.add_argument_group("flow-sim scenes")
     flow.add_argument("--background", default=None, choices=("texture", *PHOTOS),
                       help="procedural texture (default) or a photo bundled with scikit-image")
     flow.add_argument("--encoding", default=None, choices=("png", "jpeg", "raw"), help="image encoding (default png, lossless)")
-    flow.add_argument("--frames", type=int, default=None, help="number of frames, t = 0..frames-1 (paper: 51)")
+    flow.add_argument("--frames", type=positive_int, default=None, help="number of frames, t = 0..frames-1 (paper: 51)")
     golf = p.add_argument_group("golf-teeshot")
     golf.add_argument("--size", default=None, choices=tuple(SIZES), help="frame size (default 720p)")
-    golf.add_argument("--fps", type=float, default=None, help="frame rate (default 30; 60 also typical)")
-    golf.add_argument("--duration", type=float, default=None, metavar="S",
+    golf.add_argument("--fps", type=positive_float, default=None, help="frame rate (default 30; 60 also typical)")
+    golf.add_argument("--duration", type=positive_float, default=None, metavar="S",
                       help="seconds to record (default: until the ball has rested for 1 s)")
     golf.add_argument("--camera", default=None, choices=tuple(CAMERA_PLACES), help="camera behind (default) or beside the tee")
     golf.add_argument("--no-bounce", action="store_true", default=None, help="the ball checks into the turf and rolls out, no hop")
-    golf.add_argument("--cut", type=float, default=None, metavar="AT_S", help="a camera cut / fast zoom out at this time")
-    golf.add_argument("--occlusion", type=float, nargs=2, default=None, metavar=("START_S", "END_S"),
+    golf.add_argument("--cut", type=non_negative_float, default=None, metavar="AT_S", help="a camera cut / fast zoom out at this time")
+    golf.add_argument("--occlusion", type=non_negative_float, nargs=2, default=None, metavar=("START_S", "END_S"),
                       help="the ball is hidden in this window (behind a tree in flight, a spectator on the ground)")
-    golf.add_argument("--encoder-dropout", type=float, nargs=2, default=None, metavar=("START_S", "END_S"),
+    golf.add_argument("--encoder-dropout", type=non_negative_float, nargs=2, default=None, metavar=("START_S", "END_S"),
                       help="no PTZ encoder readings in this window")
     golf.add_argument("--exact-encoders", action="store_true", default=None,
                       help="log the encoders without noise or quantisation (geometry checks)")

@@ -55,3 +55,24 @@ def test_a_truncated_or_topicless_source_is_named_and_nothing_is_written(short_s
 
     with pytest.raises(LogError, match=r"has no topic /nope; topics present: .*/camera/image"):
         annotate(short_sim, tmp_path / "x.mcap", [Mark(0, 1, 1, 2, 2)], image_topic="/nope")
+
+
+def test_annotated_log_gets_ordinary_permissions_and_missing_folders_are_one_sentence(tmp_path, capsys):
+    import os
+    import stat
+
+    from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+    from trackreplay.replay.cli import main
+
+    src = tmp_path / "src.mcap"
+    write_flow_sim(src, FlowSimConfig(scene="flow-sim1", frames=3))
+    out = tmp_path / "marked.mcap"
+    assert main(["annotate", str(src), "--frame", "0", "--box", "10,10,20,20", "--out", str(out)]) == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o666 & ~umask
+    capsys.readouterr()
+    missing = tmp_path / "no" / "marked.mcap"
+    assert main(["annotate", str(src), "--frame", "0", "--box", "10,10,20,20", "--out", str(missing)]) == 5
+    assert capsys.readouterr().err.strip() == f"trackreplay: error: cannot write {missing} (No such file or directory)"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["marked.mcap", "src.mcap"]

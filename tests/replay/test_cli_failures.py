@@ -119,3 +119,21 @@ def test_missing_output_folder_is_one_sentence(short_sim: Path, tmp_path: Path, 
     assert capsys.readouterr().err.strip() == (
         f"trackreplay: error: cannot write {tmp_path / 'no' / 'such' / 'out.mcap'} (No such file or directory)")
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["replay", "LOG", "--seed", "-1"], "argument --seed: -1 is negative"),
+    (["replay", "LOG", "--start", "nan"], "argument --start: 'nan' is not a finite number"),
+    (["bench", "LOG", "--repeats", "0"], "argument --repeats: 0 is not positive"),
+    (["synth", "flow-sim1", "OUT", "--frames", "0"], "argument --frames: 0 is not positive"),
+    (["synth", "golf-teeshot", "OUT", "--fps", "-30"], "argument --fps: -30 is not positive"),
+])
+def test_impossible_values_are_refused_when_parsed(argv, message, capsys) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_an_empty_time_range_is_refused(short_sim: Path, capsys) -> None:
+    assert main(["replay", str(short_sim), "--start", "5", "--end", "2", "--quiet"]) == 2
+    assert capsys.readouterr().err.strip() == "trackreplay: error: --end 2 must be after --start 5"
