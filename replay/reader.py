@@ -7,6 +7,7 @@ sequence (ARCHITECTURE.md ★ Log contract).
 from __future__ import annotations
 
 import heapq
+import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -76,7 +77,7 @@ class LogReader:
         try:
             with open(self.path, "rb") as fh:
                 summary = make_reader(fh).get_summary()
-        except McapError as err:
+        except (McapError, OSError, ValueError, EOFError, struct.error) as err:  # e.g. magic only: seeks before byte 0
             raise TruncatedLogError(_truncation_hint(self.path) + f" ({type(err).__name__})") from None
         if summary is None:
             raise TruncatedLogError(_truncation_hint(self.path))
