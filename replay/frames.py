@@ -46,6 +46,21 @@ class BundleReport:
     frames: int = 0
     unpaired: list[tuple[str, int]] = field(default_factory=list)
     outside_encoder_coverage: list[int] = field(default_factory=list)
+    lost: list[LostFrame] = field(default_factory=list)  # frames skipped: damaged chunk or undecodable image
+
+
+@dataclass(frozen=True)
+class LostFrame:
+    """An image the replay could not use; the tracker never saw it (it predicts across the gap)."""
+
+    topic: str
+    index: int
+    t_ns: int
+    reason: str
+
+
+class UndecodableImage(LogError):
+    """One image's bytes do not decode: that frame is skipped, the replay goes on."""
 
 
 def interpolate_ptz(a: PtzReading, b: PtzReading, t_ns: int) -> PtzReading:
@@ -85,7 +100,8 @@ class PtzInterpolator:
 
 def _ptz_stream(reader: LogReader, topic: str, start_ns: int | None) -> Iterator[PtzReading]:
     for item in reader.messages([topic], start_ns=None if start_ns is None else max(0, start_ns - 10**9)):
-        yield PtzReading.from_pb(item.decode())
+        if item.lost is None:  # a lost reading leaves a wider bracket; the pose tolerance decides
+            yield PtzReading.from_pb(item.decode())
 
 
 def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
@@ -93,7 +109,8 @@ def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
         return ()
     regions: list[InitRegion] = []
     for item in reader.messages([topic]):
-        regions.extend(InitRegion.from_pb(r) for r in item.decode().regions)
+        if item.lost is None:
+            regions.extend(InitRegion.from_pb(r) for r in item.decode().regions)
     return tuple(regions)
 
 
@@ -123,7 +140,7 @@ def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
         return out
     last = max(by_frame)
     for item in reader.messages([topics.image]):
-        if item.index in by_frame:
+        if item.index in by_frame and item.lost is None:
             where = f"{reader.path}: topic {item.topic} message {item.index}"
             out.append((decode_image(item.decode(), item.schema, where)[0], tuple(by_frame[item.index])))
         if item.index >= last:
@@ -139,8 +156,13 @@ def iter_frames(
     end_ns: int | None = None,
     ptz_tolerance_ns: int = 100_000_000,
     report: BundleReport | None = None,
+    strict: bool = False,
 ) -> Iterator[Frame]:
-    """Yield one immutable :class:`Frame` per image (or stereo pair) in log-time order."""
+    """Yield one immutable :class:`Frame` per image (or stereo pair) in log-time order.
+
+    An image lost with a damaged chunk, or one that does not decode, is skipped and listed in
+    ``report.lost`` (the tracker predicts across it); ``strict`` makes it an error instead.
+    """
     report = report if report is not None else BundleReport()
     reader.require(topics.image, *([topics.right] if topics.right else []), *([topics.ptz] if topics.ptz else []))
     lens_pb = reader.first(topics.lens)
@@ -160,7 +182,10 @@ def iter_frames(
     def pixels(item: LogMessage):
         nonlocal shape
         where = f"{reader.path}: topic {item.topic} message {item.index}"
-        image, encoded, encoding = decode_image(item.decode(), item.schema, where)
+        try:
+            image, encoded, encoding = decode_image(item.decode(), item.schema, where)
+        except LogError as err:
+            raise UndecodableImage(str(err)) from None
         if shape is None:
             shape = image.shape
             if calibration is not None and (calibration.width, calibration.height) != (image.shape[1], image.shape[0]):
@@ -192,9 +217,28 @@ def iter_frames(
             ground_plane=ground,
         )
 
+    def skip(item: LogMessage, reason: str) -> None:
+        if strict:
+            raise LogError(f"{reader.path}: frame {item.index} on topic {item.topic} cannot be used ({reason}); "
+                           f"without --strict it is skipped")
+        report.lost.append(LostFrame(item.topic, item.index, item.log_time, reason))
+
+    def usable(left: LogMessage, right: LogMessage | None) -> Frame | None:
+        for item in (left, right):
+            if item is not None and item.lost is not None:
+                skip(left, item.lost)
+                return None
+        try:
+            return bundle(left, right)
+        except UndecodableImage as err:
+            skip(left, str(err))
+            return None
+
     if topics.right is None:
         for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
-            yield bundle(item, None)
+            frame = usable(item, None)
+            if frame is not None:
+                yield frame
         return
 
     group: dict[str, LogMessage] = {}
@@ -203,7 +247,9 @@ def iter_frames(
     def flush() -> Iterator[Frame]:
         left, right = group.get(topics.image), group.get(topics.right)
         if left is not None and right is not None:
-            yield bundle(left, right)
+            frame = usable(left, right)
+            if frame is not None:
+                yield frame
         else:
             lone = left or right
             report.unpaired.append((lone.topic, lone.index))

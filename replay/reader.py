@@ -17,6 +17,7 @@ from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 
+from trackreplay.replay.chunks import DamagedChunk, iter_checked
 from trackreplay.schemas.errors import LogError, TruncatedLogError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -43,8 +44,11 @@ class LogMessage:
     data: bytes
     _decoder: Callable[[bytes], Any]
     _path: str
+    lost: str | None = None  # why this message could not be read (a damaged chunk); it has no data
 
     def decode(self) -> Any:
+        if self.lost is not None:
+            raise LogError(f"{self._path}: message {self.index} on topic {self.topic} is lost ({self.lost})")
         try:
             return self._decoder(self.data)
         except Exception as err:  # protobuf raises DecodeError or RuntimeWarning-ish errors
@@ -145,10 +149,40 @@ class LogReader:
         self.require(*topics)
         offsets = self._index_offsets(topics, start_ns)
         counters = dict(offsets)
+        if not self._summary.chunk_indexes:  # an unindexed log (other writers): mcap's linear reader
+            yield from self._unindexed_messages(topics, counters, start_ns, end_ns)
+            return
+        channels = {cid: ch for cid, ch in self._summary.channels.items() if ch.topic in topics}
+        try:
+            with open(self.path, "rb") as fh:
+                for item in iter_checked(fh, self._summary, channels, start_ns, end_ns):
+                    channel = channels[item.channel_id]
+                    schema = self._summary.schemas.get(channel.schema_id)
+                    dec = self._decoder(schema, channel)
+                    name = schema.name if schema else ""
+                    if isinstance(item, DamagedChunk):
+                        reason = f"damaged chunk at byte {item.offset}: {item.reason}"
+                        if item.log_times is None:
+                            reason += "; how many messages it held is unknown, so later message numbers may be too low"
+                        for t in item.log_times or (None,):
+                            idx = counters.get(channel.topic, 0)
+                            counters[channel.topic] = idx + (t is not None)
+                            yield LogMessage(channel.topic, name, t if t is not None else -1, channel.id, -1, idx, b"",
+                                             dec, str(self.path), lost=reason)
+                        continue
+                    idx = counters.get(channel.topic, 0)
+                    counters[channel.topic] = idx + 1
+                    yield LogMessage(channel.topic, name, item.log_time, channel.id, item.sequence, idx, item.data,
+                                     dec, str(self.path))
+        except (McapError, OSError, ValueError, EOFError, struct.error) as err:
+            raise LogError(f"{_truncation_hint(self.path)} ({type(err).__name__}: {err})") from None
+
+    def _unindexed_messages(self, topics: list[str], counters: dict[str, int], start_ns: int | None,
+                            end_ns: int | None) -> Iterator[LogMessage]:
         pending: list[tuple[int, int, int, int, LogMessage]] = []
         try:
             with open(self.path, "rb") as fh:
-                reader = make_reader(fh)
+                reader = make_reader(fh, validate_crcs=True)
                 it = reader.iter_messages(topics=topics, starting_at=start_ns, ending_before=end_ns, log_time_order=True)
                 for schema, channel, msg in it:
                     dec = self._decoder(schema, channel)
@@ -165,19 +199,26 @@ class LogReader:
                     heapq.heappush(pending, (msg.log_time, channel.id, msg.sequence, idx, item))
                 while pending:
                     yield heapq.heappop(pending)[4]
-        except McapError as err:
+        except (McapError, OSError, ValueError, EOFError, struct.error) as err:
             raise LogError(f"{_truncation_hint(self.path)} ({type(err).__name__}: {err})") from None
 
     def _index_offsets(self, topics: list[str], start_ns: int | None) -> dict[str, int]:
-        """How many messages each topic has before ``start_ns`` (reads no payloads twice)."""
+        """How many messages each topic has before ``start_ns`` (lost ones included)."""
         if not start_ns:
             return {t: 0 for t in topics}
         counts = {t: 0 for t in topics}
+        if not self._summary.chunk_indexes:
+            with open(self.path, "rb") as fh:
+                for _, channel, _ in make_reader(fh).iter_messages(
+                    topics=topics, ending_before=start_ns, log_time_order=False
+                ):
+                    counts[channel.topic] += 1
+            return counts
+        channels = {cid: ch for cid, ch in self._summary.channels.items() if ch.topic in topics}
         with open(self.path, "rb") as fh:
-            for _, channel, _ in make_reader(fh).iter_messages(
-                topics=topics, ending_before=start_ns, log_time_order=False
-            ):
-                counts[channel.topic] += 1
+            for item in iter_checked(fh, self._summary, channels, None, start_ns):
+                lost = isinstance(item, DamagedChunk)
+                counts[channels[item.channel_id].topic] += len(item.log_times or ()) if lost else 1
         return counts
 
     def first(self, topic: str) -> Any | None:

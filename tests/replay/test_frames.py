@@ -83,8 +83,37 @@ def test_raw_image_with_short_payload_is_reported(tmp_path: Path) -> None:
     with LogWriter(path) as log:
         log.write(T.CAMERA_IMAGE, msg, 0)
     reader = LogReader(path)
-    with pytest.raises(LogError, match=r"message 0: raw image claims 10x8 mono8 but holds 75 bytes"):
-        list(iter_frames(reader, FrameTopics.detect(reader)))
+    report = BundleReport()
+    assert list(iter_frames(reader, FrameTopics.detect(reader), report=report)) == []
+    [lost] = report.lost
+    assert (lost.topic, lost.index) == (T.CAMERA_IMAGE, 0)
+    assert "message 0: raw image claims 10x8 mono8 but holds 75 bytes" in lost.reason
+    with pytest.raises(LogError, match=r"frame 0 on topic /camera/image cannot be used .*holds 75 bytes.*without --strict"):
+        list(iter_frames(reader, FrameTopics.detect(reader), strict=True))
+
+
+def test_a_damaged_chunk_costs_its_frames_only(flow_sim1: Path, tmp_path: Path) -> None:
+    """Frames after a damaged chunk keep their numbers; the lost ones are listed with their times."""
+    from mcap.reader import make_reader
+
+    with open(flow_sim1, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+    chunk = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)[1]
+    data = bytearray(flow_sim1.read_bytes())
+    data[chunk.chunk_start_offset + chunk.chunk_length // 2] ^= 0x04
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    intact = {f.index: f for f in iter_frames(LogReader(flow_sim1), FrameTopics.detect(LogReader(flow_sim1)))}
+    report = BundleReport()
+    reader = LogReader(bad)
+    kept = {f.index: f for f in iter_frames(reader, FrameTopics.detect(reader), report=report)}
+    lost = [x.index for x in report.lost]
+    assert lost and sorted(set(kept) | set(lost)) == sorted(intact)
+    assert lost == list(range(lost[0], lost[-1] + 1))  # one chunk: consecutive frames
+    assert all("damaged chunk at byte" in x.reason and "crc" in x.reason.lower() for x in report.lost)
+    assert [x.t_ns for x in report.lost] == [intact[i].t_ns for i in lost]
+    for i, frame in kept.items():
+        assert frame.t_ns == intact[i].t_ns and (frame.image == intact[i].image).all()
 
 
 def test_hints_attach_to_their_frame(flow_sim1: Path) -> None:
