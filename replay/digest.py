@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -28,44 +29,182 @@ def portable_floats(values: np.ndarray) -> np.ndarray:
     return a
 
 
-def _feed(h: "hashlib._Hash", name: str, value: Any) -> None:
-    h.update(name.encode() + b"\0")
+def _leaf_bytes(value: Any) -> bytes | None:
+    """The hashed bytes of a leaf value (after its name), or None when ``value`` is a container."""
     if isinstance(value, np.ndarray):
         arr = np.ascontiguousarray(value)
         if arr.dtype.kind in "fc":
             arr = portable_floats(arr.real if arr.dtype.kind == "f" else np.stack([arr.real, arr.imag]))
-        h.update(f"{arr.dtype.str}{arr.shape}".encode())
-        h.update(arr.tobytes())
-    elif isinstance(value, (bool, int, np.integer)):
-        h.update(np.int64(value).tobytes())
-    elif isinstance(value, (float, np.floating)):
-        h.update(portable_floats(np.float64(value)).tobytes())
-    elif isinstance(value, str):
-        h.update(value.encode())
-    elif value is None:
-        h.update(b"<none>")
+        return f"{arr.dtype.str}{arr.shape}".encode() + arr.tobytes()
+    if isinstance(value, (bool, int, np.integer)):
+        return np.int64(value).tobytes()
+    if isinstance(value, (float, np.floating)):
+        return portable_floats(np.float64(value)).tobytes()
+    if isinstance(value, str):
+        return value.encode()
+    if value is None:
+        return b"<none>"
+    return None
+
+
+def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: list | None = None) -> None:
+    """Hash ``value`` under ``name``; with ``leaves``, also append (path, 8-byte hash) per leaf.
+
+    The bytes fed to ``h`` do not depend on ``leaves``: recording per-field hashes leaves the digest as it is.
+    """
+    h.update(name.encode() + b"\0")
+    leaf = _leaf_bytes(value)
+    if leaf is not None:
+        h.update(leaf)
+        if leaves is not None:
+            leaves.append((path, hashlib.blake2b(leaf, digest_size=8).digest(), _small(value)))
     elif dataclasses.is_dataclass(value):
         for f in dataclasses.fields(value):
-            _feed(h, f.name, getattr(value, f.name))
+            _feed(h, f.name, getattr(value, f.name), _join(path, f.name), leaves)
     elif isinstance(value, (tuple, list)):
         h.update(np.int64(len(value)).tobytes())
+        if leaves is not None:
+            leaves.append((_join(path, "len"), np.int64(len(value)).tobytes(), np.array([len(value)], np.float64)))
         for i, item in enumerate(value):
-            _feed(h, str(i), item)
+            _feed(h, str(i), item, _join(path, str(i)), leaves)
     elif isinstance(value, dict):
         for key in sorted(value):
-            _feed(h, str(key), value[key])
+            _feed(h, str(key), value[key], _join(path, str(key)), leaves)
     else:
-        raise TypeError(f"cannot digest {type(value).__name__} in field {name}")
+        raise TypeError(f"cannot digest {type(value).__name__} in field {path or name}")
+
+
+SMALL = 32  # numeric fields of at most this many elements keep their values beside their hash
+
+
+def _small(value: Any) -> np.ndarray | None:
+    """A numeric leaf of ≤ SMALL elements as float64 (kept so ``diff`` can give max |Δ|), else None."""
+    if isinstance(value, (str, type(None))):
+        return None
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "biuf" or arr.size > SMALL:
+        return None
+    return arr.astype(np.float64).ravel()
+
+
+def _join(path: str, name: str) -> str:
+    return f"{path}.{name}" if path else name
+
+
+def leaf_values(value: Any, path: str = "") -> Iterator[tuple[str, Any]]:
+    """(path, value) of every leaf, in the order and with the paths the per-field hashes use."""
+    if _leaf_bytes(value) is not None:
+        yield path, value
+    elif dataclasses.is_dataclass(value):
+        for f in dataclasses.fields(value):
+            yield from leaf_values(getattr(value, f.name), _join(path, f.name))
+    elif isinstance(value, (tuple, list)):
+        yield _join(path, "len"), len(value)
+        for i, item in enumerate(value):
+            yield from leaf_values(item, _join(path, str(i)))
+    elif isinstance(value, dict):
+        for key in sorted(value):
+            yield from leaf_values(value[key], _join(path, str(key)))
+    else:
+        raise TypeError(f"cannot digest {type(value).__name__} in field {path}")
+
+
+class FrameDigests:
+    """Per-frame, per-field hashes of a replay, recorded beside the digest (which they leave unchanged).
+
+    Each frame keeps its field paths (one interned tuple shared by frames with the same layout), the
+    concatenated 8-byte blake2b hashes of the fields, and the values of small numeric fields (≤ SMALL
+    elements: track states, filter states, velocities) as one float64 blob, so memory stays small.
+    Paths are ``intermediates.<field>…`` and ``states.<i>.<field>`` (``states.len`` the track count).
+    """
+
+    def __init__(self) -> None:
+        self.frames: list[int] = []
+        self._paths: list[tuple[str, ...]] = []
+        self._hashes: list[bytes] = []
+        self._sizes: list[tuple[int, ...]] = []  # per field: number of kept values, -1 for none
+        self._values: list[bytes] = []
+        self._layouts: dict[tuple, tuple] = {}
+
+    def add(self, index: int, leaves: list[tuple[str, bytes, np.ndarray | None]]) -> None:
+        paths = tuple(p for p, _, _ in leaves)
+        sizes = tuple(-1 if v is None else v.size for _, _, v in leaves)
+        self.frames.append(index)
+        self._paths.append(self._layouts.setdefault(paths, paths))
+        self._sizes.append(self._layouts.setdefault(sizes, sizes))
+        self._hashes.append(b"".join(d for _, d, _ in leaves))
+        self._values.append(b"".join(v.tobytes() for _, _, v in leaves if v is not None))
+
+    def values(self, i: int) -> dict[str, np.ndarray]:
+        """Field path -> kept values (flattened float64) of the i-th recorded frame."""
+        flat = np.frombuffer(self._values[i], dtype=np.float64)
+        out, at = {}, 0
+        for path, n in zip(self._paths[i], self._sizes[i]):
+            if n >= 0:
+                out[path] = flat[at:at + n]
+                at += n
+        return out
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def fields(self, i: int) -> dict[str, str]:
+        """Field path -> hex hash of the i-th recorded frame."""
+        blob = self._hashes[i]
+        return {p: blob[8 * k:8 * k + 8].hex() for k, p in enumerate(self._paths[i])}
+
+    def table(self) -> pl.DataFrame:
+        """Long table (the sidecar): frame, field, hash (hex), values (kept values or null), one row per field per frame."""
+        frames, fields, hashes, values = [], [], [], []
+        for i, index in enumerate(self.frames):
+            kept = self.values(i)
+            for path, digest in self.fields(i).items():
+                frames.append(index)
+                fields.append(path)
+                hashes.append(digest)
+                values.append(kept[path].tolist() if path in kept else None)
+        return pl.DataFrame({"frame": frames, "field": fields, "hash": hashes, "values": values},
+                            schema={"frame": pl.Int64, "field": pl.String, "hash": pl.String, "values": pl.List(pl.Float64)})
+
+    @classmethod
+    def from_table(cls, table: pl.DataFrame) -> FrameDigests:
+        out = cls()
+        if "values" not in table.columns:
+            table = table.with_columns(pl.lit(None, dtype=pl.List(pl.Float64)).alias("values"))
+        for (index,), part in table.group_by("frame", maintain_order=True):
+            out.add(int(index), [(f, bytes.fromhex(h), None if v is None else np.asarray(v, np.float64))
+                                 for f, h, v in zip(part["field"], part["hash"], part["values"])])
+        return out
+
+
+_FRAME_ROOTS = {"0": "intermediates", "1": "states"}
+
+
+def _frame_path(path: str) -> str:
+    """``0.particles.weights`` -> ``intermediates.particles.weights``, ``1.0.x`` -> ``states.0.x``."""
+    root, _, rest = path.partition(".")
+    return _join(_FRAME_ROOTS.get(root, root), rest)
 
 
 class ReplayDigest:
     """Accumulates per-frame outputs in replay order; ``finish`` adds the trajectory table."""
 
-    def __init__(self) -> None:
+    def __init__(self, per_frame: bool = False) -> None:
         self._h = hashlib.sha256(b"trackreplay-digest-v2")
+        self.frames: FrameDigests | None = FrameDigests() if per_frame else None
 
     def add_frame(self, index: int, intermediates: Any) -> None:
-        _feed(self._h, f"frame{index}", intermediates)
+        """Hash one frame's outputs; with ``per_frame``, also record its per-field hashes.
+
+        ``intermediates`` is what the engine passes: the tuple ``(intermediates, states)``, whose
+        fields are recorded as ``intermediates.…`` and ``states.…``.
+        """
+        if self.frames is None:
+            _feed(self._h, f"frame{index}", intermediates)
+            return
+        leaves: list[tuple[str, bytes, np.ndarray | None]] = []
+        _feed(self._h, f"frame{index}", intermediates, "", leaves)
+        self.frames.add(index, [(_frame_path(p), d, v) for p, d, v in leaves if p != "len"])
 
     def finish(self, table: pl.DataFrame) -> str:
         self._h.update(canonical_bytes(table, float_bytes=lambda v: portable_floats(v).tobytes()))

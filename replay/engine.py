@@ -28,8 +28,8 @@ import polars as pl
 from tqdm import tqdm
 
 from trackreplay.replay import registry
-from trackreplay.replay.config import ConfigSource, load_config
-from trackreplay.replay.digest import ReplayDigest
+from trackreplay.replay.config import ConfigSource, config_to_dict, load_config
+from trackreplay.replay.digest import FrameDigests, ReplayDigest
 from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
@@ -69,12 +69,15 @@ class ReplayResult:
     report: BundleReport = field(default_factory=BundleReport)
     rrd: Path | None = None
     notices: tuple[str, ...] = ()  # each distinct tracker notice, in the order first seen
+    config: Any = None  # the tracker's config as replayed (its dataclass)
+    frame_digests: FrameDigests | None = None  # per-frame, per-field hashes (``trackreplay diff``)
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
             "log": str(log),
             "tracker": self.tracker,
             "seed": self.seed,
+            "config": None if self.config is None else config_to_dict(self.config),
             "digest": self.digest,
             "frames": self.frames,
             "rows": self.trajectory.height,
@@ -145,7 +148,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
         from trackreplay.replay.rerun_sink import RerunSink
 
         sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker))
-    digest = ReplayDigest()
+    digest = ReplayDigest(per_frame=True)
     rows: list[tuple] = []
     notices: list[str] = []
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
@@ -169,4 +172,4 @@ def replay(req: ReplayRequest) -> ReplayResult:
     seconds = time.perf_counter() - started
     table = trajectory_table(rows)
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
-                        req.rrd, tuple(notices))
+                        req.rrd, tuple(notices), steps.config, digest.frames)

@@ -38,7 +38,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the export (default linear)")
     p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
-    p.add_argument("--summary", type=Path, help="write a JSON summary (digest, frames, timings)")
+    p.add_argument("--summary", type=Path, help="write a JSON summary (digest, frames, timings; per-frame digests "
+                   "beside it as SUMMARY.frames.parquet, for trackreplay diff)")
     p.add_argument("--expect-digest", help="fail unless the replay's digest equals this hex string")
     p.set_defaults(func=run)
     return p
@@ -60,7 +61,10 @@ def run(args: argparse.Namespace) -> int:
         table = result.trajectory if args.interpolate == "none" else fill_gaps(result.trajectory, args.interpolate, args.max_gap)
         write_trajectory(table, args.export)
     summary = result.summary(args.log)
-    if args.summary:
+    if args.summary:  # the per-frame digests go beside it, for `trackreplay diff`
+        from trackreplay.replay.diff import sidecar_path, write_sidecar
+
+        summary["frame_digests"] = write_sidecar(result.frame_digests, sidecar_path(args.summary)).name
         args.summary.parent.mkdir(parents=True, exist_ok=True)
         args.summary.write_text(json.dumps(summary, indent=2) + "\n")
     print(f"{result.tracker}: {result.frames} frames, digest {result.digest}")

@@ -1,0 +1,113 @@
+"""Parameter grids for ``trackreplay batch`` and ``diff``: seeds, ``--set key=v1,v2`` and config merging.
+
+Values are TOML values (``500``, ``0.5``, ``true``, ``"ptz"``, ``[1.0, 0.0]``); a bare word that is
+not TOML is a string. A key path may start with the tracker's table name (``golf.particles.n``)
+or not (``particles.n``). The merged config is checked by :func:`replay.config.load_config`, so an
+unknown key is an error naming its full path before any replay starts.
+"""
+
+from __future__ import annotations
+
+import copy
+import itertools
+import tomllib
+from pathlib import Path
+from typing import Any
+
+from trackreplay.replay.config import read_toml
+from trackreplay.schemas.errors import TrackreplayError
+
+
+def parse_value(text: str) -> Any:
+    text = text.strip()
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def _split_values(text: str) -> list[str]:
+    """Split on commas outside brackets and quotes: ``1,2`` -> 2 values, ``[1,2],[3,4]`` -> 2 values."""
+    parts, depth, quote, cur = [], 0, "", []
+    for ch in text:
+        if quote:
+            quote = "" if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append("".join(cur))
+            cur = []
+            continue
+        cur.append(ch)
+    parts.append("".join(cur))
+    return [p for p in parts if p.strip()]
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """``key=value`` -> (key, parsed value)."""
+    key, eq, value = text.partition("=")
+    if not eq or not key.strip():
+        raise TrackreplayError(f"--set {text!r}: expected KEY=VALUE, e.g. golf.particles.n=500")
+    return key.strip(), parse_value(value)
+
+
+def parse_set(text: str) -> tuple[str, list[Any]]:
+    """``golf.particles.n=500,1000`` -> ("golf.particles.n", [500, 1000])."""
+    key, eq, values = text.partition("=")
+    if not eq or not key.strip() or not values.strip():
+        raise TrackreplayError(f"--set {text!r}: expected KEY=V1[,V2...], e.g. golf.particles.n=500,1000")
+    return key.strip(), [parse_value(v) for v in _split_values(values)]
+
+
+def parse_seeds(text: str) -> list[int]:
+    """``0-9``, ``1,5,7`` or ``0-3,10`` -> the seeds in order, without repeats."""
+    seeds: list[int] = []
+    for part in _split_values(text):
+        lo, dash, hi = part.strip().partition("-")
+        try:
+            rng = range(int(lo), int(hi) + 1) if dash else [int(lo)]
+        except ValueError:
+            raise TrackreplayError(f"--seeds {text!r}: expected N, N-M or a comma list of them") from None
+        if dash and int(hi) < int(lo):
+            raise TrackreplayError(f"--seeds {text!r}: range {part} is empty")
+        seeds += [s for s in rng if s not in seeds]
+    if not seeds:
+        raise TrackreplayError(f"--seeds {text!r}: no seeds")
+    return seeds
+
+
+def grid(sets: list[str]) -> list[dict[str, Any]]:
+    """The cross product of ``--set`` options: one dict (key path -> value) per combination."""
+    parsed = [parse_set(s) for s in sets]
+    keys = [k for k, _ in parsed]
+    dupes = sorted({k for k in keys if keys.count(k) > 1})
+    if dupes:
+        raise TrackreplayError(f"--set {dupes[0]} given twice; list its values once, comma-separated")
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in parsed))]
+
+
+def apply_sets(tracker: str, base: str | Path | dict | None, sets: dict[str, Any]) -> dict[str, Any]:
+    """The tracker's config as a nested dict: ``base`` (TOML path, dict or None) with ``sets`` applied."""
+    if base is None:
+        config: dict[str, Any] = {}
+    elif isinstance(base, dict):
+        config = copy.deepcopy(base)
+    else:
+        data = read_toml(base)
+        config = copy.deepcopy(data[tracker]) if isinstance(data.get(tracker), dict) else data
+    for key, value in sets.items():
+        path = key.split(".")
+        if len(path) > 1 and path[0] == tracker:
+            path = path[1:]
+        node = config
+        for i, part in enumerate(path[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                raise TrackreplayError(f"--set {key}: {'.'.join(path[:i + 1])} is a value, not a table")
+            node = child
+        node[path[-1]] = value
+    return config

@@ -1,0 +1,61 @@
+"""`trackreplay batch LOG… --tracker NAME`: logs × seeds × --set values, one replay per Ray task."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from trackreplay.replay import registry
+from trackreplay.replay.batch import BatchOptions, format_table, plan, run_ray, run_serial, summary_table
+from trackreplay.replay.batch_config import grid, parse_seeds
+from trackreplay.replay.export import METHODS
+
+FAILED = 1  # some task failed (its row says why); the others' outputs are written
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser(
+        "batch", help="replay many logs × seeds × parameter values on Ray (local cores or a cluster)",
+        description="Runs the cross product of LOGs, --seeds and every --set value, one replay per Ray task. "
+                    "Writes OUT/tasks/<task>/{trajectory.parquet,summary.json,summary.frames.parquet[,replay.rrd]} "
+                    "and OUT/summary.parquet (one row per task: log, tracker, seed, parameters, digest, frames, "
+                    "seconds, eval metrics where the log has ground truth, status, error), and prints the table. "
+                    "Exit 0 when every task succeeded, 1 when some failed. See docs/batch.md for clusters.")
+    p.add_argument("logs", nargs="+", type=Path, metavar="LOG")
+    p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
+    p.add_argument("--seeds", default="0", help="seeds: N, N-M or a comma list (default 0)")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=V1[,V2…]",
+                   help="config values to sweep, e.g. golf.particles.n=500,1000 (repeat for a cross product)")
+    p.add_argument("--config", type=Path, help="base tracker config TOML that --set values override")
+    p.add_argument("--out", type=Path, default=Path("batch-out"), help="output folder (default batch-out)")
+    p.add_argument("--rrd", action="store_true", help="also write each replay's .rrd")
+    p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the trajectories")
+    p.add_argument("--max-gap", type=int, default=15)
+    p.add_argument("--address", help="join this Ray cluster (auto, ray://head:10001, …); default: a local Ray on this machine")
+    p.add_argument("--workers", type=int, help="CPUs of the local Ray (default: all cores)")
+    p.add_argument("--ship-logs", action="store_true",
+                   help="send logs to the tasks through Ray's object store and outputs back to this machine "
+                        "(nodes without shared storage); default: by path")
+    p.add_argument("--serial", action="store_true", help="no Ray: run the replays one by one in this process")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    tasks = plan(args.logs, args.tracker, parse_seeds(args.seeds), grid(args.sets), args.config)
+    out = args.out.resolve()
+    out.mkdir(parents=True, exist_ok=True)
+    opts = BatchOptions(out=out, rrd=args.rrd, interpolate=args.interpolate, max_gap=args.max_gap)
+    progress = not args.quiet and sys.stderr.isatty()
+    if args.serial:
+        rows = run_serial(tasks, opts, progress)
+    else:
+        rows = run_ray(tasks, opts, address=args.address, workers=args.workers, ship_logs=args.ship_logs, progress=progress)
+    table = summary_table(rows, tasks)
+    table.write_parquet(out / "summary.parquet")
+    print(format_table(table))
+    failed = table.filter(table["status"] == "error").height
+    print(f"{table.height - failed} of {table.height} replays done; summary {out / 'summary.parquet'}")
+    return FAILED if failed else 0

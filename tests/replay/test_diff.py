@@ -1,0 +1,100 @@
+"""trackreplay diff: first diverging frame and field, from live runs and from summaries' sidecars."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from trackreplay.replay.cli import main
+from trackreplay.replay.digest import ReplayDigest, _frame_path, leaf_values
+from trackreplay.replay.diff import RunSpec, diff_runs, sidecar_path
+from trackreplay.replay.engine import ReplayRequest, iter_steps, replay
+
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
+GOLF = GOLDEN / "golf-teeshot-640x360.mcap"
+
+
+def _outputs(req: ReplayRequest) -> list[tuple[int, dict]]:
+    return [(s.frame.index, {_frame_path(p): v for p, v in leaf_values((s.intermediates, s.states)) if p != "len"})
+            for s in iter_steps(req)]
+
+
+def _same(a, b) -> bool:
+    if isinstance(a, str) or a is None or isinstance(b, str) or b is None:
+        return a == b
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and np.array_equal(a, b, equal_nan=a.dtype.kind == "f")
+
+
+def test_per_frame_recording_leaves_the_digest_unchanged(short_sim: Path) -> None:
+    plain, recorded = ReplayDigest(), ReplayDigest(per_frame=True)
+    result = replay(ReplayRequest(log=short_sim, tracker="flow"))
+    for step in iter_steps(ReplayRequest(log=short_sim, tracker="flow")):
+        plain.add_frame(step.frame.index, (step.intermediates, step.states))
+        recorded.add_frame(step.frame.index, (step.intermediates, step.states))
+    assert plain.finish(result.trajectory) == recorded.finish(result.trajectory) == result.digest
+    assert len(result.frame_digests) == result.frames
+    assert result.frame_digests.table()["frame"].unique().len() == result.frames
+
+
+def test_identical_runs(short_sim: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["diff", str(short_sim), str(short_sim), "--tracker", "flow"]) == 0
+    digest = replay(ReplayRequest(log=short_sim, tracker="flow")).digest
+    assert capsys.readouterr().out.strip() == f"identical: 12 frames, digest {digest}"
+
+
+def test_a_perturbed_config_is_pinpointed() -> None:
+    """golf with max_predicted_frames=1 reports a miss as lost a frame earlier: the diff must name
+    that frame and field, and everything before it must really be equal."""
+    a = RunSpec(GOLF, "golf")
+    b = RunSpec(GOLF, "golf", config={"max_predicted_frames": 1})
+    result = diff_runs(a, b)
+    assert not result.identical and result.frame is not None
+    out_a = _outputs(ReplayRequest(log=GOLF, tracker="golf"))
+    out_b = _outputs(ReplayRequest(log=GOLF, tracker="golf", config=b.config))
+    first = next(i for (i, va), (_, vb) in zip(out_a, out_b) if va.keys() != vb.keys() or not all(_same(va[k], vb[k]) for k in va))
+    assert result.frame == first
+    va, vb = out_a[first][1], out_b[first][1]
+    differing = [k for k in va if not _same(va[k], vb.get(k))]
+    assert [f.field for f in result.fields][:len(differing)] == differing
+    status = next(f for f in result.fields if f.field == "states.0.status")
+    assert "'predicted' vs 'lost'" in status.note
+    assert result.trajectory_diverges and result.trajectory_equal_until == first - 1
+    assert result.report().startswith(f"frame {first}: ")
+
+
+def test_a_different_seed_via_the_cli_exits_non_zero(capsys: pytest.CaptureFixture) -> None:
+    assert main(["diff", str(GOLF), str(GOLF), "--tracker", "golf", "--b", "seed=1"]) == 1
+    first = capsys.readouterr().out.splitlines()[0]
+    assert first.startswith("frame 0: ") and "max |Δ|" in first
+
+
+def test_summaries_and_their_sidecars(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    expected = json.loads((GOLDEN / "expected.json").read_text())["golf"]["digest"]
+    a, b, c = tmp_path / "a.json", tmp_path / "b.json", tmp_path / "c.json"
+    assert main(["replay", str(GOLF), "--tracker", "golf", "--quiet", "--summary", str(a)]) == 0
+    assert main(["replay", str(GOLF), "--tracker", "golf", "--quiet", "--summary", str(c)]) == 0
+    assert main(["replay", str(GOLF), "--tracker", "golf", "--quiet", "--seed", "1", "--summary", str(b)]) == 0
+    summary = json.loads(a.read_text())
+    assert summary["digest"] == expected  # the sidecar leaves the digest alone
+    assert summary["frame_digests"] == sidecar_path(a).name and sidecar_path(a).exists()
+    assert summary["config"]["particles"]["n"] == 1000
+    capsys.readouterr()
+    assert main(["diff", str(a), str(c)]) == 0
+    assert capsys.readouterr().out.startswith("identical: 60 frames")
+    assert main(["diff", str(a), str(b)]) == 1
+    report = capsys.readouterr().out
+    assert report.startswith("frame 0: ") and "states.0.vx differ, max |Δ|" in report  # small fields keep values
+    # a summary against a live run of the same log
+    assert main(["diff", str(b), str(GOLF), "--tracker", "golf", "--b", "seed=1"]) == 0
+
+
+def test_a_summary_without_sidecar_is_a_clear_error(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    s = tmp_path / "s.json"
+    s.write_text(json.dumps({"digest": "00", "frames": 1}))
+    assert main(["diff", str(s), str(s)]) == 2
+    assert "no per-frame digests" in capsys.readouterr().err
+    assert main(["diff", str(tmp_path / "x.txt"), str(s)]) == 2
