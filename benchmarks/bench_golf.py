@@ -29,32 +29,35 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
 from trackreplay.replay.bench import median_seconds  # noqa: E402
-from trackreplay.replay.engine import tracker_rng  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
-from trackreplay.trackers.golf.particles import CondensationFilter  # noqa: E402
-from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.trackers.filters.particles import ParticleFilter  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig, ParticleConfig  # noqa: E402
+from trackreplay.trackers.golf.particles import DIM, likelihood, motion, spread_sigma, state  # noqa: E402
 
 
 def per_frame_costs(log: Path) -> dict:
-    cv2.setNumThreads(1)
-    reader = LogReader(log)
-    topics = FrameTopics.detect(reader)
-    tracker = GolfTracker(GolfConfig(), tracker_rng(0, "golf"))
-    tracker.prepare(marked_images(reader, topics))
-    steps, decodes = [], []
-    for frame in iter_frames(reader, topics):
-        buf = np.frombuffer(frame.encoded, np.uint8)
+    """The engine's replay loop (:func:`iter_steps`, prefetch off so no reader thread competes),
+    with the tracker's ``step`` timed alone and the same frame's JPEG decoded again to compare."""
+    steps = iter_steps(ReplayRequest(log=log, tracker="golf", config=GolfConfig(), prefetch=0))
+    step_seconds: list[float] = []
+    inner = steps.tracker.step
+
+    def timed_step(frame):
+        start = time.perf_counter()
+        out = inner(frame)
+        step_seconds.append(time.perf_counter() - start)
+        return out
+
+    steps.tracker.step = timed_step
+    decodes = []
+    for step in steps:
+        buf = np.frombuffer(step.frame.encoded, np.uint8)
         start = time.perf_counter()
         cv2.imdecode(buf, cv2.IMREAD_COLOR)
         decodes.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        tracker.step(frame)
-        steps.append(time.perf_counter() - start)
-    steps_ms, decodes_ms = np.array(steps) * 1e3, np.array(decodes) * 1e3
+    steps_ms, decodes_ms = np.array(step_seconds) * 1e3, np.array(decodes) * 1e3
     return {
-        "frames": len(steps),
+        "frames": len(step_seconds),
         "step_ms": {"median": float(np.median(steps_ms)), "mean": float(steps_ms.mean()),
                     "p90": float(np.percentile(steps_ms, 90)), "max": float(steps_ms.max())},
         "decode_ms": {"median": float(np.median(decodes_ms)), "mean": float(decodes_ms.mean())},
@@ -64,16 +67,21 @@ def per_frame_costs(log: Path) -> dict:
 
 
 def particle_scaling(counts: list[int], repeats: int) -> list[dict]:
+    """One CONDENSATION step on the shared :class:`ParticleFilter` with golf's models: select
+    (systematic resampling), predict (eq. (1)), measure against 3 candidates (eq. (2)), estimate (eq. (3))."""
     candidates = np.array([[640.0, 360.0], [700.0, 300.0], [100.0, 600.0]])
+    cfg = ParticleConfig()
+    transition = motion(cfg, 1.0, damp=False, steps=1)
+    measure = likelihood(candidates, cfg.sigma_px, cfg.alpha)
     rows = []
     for n in counts:
-        pf = CondensationFilter(n, np.random.default_rng(0))
-        pf.initialise(np.array([640.0, 360.0]), 5.0, 3.0)
+        pf = ParticleFilter(n, DIM, np.random.default_rng(0))
+        pf.initialise(state(np.array([640.0, 360.0])), spread_sigma(5.0, 3.0))
 
         def one_step() -> None:
-            pf.select()
-            pf.predict(2.0, 1.5)
-            pf.measure(candidates, 6.0, 0.002)
+            pf.resample()
+            pf.predict(transition)
+            pf.weigh(measure)
             pf.estimate()
 
         seconds = median_seconds(lambda: [one_step() for _ in range(20)], repeats) / 20

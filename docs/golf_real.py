@@ -32,11 +32,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from trackreplay.replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
-from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, iter_steps, replay  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig, ReinitConfig  # noqa: E402
 
 CLIP_DIR = ROOT.parent / "shared" / "data" / "real" / "golf_broadcast_approach"
 VIDEO = CLIP_DIR / "demo.mp4"
@@ -100,35 +97,33 @@ def segments(j: pl.DataFrame) -> list[tuple[int, int, str, float, float]]:
 
 
 def step_through(log: Path, ref: pl.DataFrame) -> tuple[dict[int, dict], tuple[str, ...]]:
-    """The same run as the CLI (same seed), keeping per frame what the pictures and the text need:
-    status, re-initialisation, gate targets, particle spread and mean, and the blob nearest to the
-    reference centre (area, circularity, gate verdict)."""
+    """The same run as the CLI (the engine's own loop, same seed), keeping per frame what the
+    pictures and the text need: status, re-initialisation, gate targets, particle spread and
+    predicted mean, and the blob nearest to the reference centre (area, circularity, gate verdict)."""
     where = {int(r["frame"]): (r["x"], r["y"]) for r in ref.iter_rows(named=True)}
-    reader = LogReader(log)
-    topics = FrameTopics.detect(reader)
-    config = GolfConfig()
-    tracker = GolfTracker(config, tracker_rng(0, "golf"))
-    tracker.prepare(marked_images(reader, topics))
     keep: dict[int, dict] = {}
-    for frame in iter_frames(reader, topics):
-        states = tracker.step(frame)
-        im = tracker.intermediates
-        row = {"status": states[0].status if states else None, "reinit": im.reinit, "blobs": len(im.blobs),
-               "target_area": float(im.targets[0]), "target_circ": float(im.targets[1]),
-               "spread": float(np.max(im.spread)) if im.spread.size else np.nan, "ball_blob": None, "cloud_off": np.nan}
+    steps = iter_steps(ReplayRequest(log=log, tracker="golf", config=GolfConfig()))
+    for step in steps:
+        frame, states, im = step.frame, step.states, step.intermediates
+        gated, search = im.blobs, im.search
+        row = {"status": states[0].status if states else None, "reinit": im.reinit.kind, "blobs": len(gated.blobs),
+               "target_area": float(gated.targets[0]), "target_circ": float(gated.targets[1]),
+               "spread": float(np.max(search.spread)) if np.isfinite(search.spread).all() else np.nan,
+               "ball_blob": None, "cloud_off": np.nan}
         if frame.index in where and states:
             rx, ry = where[frame.index]
-            row["cloud_off"] = float(np.hypot(im.predicted[0] - rx, im.predicted[1] - ry))
-            if len(im.blobs):
-                near = int(np.argmin(np.hypot(im.blobs[:, 0] - rx, im.blobs[:, 1] - ry)))
-                b = im.blobs[near]
-                if np.hypot(b[0] - rx, b[1] - ry) <= 3:
-                    row["ball_blob"] = (float(b[2]), float(b[3]), im.blob_reasons[int(b[5])])
+            row["cloud_off"] = float(np.hypot(search.centre[0] - rx, search.centre[1] - ry))
+            if len(gated.blobs):
+                c = gated.blobs.centroid
+                near = int(np.argmin(np.hypot(c[:, 0] - rx, c[:, 1] - ry)))
+                if np.hypot(c[near, 0] - rx, c[near, 1] - ry) <= 3:
+                    row["ball_blob"] = (float(gated.blobs.area[near]), float(gated.blobs.circularity[near]),
+                                        gated.reasons[int(gated.reason[near])])
         if frame.index in SHEET_FRAMES:
-            row.update(image=frame.image.copy(), silhouette=im.silhouette.copy(), offset=im.silhouette_offset.copy(),
+            row.update(image=frame.image.copy(), silhouette=im.silhouette.mask.copy(), offset=im.silhouette.offset.copy(),
                        est=None if not states or states[0].x is None else (states[0].x, states[0].y))
         keep[frame.index] = row
-    return keep, tracker.luts.names
+    return keep, steps.tracker.luts.names
 
 
 def contact_sheet(steps: dict[int, dict], j: pl.DataFrame, path: Path) -> tuple[int, int, int]:
@@ -234,7 +229,7 @@ def main() -> int:
             raise SystemExit("the step-through differs from the CLI replay")
         variants = []
         for label, reinit, lost in CONFIGS:
-            res = replay(ReplayRequest(log=marked, tracker="golf", config=GolfConfig(landing_reinit=reinit, lost_search=lost)))
+            res = replay(ReplayRequest(log=marked, tracker="golf", config=GolfConfig(reinit=ReinitConfig(landing=reinit, lost=lost))))
             variants.append((label, compare(res.trajectory, ref), res.digest))
         sheet = contact_sheet(steps, j, HERE / "golf_real_frames.png")
     error_plot(j, HERE / "golf_real_error.png")

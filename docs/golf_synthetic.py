@@ -39,17 +39,16 @@ import polars as pl  # noqa: E402
 
 from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, replay, tracker_rng  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, iter_steps, replay  # noqa: E402
 from trackreplay.replay.eval import evaluate  # noqa: E402
 from trackreplay.replay.export import fill_gaps, write_trajectory  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames, marked_images  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.replay.overlay import project_trajectory  # noqa: E402
 from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
 from trackreplay.schemas import topics as T  # noqa: E402
 from trackreplay.schemas.records import LensTable  # noqa: E402
-from trackreplay.trackers.golf.config import GolfConfig  # noqa: E402
-from trackreplay.trackers.golf.tracker import GolfTracker  # noqa: E402
+from trackreplay.trackers.golf.config import GolfConfig, ReinitConfig  # noqa: E402
 
 DETECT_PX = 5.0  # "detected": measured within this distance of the true centre
 FILLED_PX = 10.0  # completeness after gap filling: a position within this distance
@@ -141,31 +140,31 @@ def run_metrics(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray, landin
     return m, frames
 
 
+def config_for(reinit: bool, lost: str) -> GolfConfig:
+    """The default configuration with the landing re-initialisation on/off and the lost search."""
+    return GolfConfig(reinit=ReinitConfig(landing=reinit, lost=lost))
+
+
 def landing_events(log: Path, config: GolfConfig, gt: pl.DataFrame, info: dict) -> dict:
-    """Step the tracker as the engine does (same seed) and read its intermediates at the landing.
+    """Replay step by step (the engine's own loop, same seed) and read the intermediates at the landing.
 
     Returns the frames of the EKF / parabola re-initialisations with the distance from the
     re-initialisation point to the true ball, the EKF's last predicted ground contact before the
     landing vs the true landing point (m), and the per-frame status (to check it is the replay's)."""
-    reader = LogReader(log)
-    topics = FrameTopics.detect(reader)
-    tracker = GolfTracker(config, tracker_rng(0, "golf"))
-    tracker.prepare(marked_images(reader, topics))
     truth = {int(r["frame"]): r for r in gt.iter_rows(named=True)}
     events, statuses, contact = [], {}, None
     land = info["landing_frame"]
-    for frame in iter_frames(reader, topics):
-        states = tracker.step(frame)
-        im = tracker.intermediates
-        statuses[frame.index] = states[0].status if states else None
-        if im.reinit in ("ekf_landing", "image_parabola"):
-            t = truth.get(frame.index)
+    for step in iter_steps(ReplayRequest(log=log, tracker="golf", config=config)):
+        index, im = step.frame.index, step.intermediates
+        statuses[index] = step.states[0].status if step.states else None
+        if im.reinit.kind in ("ekf_landing", "image_parabola"):
+            t = truth.get(index)
             d = None
             if t is not None and t["x"] is not None:
-                d = float(np.hypot(im.reinit_point[0] - t["x"], im.reinit_point[1] - t["y"]))
-            events.append((frame.index, im.reinit, d))
-        if land is not None and frame.index < land and np.isfinite(im.landing_world).all():
-            contact = float(np.linalg.norm(im.landing_world[:2] - np.asarray(info["landing_point"][:2])))
+                d = float(np.hypot(im.reinit.point[0] - t["x"], im.reinit.point[1] - t["y"]))
+            events.append((index, im.reinit.kind, d))
+        if land is not None and index < land and np.isfinite(im.ekf.landing_world).all():
+            contact = float(np.linalg.norm(im.ekf.landing_world[:2] - np.asarray(info["landing_point"][:2])))
     return {"events": events, "contact_error_m": contact, "statuses": statuses}
 
 
@@ -315,13 +314,13 @@ def main() -> int:
             camera = np.array(LensTable.from_pb(reader.first(T.PTZ_LENS_TABLE)).camera_position, float)
             per = {}
             for ckey, _, reinit, lost in CONFIGS:
-                res = replay(ReplayRequest(log=log, tracker="golf", config=GolfConfig(landing_reinit=reinit, lost_search=lost)))
+                res = replay(ReplayRequest(log=log, tracker="golf", config=config_for(reinit, lost)))
                 m, frames = run_metrics(res.trajectory, gt, camera, info["landing_frame"])
                 m["digest"] = res.digest
                 m["fps"] = res.frames / res.seconds if res.seconds > 0 else float("nan")
                 per[ckey] = (m, frames, res.trajectory)
                 if reinit:
-                    ev = landing_events(log, GolfConfig(landing_reinit=reinit, lost_search=lost), gt, info)
+                    ev = landing_events(log, config_for(reinit, lost), gt, info)
                     replayed = dict(zip(res.trajectory["frame"].to_list(), res.trajectory["status"].to_list()))
                     if any(replayed.get(k) != v for k, v in ev["statuses"].items() if v is not None):
                         raise SystemExit(f"{key} {ckey}: the step-by-step run differs from the replay")
