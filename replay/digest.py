@@ -206,6 +206,12 @@ class ReplayDigest:
         _feed(self._h, f"frame{index}", intermediates, "", leaves)
         self.frames.add(index, [(_frame_path(p), d, v) for p, d, v in leaves if p != "len"])
 
+    def add_lost(self, lost: list[tuple[str, int, int]]) -> None:
+        """Frames the replay had to skip ``(topic, index, t_ns)``: a replay of a damaged log never
+        shares the digest of the intact one (nothing is fed when none were lost)."""
+        if lost:
+            _feed(self._h, "lost", [f"{topic}#{index}@{t_ns}" for topic, index, t_ns in lost])
+
     def finish(self, table: pl.DataFrame) -> str:
         self._h.update(canonical_bytes(table, float_bytes=lambda v: portable_floats(v).tobytes()))
         return self._h.hexdigest()

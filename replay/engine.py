@@ -56,6 +56,7 @@ class ReplayRequest:
     progress: bool = False
     opencv_threads: int = 1
     prefetch: int = 4  # frames decoded ahead in a reader thread; 0 = read in the loop
+    strict: bool = False  # a damaged or undecodable frame stops the replay (else it is skipped and reported)
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,8 @@ class ReplayResult:
             },
             "unpaired_images": len(self.report.unpaired),
             "frames_outside_encoder_coverage": len(self.report.outside_encoder_coverage),
+            "frames_lost": [{"topic": x.topic, "index": x.index, "t_ns": x.t_ns, "reason": x.reason}
+                            for x in self.report.lost],
             "rrd": str(self.rrd) if self.rrd else None,
             "notices": list(self.notices),
         }
@@ -122,8 +125,8 @@ class ReplaySteps(Iterator[ReplayStep]):
         self.tracker.prepare(marked_images(reader, topics))  # a no-op for trackers that need no look ahead
         self.report = BundleReport()
         self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)
-        self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report),
-                                req.prefetch)
+        self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report,
+                                            strict=req.strict), req.prefetch)
 
     def __next__(self) -> ReplayStep:
         frame = next(self._frames)
@@ -170,6 +173,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
         if sink is not None:
             sink.close()
     seconds = time.perf_counter() - started
+    digest.add_lost([(x.topic, x.index, x.t_ns) for x in steps.report.lost])
     table = trajectory_table(rows)
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
                         req.rrd, tuple(notices), steps.config, digest.frames)

@@ -101,16 +101,28 @@ class PtzInterpolator:
 def _ptz_stream(reader: LogReader, topic: str, start_ns: int | None) -> Iterator[PtzReading]:
     for item in reader.messages([topic], start_ns=None if start_ns is None else max(0, start_ns - 10**9)):
         if item.lost is None:  # a lost reading leaves a wider bracket; the pose tolerance decides
-            yield PtzReading.from_pb(item.decode())
+            yield _checked(PtzReading.from_pb, item)
 
 
-def read_hints(reader: LogReader, topic: str) -> tuple[InitRegion, ...]:
+def _checked(convert, item: LogMessage):
+    """``convert(decoded message)``, a value it refuses named by file, topic and message index."""
+    try:
+        return convert(item.decode())
+    except ValueError as err:
+        raise LogError(f"{item._path}: message {item.index} on topic {item.topic}: {err}") from None
+
+
+def read_hints(reader: LogReader, topic: str, image_topic: str = T.CAMERA_IMAGE) -> tuple[InitRegion, ...]:
     if topic not in reader.topics():
         return ()
     regions: list[InitRegion] = []
     for item in reader.messages([topic]):
         if item.lost is None:
-            regions.extend(InitRegion.from_pb(r) for r in item.decode().regions)
+            regions.extend(_checked(lambda pb: [InitRegion.from_pb(r) for r in pb.regions], item))
+    images = reader.topics()[image_topic].count if image_topic in reader.topics() else None
+    for region in regions:
+        if images is not None and region.frame >= images:
+            raise LogError(f"{reader.path}: topic {topic} marks frame {region.frame}, but {image_topic} has {images} frames")
     return tuple(regions)
 
 
@@ -131,7 +143,7 @@ def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
     Only those images are decoded; trackers that learn from the marks (the golf LUTs) get them
     all before the first step, wherever the marked frames are in the log.
     """
-    hints = read_hints(reader, topics.hints)
+    hints = read_hints(reader, topics.hints, topics.image)
     by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
         by_frame.setdefault(region.frame, []).append(region)
@@ -166,8 +178,11 @@ def iter_frames(
     report = report if report is not None else BundleReport()
     reader.require(topics.image, *([topics.right] if topics.right else []), *([topics.ptz] if topics.ptz else []))
     lens_pb = reader.first(topics.lens)
-    lens = LensTable.from_pb(lens_pb) if lens_pb is not None else None
-    hints = read_hints(reader, topics.hints)
+    try:
+        lens = LensTable.from_pb(lens_pb) if lens_pb is not None else None
+    except ValueError as err:
+        raise LogError(f"{reader.path}: topic {topics.lens}: {err}") from None
+    hints = read_hints(reader, topics.hints, topics.image)
     hints_by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
         hints_by_frame.setdefault(region.frame, []).append(region)
@@ -191,6 +206,9 @@ def iter_frames(
             if calibration is not None and (calibration.width, calibration.height) != (image.shape[1], image.shape[0]):
                 raise LogError(f"{reader.path}: topic {topics.ground_plane} is for {calibration.width}x{calibration.height} "
                                f"images but {where} is {image.shape[1]}x{image.shape[0]}")
+            if lens is not None and lens.width and lens.height and (lens.width, lens.height) != (image.shape[1], image.shape[0]):
+                raise LogError(f"{reader.path}: topic {topics.lens} is for {lens.width}x{lens.height} images "
+                               f"but {where} is {image.shape[1]}x{image.shape[0]}")
         elif image.shape != shape:
             raise LogError(f"{where} is {image.shape[1]}x{image.shape[0]} but earlier images are {shape[1]}x{shape[0]}")
         return image, encoded, encoding
@@ -235,7 +253,12 @@ def iter_frames(
             return None
 
     if topics.right is None:
+        previous: LogMessage | None = None
         for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
+            if previous is not None and item.lost is None and previous.log_time == item.log_time:
+                raise LogError(f"{reader.path}: messages {previous.index} and {item.index} on topic {item.topic} have "
+                               f"the same log_time {item.log_time}: two frames cannot share a time")
+            previous = item if item.lost is None else previous
             frame = usable(item, None)
             if frame is not None:
                 yield frame

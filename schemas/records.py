@@ -6,6 +6,7 @@ Trackers and the replay layer work with these, never with protobuf objects; the
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from google.protobuf.timestamp_pb2 import Timestamp
@@ -41,7 +42,12 @@ class PtzReading:
 
     @classmethod
     def from_pb(cls, pb) -> PtzReading:
-        return cls(t_ns_of(pb.timestamp), pb.pan, pb.tilt, pb.zoom, pb.focus)
+        """Raises ValueError for a value that is not a finite number."""
+        reading = cls(t_ns_of(pb.timestamp), pb.pan, pb.tilt, pb.zoom, pb.focus)
+        for name in ("pan", "tilt", "zoom", "focus"):
+            if not math.isfinite(getattr(reading, name)):
+                raise ValueError(f"{name} is {getattr(reading, name)}, not a finite number")
+        return reading
 
 
 @dataclass(frozen=True)
@@ -77,8 +83,18 @@ class LensTable:
 
     @classmethod
     def from_pb(cls, pb) -> LensTable:
+        """Raises ValueError for an empty table, a non-finite value or a focal length that is not positive."""
         entries = tuple(LensEntry(e.zoom, e.focus, e.fx, e.fy, e.cx, e.cy) for e in pb.entries)
-        return cls(pb.width, pb.height, entries, (pb.camera_x, pb.camera_y, pb.camera_z))
+        if not entries:
+            raise ValueError("the lens table has no entries")
+        for k, e in enumerate(entries):
+            values = (e.zoom, e.focus, e.fx, e.fy, e.cx, e.cy)
+            if not all(math.isfinite(v) for v in values) or e.fx <= 0 or e.fy <= 0:
+                raise ValueError(f"lens table entry {k} ({', '.join(f'{v:g}' for v in values)}) needs finite values and fx, fy > 0")
+        position = (pb.camera_x, pb.camera_y, pb.camera_z)
+        if not all(math.isfinite(v) for v in position):
+            raise ValueError("the lens table's camera position is not finite")
+        return cls(pb.width, pb.height, entries, position)
 
 
 @dataclass(frozen=True)
@@ -150,7 +166,12 @@ class InitRegion:
 
     @classmethod
     def from_pb(cls, pb) -> InitRegion:
-        return cls(pb.frame, pb.t_ns, pb.x, pb.y, pb.w, pb.h, pb.label)
+        """Raises ValueError for a box that is not finite or not of positive size."""
+        region = cls(pb.frame, pb.t_ns, pb.x, pb.y, pb.w, pb.h, pb.label)
+        if not all(math.isfinite(v) for v in (region.x, region.y, region.w, region.h)) or region.w <= 0 or region.h <= 0:
+            raise ValueError(f"the box on frame {region.frame} (centre {region.x:g},{region.y:g}, size {region.w:g}x{region.h:g}) "
+                             "is not a finite box of positive size")
+        return region
 
 
 def init_annotations_pb(regions: tuple[InitRegion, ...] | list[InitRegion], t_ns: int) -> m.InitAnnotations:

@@ -15,6 +15,10 @@ from trackreplay.replay.engine import ReplayRequest, replay
 from trackreplay.replay.export import METHODS, fill_gaps, write_trajectory
 
 
+# The replay finished but skipped damaged or undecodable frames (docs/exit_codes.md).
+DAMAGED_INPUT = 7
+
+
 class DigestMismatch(TrackreplayError):
     exit_code = 4
 
@@ -27,6 +31,8 @@ def add_replay_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start", type=non_negative_float, help="start, seconds from the log's first message")
     p.add_argument("--end", type=non_negative_float, help="end (exclusive), seconds from the log's first message")
     p.add_argument("--opencv-threads", type=positive_int, default=1, help="OpenCV threads (results do not depend on it)")
+    p.add_argument("--strict", action="store_true",
+                   help="stop at the first damaged or undecodable frame (default: skip it, warn, exit 7)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -51,7 +57,7 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
     return ReplayRequest(
         log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
-        progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads,
+        progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads, strict=args.strict,
     )
 
 
@@ -72,4 +78,24 @@ def run(args: argparse.Namespace) -> int:
         print(f"warning: {len(result.report.outside_encoder_coverage)} frames outside encoder coverage", file=sys.stderr)
     if args.expect_digest and args.expect_digest.lower() != result.digest:
         raise DigestMismatch(f"digest mismatch for {args.log}: expected {args.expect_digest.lower()}, got {result.digest}")
+    if result.report.lost:
+        print(f"warning: {lost_frames_sentence(args.log, result.report.lost)}", file=sys.stderr)
+        return DAMAGED_INPUT
     return 0
+
+
+def lost_frames_sentence(log: Path, lost: list) -> str:
+    """One sentence: how many frames were skipped, which, and the first reason."""
+    indexes = [x.index for x in lost]
+    runs: list[str] = []
+    start = prev = indexes[0]
+    for i in indexes[1:] + [None]:
+        if i is not None and i == prev + 1:
+            prev = i
+            continue
+        runs.append(str(start) if start == prev else f"{start}-{prev}")
+        if i is not None:
+            start = prev = i
+    shown = ", ".join(runs[:6]) + (f" and {len(runs) - 6} more runs" if len(runs) > 6 else "")
+    return (f"{log}: {len(lost)} frame(s) could not be read and were skipped (the tracker predicted across them): "
+            f"frames {shown}; first cause: {lost[0].reason}")

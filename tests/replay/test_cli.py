@@ -93,6 +93,9 @@ def test_truncated_and_corrupt_logs(flow_sim1: Path, tmp_path: Path, capsys: pyt
     bad[middle : middle + 64] = bytes(b ^ 0xFF for b in bad[middle : middle + 64])
     corrupt = tmp_path / "corrupt.mcap"
     corrupt.write_bytes(bytes(bad))
-    assert main(["replay", str(corrupt), "--quiet"]) == 2
+    assert main(["replay", str(corrupt), "--quiet"]) == 7  # finished, but frames were skipped
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert err.startswith("trackreplay: error: ") and "corrupt.mcap" in err
+    assert err.startswith("warning: ") and "corrupt.mcap" in err and "skipped" in err and "crc" in err.lower()
+    assert main(["replay", str(corrupt), "--quiet", "--strict"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("trackreplay: error: ") and "corrupt.mcap" in err and "without --strict" in err

@@ -123,3 +123,64 @@ def test_hints_attach_to_their_frame(flow_sim1: Path) -> None:
     assert first.hints[0].label == "target" and first.hints[0].w == 13.0
     assert second.hints == ()
     assert first.image.shape == (256, 256) and first.encoding == "png"
+
+
+def _log_with(tmp_path: Path, name: str, write) -> LogReader:
+    path = tmp_path / name
+    with LogWriter(path) as log:
+        write(log)
+    return LogReader(path)
+
+
+def test_values_inside_a_log_are_checked_with_topic_and_index(tmp_path: Path) -> None:
+    from trackreplay.schemas.records import InitRegion, LensEntry, LensTable, PtzReading, init_annotations_pb
+
+    def frames(log, times=(0, 10, 20)):
+        for t in times:
+            log.write(T.CAMERA_IMAGE, image_message(_img(t), "png", t), t)
+
+    def bad_pan(log):
+        frames(log)
+        log.write(T.PTZ_LENS_TABLE, LensTable(10, 8, (LensEntry(0, 0, 100, 100, 5, 4),)).to_pb(0), 0)
+        for k, t in enumerate((0, 10, 20)):
+            log.write(T.PTZ_ENCODERS, PtzReading(t, float("nan") if k == 1 else 0.0, 0, 0, 0).to_pb(), t)
+
+    reader = _log_with(tmp_path, "pan.mcap", bad_pan)
+    with pytest.raises(LogError, match=r"pan\.mcap: message 1 on topic /ptz/encoders: pan is nan, not a finite number"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+    def empty_lens(log):
+        frames(log)
+        log.write(T.PTZ_LENS_TABLE, LensTable(10, 8, ()).to_pb(0), 0)
+
+    reader = _log_with(tmp_path, "lens.mcap", empty_lens)
+    with pytest.raises(LogError, match=r"lens\.mcap: topic /ptz/lens_table: the lens table has no entries"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+    def wrong_lens_size(log):
+        frames(log)
+        log.write(T.PTZ_LENS_TABLE, LensTable(640, 480, (LensEntry(0, 0, 100, 100, 5, 4),)).to_pb(0), 0)
+
+    reader = _log_with(tmp_path, "size.mcap", wrong_lens_size)
+    with pytest.raises(LogError, match=r"topic /ptz/lens_table is for 640x480 images but .* is 10x8"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+    def far_mark(log):
+        frames(log)
+        log.write(T.ANNOTATIONS_INIT, init_annotations_pb([InitRegion(10**12, 0, 5, 4, 2, 2)], 0), 0)
+
+    reader = _log_with(tmp_path, "mark.mcap", far_mark)
+    with pytest.raises(LogError, match=r"topic /annotations/init marks frame 1000000000000, but /camera/image has 3 frames"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+    def nan_mark(log):
+        frames(log)
+        log.write(T.ANNOTATIONS_INIT, init_annotations_pb([InitRegion(0, 0, float("nan"), 4, 2, 2)], 0), 0)
+
+    reader = _log_with(tmp_path, "nan.mcap", nan_mark)
+    with pytest.raises(LogError, match=r"message 0 on topic /annotations/init: the box on frame 0 .* is not a finite box"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
+
+    reader = _log_with(tmp_path, "dup.mcap", lambda log: frames(log, (0, 10, 10, 20)))
+    with pytest.raises(LogError, match=r"messages 1 and 2 on topic /camera/image have the same log_time 10"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
