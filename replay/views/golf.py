@@ -66,7 +66,7 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     root = f"trackers/{name}"
     parts.tracks(rec, states)
     if inter is not None and inter.notice:
-        rec.log(f"{root}/events", rr.TextLog(inter.notice, level=rr.TextLogLevel.WARN))
+        parts.draw(rec, f"{root}/events", rr.TextLog, text=[inter.notice], level=[rr.TextLogLevel.WARN])
     if inter is None or inter.mode == "idle":
         for stage in DRAWN:
             parts.clear(rec, f"{root}/{stage}", recursive=stage == "reinit")
@@ -78,26 +78,42 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     parts.scalar(rec, f"{root}/search/spread/x", inter.search.spread[0])
     parts.scalar(rec, f"{root}/search/spread/y", inter.search.spread[1])
     scores = ", ".join(f"{n} {s:.2f}" for n, s in zip(sil.lut_names, sil.lut_scores) if np.isfinite(s))
-    rec.log(f"{root}/events", rr.TextLog(f"LUT {sil.lut_name or '-'} ({scores})", level=rr.TextLogLevel.DEBUG))
+    parts.draw(rec, f"{root}/events", rr.TextLog, text=[f"LUT {sil.lut_name or '-'} ({scores})"],
+               level=[rr.TextLogLevel.DEBUG])
     _silhouette(rec, f"{root}/silhouette", frame, sil)
+    check = inter.validation  # issue 10: the confidence and why a frame is (not) measured
+    parts.scalar(rec, f"{root}/validation/confidence", check.confidence)
+    parts.scalar(rec, f"{root}/validation/gate_px", check.gate_px)
+    if check.verdict not in ("", "measured", "confirmed"):
+        parts.draw(rec, f"{root}/events", rr.TextLog,
+                   text=[f"frame {frame.index}: not measured: {check.verdict} (confidence {check.confidence:.2f}, "
+                         f"fit {check.fit:.2f}, tentative {len(check.tentative)} frames)"],
+                   level=[rr.TextLogLevel.INFO])
     _blobs(rec, f"{root}/blobs", f"{root}/silhouette/blobs", inter.blobs, sil.offset)
     parts.particles(rec, f"{root}/particles", inter.particles.particles, inter.particles.weights)
     _ekf(rec, f"{root}/ekf", frame, inter.ekf, inter.trail.world)
     if len(inter.trail.image) >= 2:
-        rec.log(f"{root}/trail", rr.LineStrips2D([inter.trail.image.astype(np.float32)], colors=[(255, 200, 0)]))
+        parts.draw(rec, f"{root}/trail", rr.LineStrips2D, strips=[inter.trail.image.astype(np.float32)],
+                   colors=[(255, 200, 0)])
     else:
         parts.clear(rec, f"{root}/trail")
+
+
+def _row(point) -> np.ndarray:
+    """One point as a batch of one (float32, as Rerun stores positions)."""
+    return np.asarray(point, dtype=np.float32).reshape(1, -1)
 
 
 def _reinit(rec: FrameLogger, path: str, events: str, frame: Frame, reinit) -> None:
     if not reinit.kind:
         parts.clear(rec, path, recursive=True)
         return
-    rec.log(f"{path}/point", rr.Points2D([reinit.point], radii=6.0, colors=[(0, 255, 255)], labels=[reinit.kind]))
+    parts.draw(rec, f"{path}/point", rr.Points2D, positions=_row(reinit.point), radii=6.0, colors=[(0, 255, 255)],
+               labels=[reinit.kind])
     parts.covariance_ellipses(rec, f"{path}/spread", reinit.point, np.diag(reinit.sigma**2), n_sigma=1.0,
                               colors=[(0, 255, 255)])
-    rec.log(events, rr.TextLog(f"frame {frame.index}: particles re-initialised ({reinit.kind}) at "
-                               f"({reinit.point[0]:.1f}, {reinit.point[1]:.1f})"))
+    parts.draw(rec, events, rr.TextLog, text=[f"frame {frame.index}: particles re-initialised ({reinit.kind}) at "
+                                              f"({reinit.point[0]:.1f}, {reinit.point[1]:.1f})"])
 
 
 def _silhouette(rec: FrameLogger, path: str, frame: Frame, sil) -> None:
@@ -128,25 +144,28 @@ def _blobs(rec: FrameLogger, path: str, points_path: str, gated, offset: np.ndar
 def _ekf(rec: FrameLogger, path: str, frame: Frame, ekf, trail_world: np.ndarray) -> None:
     world = f"{path}/world"
     if np.all(np.isfinite(ekf.landing_image)):
-        rec.log(f"{path}/landing", rr.Points2D([ekf.landing_image], radii=4.0, colors=[(255, 0, 255)],
-                                               labels=[f"landing in {ekf.landing_in_s:.2f} s"]))
+        parts.draw(rec, f"{path}/landing", rr.Points2D, positions=_row(ekf.landing_image), radii=4.0,
+                   colors=[(255, 0, 255)], labels=[f"landing in {ekf.landing_in_s:.2f} s"])
     else:
         parts.clear(rec, f"{path}/landing")
     if frame.camera is not None:
-        rec.log(f"{world}/camera", rr.Points3D([frame.camera.position], radii=0.5, colors=[(255, 255, 255)],
-                                               labels=["camera"]))
+        parts.draw(rec, f"{world}/camera", rr.Points3D, positions=_row(frame.camera.position), radii=0.5,
+                   colors=[(255, 255, 255)], labels=["camera"])
     if np.all(np.isfinite(ekf.x)):
         p = ekf.x[:3]
-        rec.log(f"{world}/ball", rr.Points3D([p], radii=0.4, colors=[(255, 255, 0)]))
+        parts.draw(rec, f"{world}/ball", rr.Points3D, positions=_row(p), radii=0.4, colors=[(255, 255, 0)])
         parts.covariance_ellipsoids(rec, f"{world}/covariance", p, ekf.P[:3, :3], colors=[(255, 255, 0)])
         if frame.camera is not None:
-            rec.log(f"{world}/line_of_sight", rr.LineStrips3D([[frame.camera.position, p]], colors=[(120, 120, 255)]))
+            parts.draw(rec, f"{world}/line_of_sight", rr.LineStrips3D,
+                       strips=[np.array([frame.camera.position, p], dtype=np.float32)], colors=[(120, 120, 255)])
         if len(trail_world) >= 2:
-            rec.log(f"{world}/trajectory", rr.LineStrips3D([trail_world], colors=[(255, 200, 0)]))
+            parts.draw(rec, f"{world}/trajectory", rr.LineStrips3D, strips=[np.asarray(trail_world, dtype=np.float32)],
+                       colors=[(255, 200, 0)])
         parts.kalman_series(rec, path, ekf.x, ekf.P, EKF_NAMES)
         parts.scalar(rec, f"{path}/nis", ekf.nis)
     if np.all(np.isfinite(ekf.landing_world)):
-        rec.log(f"{world}/landing", rr.Points3D([ekf.landing_world], radii=0.8, colors=[(255, 0, 255)]))
+        parts.draw(rec, f"{world}/landing", rr.Points3D, positions=_row(ekf.landing_world), radii=0.8,
+                   colors=[(255, 0, 255)])
         parts.scalar(rec, f"{path}/time_to_landing_s", ekf.landing_in_s)
     else:
         parts.clear(rec, f"{world}/landing")

@@ -6,10 +6,17 @@ them are dropped. The targets follow the blobs selected as the ball in past fram
 moving average of log-area and circularity), so a zoom change is followed; the area gate widens
 while the ball is missed. Among the survivors the one nearest to the predicted position is the
 ball; all survivors' centroids are the particle filter's observation ``z_t``.
+
+Shape is gated on *roundness*: the blob's circularity ``4 pi A / P^2`` divided by the circularity a
+digitised disc of the same area scores (:func:`disc_circularity`). The raw measure is biased for
+small digital shapes (a single pixel scores 1.27, a 5-pixel plus 0.9, a 30-pixel disc 0.85), so a
+target that followed raw circularity climbed above 1 on tiny blobs and then rejected real discs;
+roundness is about 1 for a disc of every size and below 1 for streaks and fragments.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -18,16 +25,46 @@ import numpy as np
 from trackreplay.trackers.foreground.blobs import Blobs, measure_blobs, nearest
 from trackreplay.trackers.golf.config import BlobConfig
 
+@functools.lru_cache(maxsize=1)
+def _disc_table() -> tuple[np.ndarray, np.ndarray]:
+    """(area, circularity) of digitised discs, radius 0.5 to 60 px, measured as blobs are."""
+    areas, circs = [], []
+    for r in np.arange(0.5, 60.0, 0.25):
+        n = int(np.ceil(r)) + 2
+        ys, xs = np.mgrid[-n:n + 1, -n:n + 1]
+        for cx, cy in ((0.0, 0.0), (0.5, 0.5), (0.5, 0.0)):
+            mask = (((xs - cx) ** 2 + (ys - cy) ** 2) <= r * r).astype(np.uint8)
+            b = measure_blobs(mask)
+            if len(b) == 1:
+                areas.append(b.area[0])
+                circs.append(b.circularity[0])
+    areas, circs = np.array(areas), np.array(circs)
+    levels = np.unique(areas)
+    return levels, np.array([np.median(circs[areas == a]) for a in levels])
+
+
+def disc_circularity(area: np.ndarray) -> np.ndarray:
+    """Circularity a digitised disc of ``area`` px scores (interpolated; 1.27 for one pixel)."""
+    levels, circ = _disc_table()
+    return np.interp(np.asarray(area, dtype=np.float64), levels, circ)
+
+
+def roundness(blobs: Blobs) -> np.ndarray:
+    """(K,) circularity relative to a disc of the same area (about 1 for a disc; NaN where not measured)."""
+    return blobs.circularity / disc_circularity(blobs.area)
+
+
 REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess")
 OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS = range(len(REASONS))
 
 
 @dataclass(frozen=True)
 class BlobTargets:
-    """Target area (px) and circularity that candidates are gated against."""
+    """Target area (px) and roundness (circularity relative to a disc, :func:`roundness`) that
+    candidates are gated against."""
 
     area: float
-    circularity: float
+    circularity: float  # roundness: about 1 for a disc of any size
 
     @property
     def diameter(self) -> float:
@@ -35,7 +72,8 @@ class BlobTargets:
         return 2.0 * math.sqrt(self.area / math.pi)
 
     def follow(self, area: float, circularity: float, rate: float) -> BlobTargets:
-        """EMA towards a newly selected ball blob (log domain for the area: zoom is multiplicative)."""
+        """EMA towards a newly selected ball blob (log domain for the area: zoom is multiplicative;
+        ``circularity`` is the blob's roundness, so the target stays near 1 for real discs)."""
         log_area = (1 - rate) * np.log(self.area) + rate * np.log(max(area, 1e-6))
         return BlobTargets(float(np.exp(log_area)), float((1 - rate) * self.circularity + rate * circularity))
 
@@ -75,14 +113,22 @@ def find_blobs(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray,
 
 
 def start_targets(mask: np.ndarray, offset: tuple[int, int], near: np.ndarray, cfg: BlobConfig, scale: float) -> BlobTargets | None:
-    """Targets from the marked ball's own silhouette: its biggest measured blob, circularity
+    """Targets from the marked ball's own silhouette: its biggest measured blob, roundness
     clamped to [0.6, 1]; None when the silhouette has no measured blob."""
     blobs = find_blobs(mask, offset, near, cfg, scale)
     measured = np.flatnonzero(blobs.measured)
     if not measured.size:
         return None
     biggest = measured[int(np.argmax(blobs.area[measured]))]
-    return BlobTargets(float(blobs.area[biggest]), float(min(max(blobs.circularity[biggest], 0.6), 1.0)))
+    return BlobTargets(float(blobs.area[biggest]), float(min(max(roundness(blobs)[biggest], 0.6), 1.0)))
+
+
+def shape_tolerance(area: np.ndarray, cfg: BlobConfig, scale: float) -> np.ndarray:
+    """The roundness tolerance for blobs of ``area`` px: ``circularity_tolerance``, widened as
+    ``sqrt(shape_area_px / area)`` below ``shape_area_px`` (a shape read from a few pixels is noisy:
+    its perimeter is a handful of steps). ``scale`` is unused: the noise is in the pixel count."""
+    reliable = cfg.shape_area_px  # pixels, not scaled: the noise is in the pixel count
+    return cfg.circularity_tolerance * np.maximum(1.0, np.sqrt(reliable / np.maximum(np.asarray(area, float), 1.0)))
 
 
 def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, widen: float = 1.0) -> np.ndarray:
@@ -91,7 +137,7 @@ def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, w
     ``tiny`` below ``min_area_px``; ``excess`` when not measured (beyond ``max_blobs``). Area passes
     when ``(target+s)/tol' <= area+s <= (target+s)*tol'`` with ``log tol' = widen * log tol`` and
     ``s = area_slack_px`` (which keeps a 1-2 px ball from failing against a 3 px target);
-    circularity passes when ``circ >= target - circularity_tolerance`` (shape does not change with zoom).
+    roundness passes when ``roundness >= target - circularity_tolerance`` (shape does not change with zoom).
     """
     reason = np.full(len(blobs), OK, np.int64)
     if not len(blobs):
@@ -108,7 +154,7 @@ def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, w
     reason[small] = AREA_SMALL
     reason[large] = AREA_LARGE
     live &= ~(small | large)
-    round_enough = blobs.circularity >= targets.circularity - cfg.circularity_tolerance
+    round_enough = roundness(blobs) >= targets.circularity - shape_tolerance(blobs.area, cfg, scale)
     reason[live & ~round_enough] = CIRCULARITY
     return reason
 

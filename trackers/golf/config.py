@@ -86,6 +86,12 @@ class LutConfig:
     context: float = 4.0  # reference luminance histogram: window this many box sizes, min search.min_px
     hist_bins: int = 32  # context luminance histogram bins
     switch_margin: float = 0.2  # hysteresis: switch when the other LUT fits 60 % of the region
+    # Learning from the track (ours): a confidently measured ball is added to the LUT of the
+    # background it is over when that LUT does not exist yet, or when the ball's area changed by
+    # this factor since that LUT last learned it (zoom); at most ``learn_max`` boxes per LUT.
+    learn_confidence: float = 0.5
+    learn_area_factor: float = 2.0
+    learn_max: int = 6
 
     def __post_init__(self) -> None:
         if self.bin < 1 or 256 % self.bin:
@@ -99,7 +105,8 @@ class BlobConfig:
     min_area_px: float = 2.0  # below this a blob is noise ("tiny"); at reference height
     area_tolerance: float = 3.0  # accept target/tol <= area <= target*tol ...
     area_slack_px: float = 4.0  # ... on areas plus this (a 1 px vs 3 px blob of a tiny ball is no real difference)
-    circularity_tolerance: float = 0.35  # reject circularity < target - tol (rounder is never rejected)
+    circularity_tolerance: float = 0.35  # reject roundness < target - tol (rounder is never rejected)
+    shape_area_px: float = 30.0  # below this many pixels (not scaled) the tolerance grows as sqrt(30 / area)
     target_rate: float = 0.3  # EMA rate of the targets from past selected blobs (follows zoom)
     initial_circularity: float = 0.9
     widen_per_miss: float = 0.25  # the area gate (log tolerance) grows by this per frame without a ball...
@@ -111,6 +118,23 @@ class BlobConfig:
             raise ValueError("blobs.area_tolerance must exceed 1")
         if not 0 < self.target_rate <= 1:
             raise ValueError("blobs.target_rate must be in (0, 1]")
+
+
+@dataclass(frozen=True)
+class ValidateConfig:
+    """Honest status (ours, :mod:`.validate`): the motion-model gate, the confidence that makes a
+    row ``measured``, and the evidence a jump needs; ``[golf.validate]``."""
+
+    gate_sigmas: float = 3.0  # gate radius = this x (cloud spread + ball radius)
+    max_spread_px: float = 40.0  # the cloud spread the gate uses is capped here (reference height)
+    min_confidence: float = 0.25  # below this the row is "predicted" (about 1.7 s off with a perfect fit)
+    confirm_frames: int = 3  # a blob outside the gate (or after a loss) must be seen this many frames running
+    confirm_px: float = 12.0  # ... each within this (+ a diameter) of the previous ones' extrapolation
+    confirm_fit: float = 0.5  # ... and fit the target area and roundness at least this well
+
+    def __post_init__(self) -> None:
+        if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1:
+            raise ValueError("validate: need confirm_frames >= 1, gate_sigmas > 0, 0 <= min_confidence <= 1")
 
 
 @dataclass(frozen=True)
@@ -149,12 +173,14 @@ class ReinitConfig:
     parabola_misses: int = 2  # re-initialise after this many misses while descending
     # While lost: "centre" = the samples are spread over the middle of the picture each frame (a
     # broadcast operator keeps following the ball, so it is most likely there; the search region is
-    # then the largest allowed); "stay" = they keep diffusing where the ball was last predicted.
-    lost: str = "centre"
+    # then the largest allowed); "stay" = they keep diffusing where the ball was last predicted;
+    # "auto" = "centre" when the camera was following the ball (encoders, or the last measurements
+    # within the central half of the picture), else "stay" (a fixed camera: the ball crosses it).
+    lost: str = "auto"
 
     def __post_init__(self) -> None:
-        if self.lost not in ("centre", "stay"):
-            raise ValueError("reinit.lost must be 'centre' or 'stay'")
+        if self.lost not in ("centre", "stay", "auto"):
+            raise ValueError("reinit.lost must be 'centre', 'stay' or 'auto'")
 
 
 @dataclass(frozen=True)
@@ -162,7 +188,7 @@ class GolfConfig:
     """The whole tracker: shared scalars here, one table per stage."""
 
     ball_diameter_m: float = 0.04267
-    max_predicted_frames: int = 5  # misses reported as "predicted" before the track is "lost"
+    max_predicted_frames: int = 5  # misses reported as "predicted" before the track is "lost" (no position)
     trail_length: int = 600  # past measurements kept for the drawn trajectory
     reference_height: int = 1080  # the frame height the pixel parameters are given for
     particles: ParticleConfig = field(default_factory=ParticleConfig)
@@ -172,3 +198,4 @@ class GolfConfig:
     ekf: EkfConfig = field(default_factory=EkfConfig)
     range: RangeConfig = field(default_factory=RangeConfig)
     reinit: ReinitConfig = field(default_factory=ReinitConfig)
+    validate: ValidateConfig = field(default_factory=ValidateConfig)

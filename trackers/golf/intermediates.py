@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from trackreplay.trackers.golf.blobs import GatedBlobs
 from trackreplay.trackers.golf.landing import EkfState
@@ -11,6 +11,7 @@ from trackreplay.trackers.golf.reinit import Reinit
 from trackreplay.trackers.golf.search_region import SearchRegion
 from trackreplay.trackers.golf.silhouette import LutSilhouette
 from trackreplay.trackers.golf.trail import TrailPoints
+from trackreplay.trackers.golf.validate import Validation
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,8 +28,10 @@ class GolfIntermediates:
     ekf: EkfState  # §2.3 3-D filter and its predicted landing
     trail: TrailPoints
     notice: str = ""
+    validation: Validation = field(default_factory=Validation.empty)  # ours: the motion gate, confidence and why a frame is not measured
 
     @classmethod
     def idle(cls, notice: str) -> GolfIntermediates:
         return cls("idle", Reinit.none(), SearchRegion.empty(), LutSilhouette.empty(), GatedBlobs.empty(),
-                   ParticleSet.empty(), EkfState.empty(), TrailPoints.empty(), notice)
+                   ParticleSet.empty(), EkfState.empty(), TrailPoints.empty(), notice,
+                   Validation.empty())

@@ -132,6 +132,7 @@ class GolfLuts:
         self._count: dict[str, int] = {}
         self.consumed: set = set()  # keys of regions already added
         self._labels: np.ndarray | None = None  # luminance -> LUT index, rebuilt when the LUTs change
+        self._learned: dict[str, tuple[int, float]] = {}  # per LUT: boxes learned from the track, last ball area
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -158,6 +159,28 @@ class GolfLuts:
         if fresh:
             self.add(image, fresh)
             self.consumed.update(region_key(r) for r in fresh)
+
+    def learn_from_track(self, image: np.ndarray, region: InitRegion, area: float, context_ycc: np.ndarray) -> str:
+        """Add a confidently measured ball (``region`` around it, ``area`` px) to the LUT of the
+        background it is over (read from ``context_ycc``, the search region's pixels, as for a
+        mark) when that LUT does not exist yet or the ball's area changed by ``learn_area_factor``
+        since it last learned from the track (zoom), at most ``learn_max`` times per LUT.
+        Returns the LUT name learned into, or "" (nothing learned)."""
+        cfg = self.config
+        label = region.label.lower()
+        name = "sky" if "sky" in label else "ground" if ("ground" in label or "grass" in label) else (
+            "sky" if sky_score(context_ycc) > SKY_SCORE_THRESHOLD else "ground")
+        count, last = self._learned.get(name, (0, 0.0))
+        if name in self.luts and (count >= cfg.learn_max or (last > 0 and abs(np.log(max(area, 1e-6) / last)) < np.log(cfg.learn_area_factor))):
+            return ""
+        if name in self.luts and last == 0.0:  # built from marks only: remember the area, learn on a zoom change
+            self._learned[name] = (count, max(area, 1e-6))
+            return ""
+        added = self.add(image, [InitRegion(region.frame, region.t_ns, region.x, region.y, region.w, region.h, name)])
+        if not added:
+            return ""
+        self._learned[name] = (count + 1, max(area, 1e-6))
+        return name
 
     def add(self, image: np.ndarray, regions: Sequence[InitRegion]) -> list[RegionSamples]:
         """Add the marked boxes of one image and rebuild the LUTs they touch."""

@@ -9,9 +9,11 @@ Checked in this order before each frame's select + predict; the first that appli
 2. **Image parabola** (ours, no encoders: no 3-D filter): once the ball has been missed for a few
    frames while descending, a parabola ``y(t)`` and a line ``x(t)`` through the last measurements
    bracket where it met the ground and bounced (:func:`image_parabola_landing`). Once per loss.
-3. **Lost centre** (ours, ``lost = "centre"``): after ``max_predicted_frames`` misses the ball is
-   "lost"; a broadcast operator keeps following it, so the samples are spread over the middle of
-   the picture each frame (the search region is then the largest allowed).
+3. **Lost centre** (ours, ``lost = "centre"``, or ``"auto"`` when the camera was following the
+   ball): after ``max_predicted_frames`` misses the ball is "lost"; a broadcast operator keeps
+   following it, so the samples are spread over the middle of the picture each frame (the search
+   region is then the largest allowed). What is found there must still be confirmed over several
+   frames (:mod:`.validate`) before it is ``measured``.
 """
 
 from __future__ import annotations
@@ -83,6 +85,19 @@ class ReinitPolicy:
         self.history.append((index, x, y))
         self.parabola_used = False
 
+    def centre_search(self, camera: PtzCamera | None, width: int, height: int) -> bool:
+        """Whether a lost ball is searched for mid-picture (``lost``: "centre", or "auto" when the
+        camera followed the ball: a pose, or the last measurements all in the central half)."""
+        if self.cfg.lost != "auto":
+            return self.cfg.lost == "centre"
+        if camera is not None:
+            return True
+        recent = np.array(self.history, float).reshape(-1, 3)[-4:, 1:]
+        if not len(recent):
+            return False
+        centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
+        return bool(np.all(np.abs(recent - centre) <= 0.25 * np.array([width, height])))
+
     def choose(self, *, index: int, size: tuple[int, int], scale: float, misses: int, landing: np.ndarray | None,
                camera: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
         """The re-initialisation for frame ``index`` of ``size`` (w, h) px, or ``Reinit.none()``.
@@ -106,7 +121,7 @@ class ReinitPolicy:
                 centre, half = found
                 self.parabola_used = True
                 return Reinit("image_parabola", centre, np.maximum(half, cfg.min_sigma_px * scale))
-        if cfg.lost == "centre" and misses > self.lost_after:
+        if misses > self.lost_after and self.centre_search(camera, width, height):
             centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
             sigma = filling_sigma(min(self.search.max_px * scale, width, height), self.search)
             return Reinit("lost_centre", centre, np.full(2, sigma))

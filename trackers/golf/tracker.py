@@ -8,13 +8,19 @@ Per frame, the paper's pipeline (Fig. 1), one module per stage:
 2. §2.1-2.2: search region ``I_s`` around the predicted mean, sized by the spread (:mod:`.search_region`).
 3. §2.1: sky/ground LUT from the region's luminance, silhouette ``I_c`` (:mod:`.silhouette`, :mod:`.lut`).
 4. §2.1: blobs gated on area and circularity; the accepted one nearest the prediction is the ball (:mod:`.blobs`).
-5. Eq. (2) measure with the accepted centroids, eq. (3) estimate.
-6. Outputs: "measured" (the ball), "predicted", then "lost" (no position: the export interpolates);
-   with a pose, the line of sight and X, Y, Z from the EKF, ranged from the ball's area (:mod:`.range`).
+5. Ours: the motion-model gate, a confidence per frame and evidence over several frames for a
+   jump (:mod:`.validate`); eq. (2) measures with the in-gate centroids, eq. (3) estimates.
+6. Outputs: "measured" (the ball was seen there, with its confidence), "predicted", then "lost"
+   (no position: the export interpolates) after ``max_predicted_frames`` misses; with a pose, the
+   line of sight and X, Y, Z from the EKF, ranged from the ball's area (:mod:`.range`).
+
+Every mark re-anchors: a box marked on frame N restarts the track there (and feeds the LUTs); a
+confidently measured ball also teaches the LUT of the background it is over (:meth:`GolfLuts.learn_from_track`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -24,7 +30,7 @@ from trackreplay.trackers.base import Marked, TrackerBase, TrackState
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
-from trackreplay.trackers.golf.blobs import BlobTargets, GatedBlobs, select_ball, start_targets
+from trackreplay.trackers.golf.blobs import BlobTargets, GatedBlobs, roundness, select_ball, start_targets
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
@@ -36,8 +42,10 @@ from trackreplay.trackers.golf.particles import (DIM, ParticleSet, likelihood, m
 from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.search_region import search_region
-from trackreplay.trackers.golf.silhouette import box_silhouette, lut_silhouette
+from trackreplay.trackers.golf.silhouette import LutSilhouette, box_silhouette, lut_silhouette
+from trackreplay.trackers.foreground.silhouette import silhouette
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
+from trackreplay.trackers.golf.validate import Validator
 
 NAN3 = np.full(3, np.nan)
 
@@ -57,6 +65,7 @@ class GolfTracker(TrackerBase):
         self.range = RangeFromArea(config.range, config.ball_diameter_m)
         self.reinit = ReinitPolicy(config.reinit, config.search, config.max_predicted_frames)
         self.trail = Trail(config.trail_length)
+        self.validator = Validator(config.validate, config.blobs)
         self.notices = Notices()
         self.targets: BlobTargets | None = None
         self.lut_name = ""
@@ -81,10 +90,11 @@ class GolfTracker(TrackerBase):
         prev_camera = self._prev[0]
         # With encoders (optional): the samples move with the pose change, living in camera-independent directions.
         compensated = self.started and cfg.particles.compensate_camera_motion and camera is not None and prev_camera is not None
-        if self.started:
+        marked_now = self.marks.on(frame.index)
+        if self.started and not marked_now:
             reinit = self._predict(frame, camera, scale, compensated)  # §2.3 re-initialisation, or eq. (1)
         elif (region := self.marks.start_region(frame.index)) is not None:
-            reinit = self._start(frame, region, scale)
+            reinit = self._start(frame, region, scale)  # the first mark, and every later one: re-anchor
         else:
             self.intermediates = GolfIntermediates.idle(notice)
             self._prev = (camera, frame.index, frame.t_ns)
@@ -97,16 +107,46 @@ class GolfTracker(TrackerBase):
         sil, ycc = lut_silhouette(frame.image, search.box, self.luts, self.lut_name)  # §2.1 I_c
         self.lut_name = sil.lut_name
         gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale)  # §2.1
-        self.pf.weigh(likelihood(gated.candidates, cfg.particles.sigma_px * scale, cfg.particles.alpha / scale))  # eq. (2)
+        lost = self.misses > cfg.max_predicted_frames
+        found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
+                                                  diameter=diameter, size=(width, height), scale=scale, lost=lost)
+        if not lost and (found is None or found.verdict != "measured"):
+            # The background changed under the ball faster than the luminance switch (tree line, horizon):
+            # the ball may pass the other LUT; take it only if that finds the ball in the gate.
+            for name in (n for n in self.luts.names if n != sil.lut_name):
+                other = LutSilhouette(name, sil.lut_scores, silhouette(ycc, self.luts.lut(name)), sil.offset)
+                alt = select_ball(other.mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale)
+                seen_alt, _, _ = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
+                                                             diameter=diameter, size=(width, height), scale=scale, lost=lost)
+                if seen_alt is not None and seen_alt.verdict == "measured":
+                    sil, gated, self.lut_name = other, alt, name
+                    break
+        check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
+                                        diameter=diameter, size=(width, height), scale=scale,
+                                        lost=lost)
+        seen = check.verdict in ("measured", "confirmed")
+        if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
+            point = gated.blobs.centroid[check.candidate]
+            sigma = cfg.particles.init_spread_px * scale
+            self.pf.initialise(state(point, self.validator.confirmed_velocity()),
+                               spread_sigma(sigma, cfg.particles.init_velocity_spread_px * scale))
+            reinit = Reinit("confirmed", point.copy(), np.full(2, sigma))
+            observed = gated.blobs.centroid[[check.candidate]]
+            self.validator.reset()
+        else:
+            observed = gated.blobs.centroid[check.in_gate]
+        gated = dataclasses.replace(gated, selected=check.candidate if seen else -1)
+        self.pf.weigh(likelihood(observed, cfg.particles.sigma_px * scale, cfg.particles.alpha / scale))  # eq. (2)
         estimate = self.pf.estimate()  # eq. (3)
 
-        if gated.selected >= 0:
-            x, y, w, h = self._measured(frame, camera, gated, ycc, sil.offset)
-            status = "measured"
+        if seen:
+            x, y, w, h = self._measured(frame, camera, gated, ycc, sil, check.confidence)
+            status, confidence = "measured", check.confidence
         else:
             self.misses += 1
             status = "predicted" if self.misses <= cfg.max_predicted_frames else "lost"
             x, y, w, h = float(estimate[0]), float(estimate[1]), diameter, diameter
+            confidence = check.confidence
         los = camera.line_of_sight(np.array([[x, y]]))[0] if camera is not None else NAN3
         self.trail.add((x, y) if status == "measured" else None, los, self.ekf.x)
         vx, vy = float(estimate[2]), float(estimate[3])
@@ -117,18 +157,20 @@ class GolfTracker(TrackerBase):
         self.intermediates = GolfIntermediates(
             "ptz" if camera is not None else "image", reinit, search, sil, gated,
             ParticleSet(self.pf.particles, self.pf.weights, estimate), EkfState.of(self.ekf, camera),
-            TrailPoints(self.trail.in_image(camera), self.trail.world.ordered()), notice)
+            TrailPoints(self.trail.in_image(camera), self.trail.world.ordered()), notice, check)
         if status == "lost":
             return [TrackState(1, status="lost")]
         X, Y, Z = (float(v) for v in self.ekf.x[:3]) if self.ekf.initialised else (None, None, None)
         dx, dy, dz = (float(v) for v in los) if camera is not None else (None, None, None)
-        return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status)]
+        return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))]
 
     # --- stages ------------------------------------------------------------------------------------
     def _start(self, frame: Frame, region: InitRegion, scale: float) -> Reinit:
         """§2.3 initialisation: targets from the marked box's own silhouette, samples around the box."""
         cfg = self.config
         self.started = True
+        self.misses = 0
+        self.validator.reset()
         name, self.lut_name = self.luts.start_names(frame.image, region)
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
         ycc, offset, mask = box_silhouette(frame.image, box, self.luts.lut(self.lut_name))
@@ -162,12 +204,17 @@ class GolfTracker(TrackerBase):
         return reinit
 
     def _measured(self, frame: Frame, camera: PtzCamera | None, gated: GatedBlobs, ycc: np.ndarray,
-                  offset: np.ndarray) -> tuple[float, float, float, float]:
-        """The ball was found: targets follow it; with a pose the EKF takes (u, v, range)."""
-        blobs, k = gated.blobs, gated.selected
+                  sil: LutSilhouette, confidence: float) -> tuple[float, float, float, float]:
+        """The ball was seen: targets follow it, a confident one teaches the LUT of its background;
+        with a pose the EKF takes (u, v, range)."""
+        blobs, k, offset = gated.blobs, gated.selected, sil.offset
         x, y = (float(v) for v in blobs.centroid[k])
         w, h = (float(v) for v in blobs.size[k])
-        self.targets = self.targets.follow(float(blobs.area[k]), float(blobs.circularity[k]), self.config.blobs.target_rate)
+        self.targets = self.targets.follow(float(blobs.area[k]), float(roundness(blobs)[k]), self.config.blobs.target_rate)
+        if confidence >= self.config.lut.learn_confidence:
+            side = max(w, h, 2.0)  # the core ellipse (lut.core) of this box: ball pixels, not its blurred rim
+            region = InitRegion(frame.index, frame.t_ns, x, y, side, side, "track")
+            self.luts.learn_from_track(frame.image, region, float(blobs.area[k]), ycc)
         self.misses = 0
         self.reinit.measured(frame.index, x, y)
         if camera is not None:

@@ -52,7 +52,7 @@ def test_ekf_landing_first_at_the_projected_contact():
 
 
 def test_image_parabola_once_per_loss_then_lost_centre():
-    p = policy()
+    p = policy(lost="centre")
     for k in range(10):  # descending in the image
         p.measured(k, 100.0 + 5 * k, 300.0 - 20 * k + 2.5 * k * k)
     args = dict(size=(1280, 720), scale=1.0, landing=None, camera=None, ekf=BallisticEkf(EkfConfig(), 0.02),
@@ -99,3 +99,15 @@ def test_trail_ring_keeps_the_last_rows_oldest_first():
     t.add(None, np.full(3, np.nan), np.arange(6.0))
     assert t.in_image(cam) == pytest.approx(np.array([[100.0, 200.0]]))
     assert t.in_image(None).tolist() == [[100.0, 200.0]] and t.world.ordered().tolist() == [[0.0, 1.0, 2.0]]
+
+
+def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
+    args = dict(size=(1280, 720), scale=1.0, landing=None, ekf=BallisticEkf(EkfConfig(), 0.02), estimate=np.zeros(2))
+    crossing = policy()  # "auto": the ball crossed a fixed picture -> stay where it was predicted
+    for k in range(6):
+        crossing.measured(k, 100.0 + 50 * k, 650.0 - 60 * k)
+    assert crossing.choose(index=20, misses=6, camera=None, **args).kind == ""
+    followed = policy()  # kept mid-picture by an operator -> search the centre
+    for k in range(6):
+        followed.measured(k, 630.0 + k, 350.0 - k)
+    assert followed.choose(index=20, misses=6, camera=None, **args).kind == "lost_centre"
