@@ -78,7 +78,8 @@ class Divergence:
         else:
             traj = "trajectory differs from the start"
         more = f" (and {len(self.fields) - 1} more field{'s' if len(self.fields) > 2 else ''})" if len(self.fields) > 1 else ""
-        lines = [f"frame {self.frame}: {first}{more}; {traj}"]
+        where = "static data" if self.frame == "static" else f"frame {self.frame}"
+        lines = [f"{where}: {first}{more}; {traj}"]
         lines += [f"  {f.describe()}" for f in self.fields[1:]]
         lines += list(self.notes)
         return "\n".join(lines)

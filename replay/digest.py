@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import struct
 from collections.abc import Iterator
 from typing import Any
 
@@ -23,14 +24,49 @@ from trackreplay.replay.trajectory import canonical_bytes
 
 def portable_floats(values: np.ndarray) -> np.ndarray:
     """Float values as hashed: float32 rounding, |v| < 1e-9 to 0, one NaN bit pattern."""
-    a = np.asarray(values, dtype=np.float64)
-    a = np.where(np.abs(a) < 1e-9, 0.0, a).astype("<f4")
-    a[np.isnan(a)] = np.float32("nan")
-    return a
+    a = np.asarray(values)
+    if a.dtype == np.float32:  # already float32: the same result without the float64 round trip
+        out = a.astype("<f4", copy=True)
+        out[np.abs(a) <= _TINY32] = 0.0  # |v| < 1e-9 for a float32 v is |v| <= float32(1e-9)
+    else:
+        a = np.asarray(a, dtype=np.float64)
+        out = np.where(np.abs(a) < 1e-9, 0.0, a).astype("<f4")
+    out[np.isnan(out)] = np.float32("nan")
+    return out
+
+
+_TINY32 = np.float32(1e-9)  # 9.99999972e-10 < 1e-9, and the next float32 is above 1e-9
+_NAN32 = np.float32("nan").tobytes()
+_F32 = struct.Struct("<f")
+_I64 = struct.Struct("=q")  # native order, as numpy's int64.tobytes()
+
+
+def _float_bytes(v: float) -> bytes:
+    """``portable_floats(np.float64(v)).tobytes()`` for one Python float, without numpy's per-call cost."""
+    if v != v:
+        return _NAN32
+    if abs(v) < 1e-9:
+        return b"\0\0\0\0"
+    try:
+        return _F32.pack(v)  # round to nearest even, as numpy's float64 -> float32 cast
+    except OverflowError:  # finite beyond float32: numpy gives ±inf
+        return portable_floats(np.float64(v)).tobytes()
 
 
 def _leaf_bytes(value: Any) -> bytes | None:
     """The hashed bytes of a leaf value (after its name), or None when ``value`` is a container."""
+    kind = type(value)
+    if kind is float:
+        return _float_bytes(value)
+    if kind is int or kind is bool:
+        try:
+            return _I64.pack(value)
+        except struct.error:
+            return np.int64(value).tobytes()  # raises OverflowError as before
+    if kind is str:
+        return value.encode()
+    if value is None:
+        return b"<none>"
     if isinstance(value, np.ndarray):
         arr = np.ascontiguousarray(value)
         if arr.dtype.kind in "fc":
@@ -39,12 +75,20 @@ def _leaf_bytes(value: Any) -> bytes | None:
     if isinstance(value, (bool, int, np.integer)):
         return np.int64(value).tobytes()
     if isinstance(value, (float, np.floating)):
-        return portable_floats(np.float64(value)).tobytes()
+        return _float_bytes(float(value))
     if isinstance(value, str):
         return value.encode()
-    if value is None:
-        return b"<none>"
     return None
+
+
+_FIELD_NAMES: dict[type, tuple[str, ...]] = {}
+
+
+def _field_names(cls: type) -> tuple[str, ...]:
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+    return names
 
 
 def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: list | None = None) -> None:
@@ -52,15 +96,16 @@ def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: lis
 
     The bytes fed to ``h`` do not depend on ``leaves``: recording per-field hashes leaves the digest as it is.
     """
-    h.update(name.encode() + b"\0")
     leaf = _leaf_bytes(value)
     if leaf is not None:
-        h.update(leaf)
+        h.update(name.encode() + b"\0" + leaf)  # one update: sha256 streams, the digest is the same
         if leaves is not None:
             leaves.append((path, hashlib.blake2b(leaf, digest_size=8).digest(), _small(value)))
-    elif dataclasses.is_dataclass(value):
-        for f in dataclasses.fields(value):
-            _feed(h, f.name, getattr(value, f.name), _join(path, f.name), leaves)
+        return
+    h.update(name.encode() + b"\0")
+    if dataclasses.is_dataclass(value):
+        for f in _field_names(value if isinstance(value, type) else type(value)):
+            _feed(h, f, getattr(value, f), _join(path, f), leaves)
     elif isinstance(value, (tuple, list)):
         h.update(np.int64(len(value)).tobytes())
         if leaves is not None:
@@ -79,7 +124,10 @@ SMALL = 32  # numeric fields of at most this many elements keep their values bes
 
 def _small(value: Any) -> np.ndarray | None:
     """A numeric leaf of ≤ SMALL elements as float64 (kept so ``diff`` can give max |Δ|), else None."""
-    if isinstance(value, (str, type(None))):
+    kind = type(value)
+    if kind is float or kind is int or kind is bool:
+        return np.array((value,), np.float64)
+    if kind is str or value is None:
         return None
     arr = np.asarray(value)
     if arr.dtype.kind not in "biuf" or arr.size > SMALL:
@@ -180,10 +228,16 @@ class FrameDigests:
 _FRAME_ROOTS = {"0": "intermediates", "1": "states"}
 
 
+_FRAME_PATHS: dict[str, str] = {}
+
+
 def _frame_path(path: str) -> str:
     """``0.particles.weights`` -> ``intermediates.particles.weights``, ``1.0.x`` -> ``states.0.x``."""
-    root, _, rest = path.partition(".")
-    return _join(_FRAME_ROOTS.get(root, root), rest)
+    out = _FRAME_PATHS.get(path)
+    if out is None:
+        root, _, rest = path.partition(".")
+        out = _FRAME_PATHS[path] = _join(_FRAME_ROOTS.get(root, root), rest)
+    return out
 
 
 class ReplayDigest:

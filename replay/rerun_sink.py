@@ -10,6 +10,7 @@ from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
 import rerun as rr
 import rerun.blueprint as rrb
 import rerun.chunk as rc
@@ -27,33 +28,98 @@ def _batcher() -> rr.ChunkBatcherConfig:
     return rr.ChunkBatcherConfig(flush_tick=timedelta(days=1), flush_num_bytes=8 * 1024 * 1024, flush_num_rows=2**20)
 
 
+FLUSH_BYTES = 32 * 1024 * 1024  # buffered rows are sent when they exceed this (memory stays flat in log length)
+
+
 class FrameLogger:
-    """What a tracker's view logs through: ``log`` passes straight to Rerun at the current
-    frame; ``scalar`` buffers time-series points and sends them as columns at the end, which
-    costs a fraction of one ``rr.log`` per point.
+    """What a tracker's view logs through. Every ``log`` call is one row at the current frame, kept
+    (as the Arrow arrays its archetypes produce) and sent in columns: at most ``FLUSH_BYTES`` are
+    buffered, then each entity path's rows go out as one chunk per component set, paths in sorted
+    order. That saves ``rr.log``'s fixed cost per call (about 85 µs in rerun-sdk 0.41, ten or more
+    calls a frame) and makes the chunk order a function of the data alone: nothing passes through
+    Rerun's time-driven batcher, so two replays write the same chunks in the same order without
+    rewriting the file. ``scalar`` points are sent as columns at the end.
     """
 
-    def __init__(self, rec: rr.RecordingStream) -> None:
+    def __init__(self, rec: rr.RecordingStream, flush_bytes: int = FLUSH_BYTES) -> None:
         self.rec = rec
         self._frame = 0
         self._t_ns = 0
         self._series: dict[str, tuple[list[int], list[int], list[float]]] = {}
         self._static: set[str] = set()
+        self._rows: dict[str, list[tuple[int, int, list]]] = {}
+        self._deferred: dict[str, dict[tuple, list[tuple[int, int, dict]]]] = {}
+        self._templates: dict[tuple, list[tuple]] = {}
+        self._buffered = 0
+        self.flush_bytes = flush_bytes
         self.live_tracks: set[int] = set()  # track ids drawn under tracks/ last frame (views.parts.tracks)
 
     def set_frame(self, index: int, t_ns: int) -> None:
         self._frame, self._t_ns = index, t_ns
-        self.rec.set_time("frame", sequence=index)
-        self.rec.set_time("log_time", timestamp=np.datetime64(t_ns, "ns"))
 
-    def log(self, path: str, *entities, **kwargs) -> None:
-        self.rec.log(path, *entities, **kwargs)
+    def log(self, path: str, *entities, static: bool = False) -> None:
+        components = _components(entities)
+        if static:
+            self.flush()  # keep the order: what came before, then this
+            _send(self.rec, path, {}, [components])
+            return
+        self._rows.setdefault(path, []).append((self._frame, self._t_ns, components))
+        self._buffered += sum(a.get_total_buffer_size() for _, a in components)  # 25x cheaper than nbytes
+        if self._buffered > self.flush_bytes:
+            self.flush()
+
+    def image(self, path: str, archetype: type, data: np.ndarray | bytes, **params) -> None:
+        """``archetype(data, **params)`` (``rr.Image``, ``rr.SegmentationImage``; ``rr.EncodedImage``
+        with ``data`` the encoded bytes) at ``path``, built once per shape and parameters: later
+        frames reuse that row's format and parameters and bring only their pixels (a 720p JPEG's
+        ``EncodedImage`` costs ~140 µs to build, its pixels as an Arrow list ~6 µs).
+        """
+        raw = isinstance(data, (bytes, bytearray, memoryview))
+        if not raw and (not isinstance(data, np.ndarray) or data.dtype != np.uint8):
+            entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
+            self.log(path, entity)
+            return
+        key = (path, archetype, None if raw else (data.shape, data.strides == np.ascontiguousarray(data).strides),
+               tuple(sorted((k, repr(v)) for k, v in params.items())))
+        template = self._templates.get(key)
+        if template is None:
+            entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
+            components = _components([entity])
+            self._templates[key] = components
+        else:
+            pixels = np.frombuffer(data, dtype=np.uint8) if raw else np.ascontiguousarray(data).reshape(-1)
+            components = []
+            for descriptor, array in template:
+                if str(descriptor).endswith((":buffer", ":blob")):
+                    array = pa.ListArray.from_arrays(pa.array(np.array([0, pixels.size], dtype=np.int32)),
+                                                     pa.array(pixels), type=array.type)
+                components.append((descriptor, array))
+        self._rows.setdefault(path, []).append((self._frame, self._t_ns, components))
+        self._buffered += sum(a.get_total_buffer_size() for _, a in components)
+        if self._buffered > self.flush_bytes:
+            self.flush()
+
+    def defer(self, path: str, archetype: type, **fields) -> None:
+        """Log ``archetype(**fields)`` at ``path`` at the current frame without building it now: each
+        field is a batch (a list or an array whose first axis is the instances); at ``flush`` every
+        field is concatenated over the buffered frames and converted once (``archetype.columns``).
+        The cost per frame is then a dict append, not an archetype's construction (10-350 µs).
+        """
+        key = (archetype, tuple(fields))
+        self._deferred.setdefault(path, {}).setdefault(key, []).append((self._frame, self._t_ns, fields))
+        self._buffered += sum(getattr(v, "nbytes", 64) for v in fields.values())
+        if self._buffered > self.flush_bytes:
+            self.flush()
+
+    def has_static(self, path: str) -> bool:
+        """Whether ``static_once`` has logged ``path`` (so a caller can skip building the entity)."""
+        return path in self._static
 
     def static_once(self, path: str, entity: rr.AsComponents) -> None:
         """Log ``entity`` statically at ``path`` the first time only (an annotation context, a layout)."""
         if path not in self._static:
             self._static.add(path)
-            self.rec.log(path, entity, static=True)
+            self.log(path, entity, static=True)
 
     def scalar(self, path: str, value: float) -> None:
         frames, times, values = self._series.setdefault(path, ([], [], []))
@@ -61,7 +127,30 @@ class FrameLogger:
         times.append(self._t_ns)
         values.append(float(value))
 
+    def flush(self) -> None:
+        """Send the buffered rows: paths in sorted order, one chunk per (path, component set)."""
+        for path in sorted(set(self._rows) | set(self._deferred)):
+            groups: dict[tuple, list] = {}
+            for row in self._rows.get(path, ()):
+                groups.setdefault(tuple(d for d, _ in row[2]), []).append(row)
+            for rows in groups.values():
+                _send(self.rec, path, _timelines(rows), [r[2] for r in rows])
+            for (archetype, names), rows in self._deferred.get(path, {}).items():
+                columns = {}
+                for name in names:
+                    values = [r[2][name] for r in rows]
+                    lengths = [len(v) for v in values]
+                    for column in archetype.columns(**{name: _concat(values)}):
+                        columns[column.component_descriptor()] = column.partition(lengths).as_arrow_array()
+                import rerun_bindings as bindings
+
+                bindings.send_arrow_chunk(path, timelines=_timelines(rows), components=columns, recording=self.rec.to_native())
+        self._rows.clear()
+        self._deferred.clear()
+        self._buffered = 0
+
     def flush_scalars(self) -> None:
+        self.flush()
         for path in sorted(self._series):
             frames, times, values = self._series[path]
             self.rec.send_columns(
@@ -75,6 +164,51 @@ class FrameLogger:
         self._series.clear()
 
 
+def _timelines(rows: list[tuple]) -> dict[str, pa.Array]:
+    return {
+        "frame": pa.array([r[0] for r in rows], pa.int64()),
+        "log_time": pa.array(np.asarray([r[1] for r in rows], dtype="datetime64[ns]"), pa.timestamp("ns")),
+    }
+
+
+def _concat(values: list) -> object:
+    """Batches of several frames as one batch: arrays concatenated, anything else chained as a list."""
+    if all(isinstance(v, np.ndarray) for v in values):
+        shapes = {v.shape[1:] for v in values if len(v)}
+        if len(shapes) <= 1:
+            nonempty = [v for v in values if len(v)] or values[:1]
+            return np.concatenate(nonempty) if len(nonempty) > 1 else nonempty[0]
+    return [item for v in values for item in v]
+
+
+def _components(entities) -> list[tuple]:
+    """(descriptor, Arrow array) of each component of ``entities``, first of a descriptor kept (as ``rr.log``)."""
+    out, seen = [], set()
+    for entity in entities:
+        batches = entity.as_component_batches() if hasattr(entity, "as_component_batches") else entity
+        for batch in batches:
+            descriptor = batch.component_descriptor()
+            array = batch.as_arrow_array()
+            if array is not None and descriptor not in seen:
+                seen.add(descriptor)
+                out.append((descriptor, array))
+    return out
+
+
+def _send(rec: rr.RecordingStream, path: str, timelines: dict, rows: list[list[tuple]]) -> None:
+    """One chunk: ``rows`` (each a list of (descriptor, array), all with the same descriptors) at ``timelines``."""
+    import rerun_bindings as bindings
+
+    columns = {}
+    for k, (descriptor, _) in enumerate(rows[0]):
+        arrays = [row[k][1] for row in rows]
+        offsets = np.zeros(len(arrays) + 1, dtype=np.int32)
+        np.cumsum([len(a) for a in arrays], out=offsets[1:])
+        values = arrays[0] if len(arrays) == 1 else pa.concat_arrays(arrays)
+        columns[descriptor] = pa.ListArray.from_arrays(pa.array(offsets), values)
+    bindings.send_arrow_chunk(path, timelines=timelines, components=columns, recording=rec.to_native())
+
+
 def _stream(recording_id: str) -> rr.RecordingStream:
     rec = rr.RecordingStream("trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher())
     # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
@@ -85,9 +219,11 @@ def _stream(recording_id: str) -> rr.RecordingStream:
 class RerunSink:
     """Owns the RecordingStream; trackers' views log through ``self.logger``.
 
-    The stream is written to ``<path>.partial`` and rewritten in a canonical chunk order on
-    ``close`` (see :func:`canonical_chunks`), so ``rerun rrd compare`` of two replays passes
-    without ``--unordered``.
+    The stream is written to ``<path>.partial`` and renamed on ``close``. Everything, the camera
+    images included, goes through the :class:`FrameLogger`'s columns, so the chunk order depends on
+    the data only and ``rerun rrd compare`` of two replays passes without ``--unordered`` (no
+    rewrite of the file in a canonical order is needed; :func:`canonical_chunks` stays for files
+    written otherwise).
     """
 
     def __init__(self, path: str | Path, recording_id: str, blueprint: rrb.Blueprint) -> None:
@@ -97,21 +233,19 @@ class RerunSink:
         self.recording_id = recording_id
         self.blueprint = blueprint
         self.rec = _stream(recording_id)
-        self.rec.save(str(self.partial))
+        self.rec.save(str(self.partial), default_blueprint=blueprint)
         self.logger = FrameLogger(self.rec)
 
     def begin_frame(self, frame: Frame) -> None:
-        rec = self.rec
-        self.logger.set_frame(frame.index, frame.t_ns)
+        logger = self.logger
+        logger.set_frame(frame.index, frame.t_ns)
         if frame.encoded is not None and frame.encoding in ("jpeg", "png"):
             media = "image/jpeg" if frame.encoding == "jpeg" else "image/png"
-            rec.log(CAMERA, rr.EncodedImage(contents=frame.encoded, media_type=media))
+            logger.image(CAMERA, rr.EncodedImage, frame.encoded, media_type=media)
         else:
-            model = "L" if frame.image.ndim == 2 else "BGR"
-            rec.log(CAMERA, rr.Image(frame.image, color_model=model))
+            logger.image(CAMERA, rr.Image, frame.image, color_model="L" if frame.image.ndim == 2 else "BGR")
         if frame.right is not None:
-            model = "L" if frame.right.ndim == 2 else "BGR"
-            rec.log(RIGHT, rr.Image(frame.right, color_model=model))
+            logger.image(RIGHT, rr.Image, frame.right, color_model="L" if frame.right.ndim == 2 else "BGR")
 
     def close(self) -> None:
         try:
@@ -125,12 +259,7 @@ class RerunSink:
         self.logger.flush_scalars()
         self.rec.flush()
         self.rec.disconnect()
-        out = _stream(self.recording_id)
-        out.save(str(self.path), default_blueprint=self.blueprint)
-        out.send_chunks(canonical_chunks(self.partial))  # a ChunkStore: ~3x faster to send than a list
-        out.flush()
-        out.disconnect()
-        self.partial.unlink()
+        self.partial.replace(self.path)
 
 
 def canonical_chunks(path: str | Path) -> "rc.ChunkStore":

@@ -51,7 +51,8 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     parts.box_xywh(rec, f"{root}/fov", inter.fov_box)
     parts.tracks(rec, states)
     if np.all(np.isfinite(inter.centroid)):
-        rec.log(f"{root}/centroid", rr.Points2D([inter.centroid], radii=1.5, colors=[(255, 0, 255)]))
+        parts.draw(rec, f"{root}/centroid", rr.Points2D, positions=np.asarray([inter.centroid], dtype=np.float32),
+                   radii=1.5, colors=[(255, 0, 255)])
     else:
         parts.clear(rec, f"{root}/centroid")
     x0, y0 = float(inter.fov_box[0]), float(inter.fov_box[1])
@@ -69,7 +70,7 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
         vectors = ARROW_SCALE * np.stack([us[keep], vs[keep]], axis=1).astype(np.float32)
         moving = inter.moving[ys, xs][keep]
         colours = np.where(moving[:, None], [[255, 60, 60]], [[80, 200, 255]]).astype(np.uint8)
-        rec.log(f"{root}/flow_field", rr.Arrows2D(origins=origins, vectors=vectors, colors=colours))
+        parts.draw(rec, f"{root}/flow_field", rr.Arrows2D, origins=origins, vectors=vectors, colors=colours)
     else:
         parts.clear(rec, f"{root}/flow_field")
 

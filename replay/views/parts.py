@@ -53,6 +53,8 @@ def static_once(logger: Logger, path: str, entity: rr.AsComponents) -> None:
 
 def annotation_context(logger: Logger, path: str, classes: Sequence[tuple[int, str, Colour]]) -> None:
     """Class ids -> names and colours for segmentation images under ``path``; logged once, statically."""
+    if isinstance(logger, FrameLogger) and logger.has_static(path):
+        return  # building the context costs ~0.4 ms: not again for every frame
     static_once(logger, path, rr.AnnotationContext([(int(i), label, colour) for i, label, colour in classes]))
 
 
@@ -71,6 +73,20 @@ def to_uint8(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Map ``[lo, hi]`` linearly to 0..255 (NaN -> 0), e.g. a raster of scores shown as grey."""
     scaled = (np.nan_to_num(np.asarray(values, dtype=np.float64), nan=lo) - lo) / (hi - lo)
     return np.round(np.clip(scaled, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def draw(logger: Logger, path: str, archetype: type, **fields) -> None:
+    """``archetype(**fields)`` at ``path``. Through a :class:`FrameLogger` it is deferred and built
+    once for many frames (``FrameLogger.defer``: a fraction of the cost of one archetype per frame);
+    a bare stream gets it now. Fields are batches (first axis = instances); a scalar is one
+    instance; None fields are left out. Names are those of ``archetype.columns`` (``half_sizes``,
+    ``positions``, ``strips``), which its constructor takes too.
+    """
+    fields = {k: ([v] if np.isscalar(v) else v) for k, v in fields.items() if v is not None}
+    if isinstance(logger, FrameLogger):
+        logger.defer(path, archetype, **fields)
+    else:
+        logger.log(path, archetype(**fields))
 
 
 def _points(xy: np.ndarray, dim: int) -> np.ndarray:
@@ -96,10 +112,10 @@ def particles(logger: Logger, path: str, xy: np.ndarray, weights: np.ndarray | N
         return
     xy = _points(xy[:, :2], 2)
     if weights is None:
-        logger.log(path, rr.Points2D(xy, radii=1.0, colors=[(80, 200, 255)]))
+        draw(logger, path, rr.Points2D, positions=xy, radii=1.0, colors=[(80, 200, 255)])
         return
     colours, radii = weight_style(weights)
-    logger.log(path, rr.Points2D(xy, colors=colours, radii=radii))
+    draw(logger, path, rr.Points2D, positions=xy, colors=colours, radii=radii)
 
 
 def boxes(logger: Logger, path: str, centers: np.ndarray, sizes: np.ndarray, *,
@@ -110,15 +126,17 @@ def boxes(logger: Logger, path: str, centers: np.ndarray, sizes: np.ndarray, *,
     if len(centers) == 0:
         clear(logger, path)
         return
-    logger.log(path, rr.Boxes2D(centers=centers, sizes=sizes, labels=labels, colors=colors, class_ids=class_ids))
+    draw(logger, path, rr.Boxes2D, half_sizes=sizes / 2.0, centers=centers, labels=labels, colors=colors,
+         class_ids=class_ids)
 
 
 def box_xywh(logger: Logger, path: str, box: Sequence[float], *, label: str | None = None,
              color: Colour = (255, 255, 255)) -> None:
     """One box given as ``(x0, y0, w, h)`` (a search region, a field of view)."""
     x0, y0, w, h = (float(v) for v in box)
-    logger.log(path, rr.Boxes2D(array=[[x0, y0, w, h]], array_format=rr.Box2DFormat.XYWH, colors=[color],
-                                labels=None if label is None else [label]))
+    half = np.array([[w / 2.0, h / 2.0]], dtype=np.float32)
+    draw(logger, path, rr.Boxes2D, half_sizes=half, centers=np.array([[x0, y0]], dtype=np.float32) + half,
+         colors=[color], labels=None if label is None else [label])
 
 
 def field_labels(fields: Mapping[str, np.ndarray], formats: Mapping[str, str] | None = None) -> list[str]:
@@ -156,11 +174,11 @@ def blobs(logger: Logger, path: str, centers: np.ndarray, sizes: np.ndarray, acc
     if selected is not None and 0 <= selected < len(centers):
         grow[selected] = 6.0
     labels = field_labels(fields, formats) if fields else None
-    logger.log(path, rr.Boxes2D(centers=centers, sizes=np.maximum(sizes, 2.0) + grow[:, None], colors=colours,
-                                labels=labels))
+    draw(logger, path, rr.Boxes2D, half_sizes=(np.maximum(sizes, 2.0) + grow[:, None]) / 2.0, centers=centers,
+         colors=colours, labels=labels)
     if points_path is not None:
         local = centers - np.asarray(offset, dtype=np.float32)[None, :]
-        logger.log(points_path, rr.Points2D(local, radii=1.5, colors=colours))
+        draw(logger, points_path, rr.Points2D, positions=local, radii=1.5, colors=colours)
 
 
 # --- rasters over a crop ----------------------------------------------------------------------
@@ -169,7 +187,7 @@ def blobs(logger: Logger, path: str, centers: np.ndarray, sizes: np.ndarray, acc
 def place_crop(logger: Logger, path: str, offset: Sequence[float]) -> None:
     """Put ``path``'s children at ``offset`` (x, y) of the camera image, so rasters of a crop overlay it."""
     ox, oy = (float(v) for v in offset)
-    logger.log(path, rr.Transform3D(translation=[ox, oy, 0.0]))
+    draw(logger, path, rr.Transform3D, translation=np.array([[ox, oy, 0.0]], dtype=np.float32))
 
 
 def mask_over_crop(logger: Logger, path: str, mask: np.ndarray, offset: Sequence[float], *, name: str = "mask",
@@ -184,8 +202,15 @@ def mask_over_crop(logger: Logger, path: str, mask: np.ndarray, offset: Sequence
     classes = mask.astype(np.uint8) * np.uint8(class_id) if mask.dtype == bool else mask.astype(np.uint8)
     if image is not None:
         image = np.asarray(image)
-        logger.log(f"{path}/{image_name}", rr.Image(image, color_model="L" if image.ndim == 2 else "BGR"))
-    logger.log(f"{path}/{name}", rr.SegmentationImage(classes, opacity=opacity))
+        _image(logger, f"{path}/{image_name}", rr.Image, image, color_model="L" if image.ndim == 2 else "BGR")
+    _image(logger, f"{path}/{name}", rr.SegmentationImage, classes, opacity=opacity)
+
+
+def _image(logger: Logger, path: str, archetype: type, pixels: np.ndarray, **params) -> None:
+    if isinstance(logger, FrameLogger):
+        logger.image(path, archetype, pixels, **params)  # built once per shape, then only the pixels
+    else:
+        logger.log(path, archetype(pixels, **params))
 
 
 # --- Gaussians --------------------------------------------------------------------------------
@@ -231,7 +256,7 @@ def covariance_ellipses(logger: Logger, path: str, means: np.ndarray, covs: np.n
         clear(logger, path)
         return
     strips = [ellipse_polyline(m, c, n_sigma=n_sigma).astype(np.float32) for m, c in zip(means[keep], covs[keep])]
-    logger.log(path, rr.LineStrips2D(strips, colors=_pick(colors, keep), labels=_pick(labels, keep)))
+    draw(logger, path, rr.LineStrips2D, strips=strips, colors=_pick(colors, keep), labels=_pick(labels, keep))
 
 
 def covariance_ellipsoids(logger: Logger, path: str, means: np.ndarray, covs: np.ndarray, *, n_sigma: float = 2.0,
@@ -247,7 +272,7 @@ def covariance_ellipsoids(logger: Logger, path: str, means: np.ndarray, covs: np
         strips += [p.astype(np.float32) for p in ellipsoid_polylines(m, c, n_sigma=n_sigma)]
         if picked is not None:
             colours += [picked[k]] * 3
-    logger.log(path, rr.LineStrips3D(strips, colors=colours or None))
+    draw(logger, path, rr.LineStrips3D, strips=strips, colors=colours or None)
 
 
 def _pick(values: Sequence | None, keep: np.ndarray) -> list | None:
@@ -287,7 +312,7 @@ def histogram_steps(logger: Logger, path: str, edges: np.ndarray, counts: Sequen
     """
     x = np.repeat(np.asarray(edges, dtype=np.float64), 2)[1:-1] * x_scale
     strips = [np.stack([x, -np.repeat(np.asarray(h), 2).astype(np.float64)], axis=1) for h in counts]
-    logger.log(path, rr.LineStrips2D(strips, colors=colors, labels=labels))
+    draw(logger, path, rr.LineStrips2D, strips=strips, colors=colors, labels=labels)
 
 
 def histogram_bars(logger: Logger, path: str, counts: np.ndarray, *, edges: np.ndarray | None = None) -> None:
@@ -323,9 +348,9 @@ def tracks(logger: Logger, states: Sequence[TrackState], *, root: str = TRACKS) 
             clear_track(logger, path)
             continue
         size = [s.w or 2.0, s.h or 2.0]
-        logger.log(path, rr.Boxes2D(centers=np.array([[s.x, s.y]], dtype=np.float32),
-                                    sizes=np.array([size], dtype=np.float32),
-                                    colors=[STATUS_COLOURS[s.status]], labels=[f"{s.track_id} {s.status}"]))
+        draw(logger, path, rr.Boxes2D, half_sizes=np.array([size], dtype=np.float32) / 2.0,
+             centers=np.array([[s.x, s.y]], dtype=np.float32), colors=[STATUS_COLOURS[s.status]],
+             labels=[f"{s.track_id} {s.status}"])
         drawn.add(s.track_id)
     if isinstance(logger, FrameLogger):
         for ended in sorted(logger.live_tracks - drawn - {s.track_id for s in states}):
