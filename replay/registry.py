@@ -32,7 +32,15 @@ def _golf() -> TrackerEntry:
     return TrackerEntry("golf", GolfConfig, GolfTracker, view)
 
 
-_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf}
+def _colorpf() -> TrackerEntry:
+    from trackreplay.replay.views import colorpf as view
+    from trackreplay.trackers.colorpf.config import ColorPfConfig
+    from trackreplay.trackers.colorpf.tracker import ColorPfTracker
+
+    return TrackerEntry("colorpf", ColorPfConfig, ColorPfTracker, view)
+
+
+_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf, "colorpf": _colorpf}
 NAMES = tuple(_ENTRIES)
 
 

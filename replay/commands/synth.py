@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 
 from trackreplay.replay.commands.values import non_negative_float, non_negative_int, positive_float, positive_int
+from trackreplay.recorder.synth.colorpf import SCENES as COLORPF_SCENES
+from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene
 from trackreplay.recorder.synth.flow_sims import SCENES as FLOW_SCENES
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
 from trackreplay.recorder.synth.golf.scene import CAMERA_PLACES, SCENE as GOLF_SCENE
@@ -24,8 +26,9 @@ _GOLF_ONLY = (("size", "--size"), ("fps", "--fps"), ("no_bounce", "--no-bounce")
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("synth", help="write a synthetic scene with ground truth to MCAP")
-    p.add_argument("scene", choices=(*FLOW_SCENES, GOLF_SCENE),
-                   help="flow-sim1|2|3: the gradient-flow paper's simulations; golf-teeshot: a broadcast tee shot with PTZ encoders")
+    p.add_argument("scene", choices=(*FLOW_SCENES, GOLF_SCENE, *COLORPF_SCENES),
+                   help="flow-sim1|2|3: the gradient-flow paper's simulations; golf-teeshot: a broadcast tee shot with PTZ encoders; "
+                        "colorpf-illumination|background|approach: walkers before a fixed camera (colour PF, Tables 1-3)")
     p.add_argument("out", type=Path, help="output .mcap")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the procedural scene (default 0)")
     flow = p.add_argument_group("flow-sim scenes")
@@ -60,6 +63,8 @@ def _reject(args: argparse.Namespace, options: tuple[tuple[str, str], ...], scen
 def run(args: argparse.Namespace) -> int:
     if args.scene == GOLF_SCENE:
         return _run_golf(args)
+    if args.scene in COLORPF_SCENES:
+        return _run_colorpf(args)
     _reject(args, _GOLF_ONLY, args.scene)
     cfg = FlowSimConfig(
         scene=args.scene, seed=args.seed, background=args.background or "texture", encoding=args.encoding or "png",
@@ -100,4 +105,19 @@ def _run_golf(args: argparse.Namespace) -> int:
         if bar is not None:
             bar.close()
     print(f"wrote {args.out}: {GOLF_SCENE}, {summary.describe()}", file=sys.stderr)
+    return 0
+
+
+def _run_colorpf(args: argparse.Namespace) -> int:
+    """Colour-PF scenes take --seed and --frames (walking frames, default 96)."""
+    _reject(args, _GOLF_ONLY + (("background", "--background"), ("encoding", "--encoding")), args.scene)
+    if not args.out.parent.is_dir():
+        raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
+    cfg = ColorPfSceneConfig(scene=args.scene, seed=args.seed, frames=96 if args.frames is None else args.frames)
+    try:
+        cfg.validate()
+    except ValueError as err:
+        raise TrackreplayError(str(err)) from None
+    summary = write_colorpf_scene(args.out, cfg)
+    print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
     return 0

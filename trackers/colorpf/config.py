@@ -26,6 +26,7 @@ HISTOGRAMS = ("hs", "hsv")
 REFERENCES = ("mixed", "target")
 BACKGROUNDS = ("auto", "before", "early", "none")
 SIZES = ("geometry", "noise", "fixed")
+ASPECTS = ("likelihood", "fixed")
 
 
 @dataclass(frozen=True)
@@ -38,8 +39,9 @@ class LikelihoodConfig:
     s_min: float = 0.1  # "hsv" only: Pérez's thresholds (fractions of the S and V ranges) for a coloured pixel
     v_min: float = 0.2
     # Sample at most this many pixels per particle box (a regular grid; None = every pixel). The
-    # paper counts every pixel; the default keeps large boxes (a walker close to the camera) cheap.
-    max_pixels: int | None = None
+    # paper counts every pixel; this keeps large boxes (a walker close to the camera) cheap: the cost
+    # per particle is then bounded, so a step costs O(N) whatever the target's size.
+    max_pixels: int | None = 1024
 
     def __post_init__(self) -> None:
         if self.histogram not in HISTOGRAMS:
@@ -82,7 +84,7 @@ class ReferenceConfig:
 class SizeConfig:
     """Box area from the ground-plane distance, eq. (9); ``[colorpf.size]``."""
 
-    mode: str = "geometry"  # "geometry": eq. (9); "noise": a random walk on w and h (the paper's baseline); "fixed"
+    mode: str = "geometry"  # "geometry": eq. (9) + eq. (12); "noise": a random walk on w and h (the paper's baseline); "fixed"
     r_s: float = 0.2  # eq. (9): std of omega_S relative to S
     noise: float = 0.05  # "noise" mode: std of the per-frame change of w and h, relative
     min_px: float = 4.0  # smallest width or height
@@ -98,12 +100,24 @@ class SizeConfig:
 class AspectConfig:
     """Aspect ratio from the likelihood distribution, eqs. (10)-(12); ``[colorpf.aspect]``."""
 
+    # "likelihood": the paper's §4.2, R_t from eqs. (10)-(11) with jump rejection; "fixed": R stays at
+    # the marked box's h/w (ours, the default). Measured on the synthetic scenes (docs/colorpf.md):
+    # with N = 40 the extent ratio of eq. (11) random-walks (the particles' spread carries as much of
+    # it as the target) and drags h far off (h error 30-50 px), where the fixed R keeps it within 5.
+    mode: str = "fixed"
     threshold: float = 25.0  # l: particles whose likelihood exceeds it span the target (paper: 25)
+    # True: l is a ratio to the best particle's likelihood (L > L_max / l, i.e. k S^2 within ln l of
+    # the best), ours; False: the paper's absolute L > l. The absolute threshold depends on how well
+    # the reference matches at all: on our scenes S is 0.6-0.8 around the target, L > 25 (S > 0.40)
+    # then holds for nearly every particle and R_t measures the particle cloud, not the target.
+    relative: bool = True
     near: float = 1.0  # "d_i small": within near * sqrt(S') of the estimate (eq. 10)
     max_jump: float = 1.5  # R_t more than this factor away from R_{t-1} is a wrong estimate: keep R_{t-1}
     min_particles: int = 3  # fewer qualifying particles: keep R_{t-1}
 
     def __post_init__(self) -> None:
+        if self.mode not in ASPECTS:
+            raise ValueError(f"aspect.mode must be one of {', '.join(ASPECTS)}, not {self.mode!r}")
         if self.threshold < 1 or self.near <= 0 or self.max_jump <= 1 or self.min_particles < 2:
             raise ValueError("aspect.threshold >= 1, aspect.near > 0, aspect.max_jump > 1, aspect.min_particles >= 2")
 
@@ -113,14 +127,16 @@ class ColorPfConfig:
     """The whole tracker (``[colorpf]``); each stage gets only its own table."""
 
     n_particles: int = 40  # N (paper: 40)
-    # Position noise omega_x, omega_y (eq. 2): std as a fraction of the box's side sqrt(w h), at least
-    # min_noise_px. Relative, so a walker coming closer (larger, faster in the image) is followed.
+    # Position noise omega_x, omega_y (eq. 2): std as a fraction of the box's width and height
+    # respectively, at least min_noise_px. Relative, so a walker coming closer (larger, faster in the
+    # image) is followed; per axis, so the particles spread like the box (see motion.py).
     noise: float = 0.2
     min_noise_px: float = 2.0
-    # "measured" when the best particle's likelihood reaches this (the aspect threshold l = 25, i.e.
-    # S > 0.40); otherwise "predicted", and after lost_after such frames in a row "lost" (no position).
+    # "measured" when the estimate box's likelihood exp(k S^2) reaches this (the aspect threshold
+    # l = 25, i.e. S >= 0.40); otherwise "predicted", and after lost_after such frames in a row
+    # "lost" (no position) until the colour is found again.
     measured_likelihood: float = 25.0
-    lost_after: int = 15
+    lost_after: int = 10
     likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     size: SizeConfig = field(default_factory=SizeConfig)

@@ -1,0 +1,44 @@
+"""`trackreplay smooth TRAJ LOG --out SMOOTH.parquet`: RTS smoothing of every track over the whole log."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from trackreplay.replay.commands.values import non_negative_int
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("smooth", help="smooth every track over the whole log (offline RTS) and fill its gaps")
+    p.add_argument("trajectory", type=Path, help="trajectory from `replay --export` (.parquet or .csv, not gap-filled)")
+    p.add_argument("log", type=Path, help="the log it was replayed from (frame times, camera poses)")
+    p.add_argument("--out", type=Path, required=True, help="smoothed trajectory: .parquet or .csv")
+    p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) the smoother fills; longer stays lost")
+    p.set_defaults(func=run)
+    return p
+
+
+def smooth_and_report(table, log: Path, max_gap: int):
+    """Smooth ``table`` with the log's frame times and cameras; print one line per track."""
+    from trackreplay.replay.smooth import SmoothConfig, log_context, smooth_trajectory
+
+    times, cameras = log_context(log)
+    out, fits = smooth_trajectory(table, SmoothConfig(max_gap=max_gap), frame_times=times, cameras=cameras)
+    for f in fits:
+        print(f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
+              f"{f.filled} frames filled; q {f.q:g} px²/frame³, σ {f.sigma:g} px")
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from trackreplay.replay.export import read_trajectory, write_trajectory
+
+    if args.out.suffix.lower() == ".txt":
+        from trackreplay.schemas.errors import TrackreplayError
+
+        raise TrackreplayError(f"{args.out}: a smoothed trajectory is written as .parquet or .csv (it has std and fill columns)")
+    table = read_trajectory(args.trajectory)
+    out = smooth_and_report(table, args.log, args.max_gap)
+    write_trajectory(out, args.out)
+    print(f"wrote {args.out}: {out.height} rows")
+    return 0

@@ -1,0 +1,148 @@
+"""The reference histogram, §3.2: background subtraction at initialisation, then eq. (7).
+
+``H_ref = (P_detect / P_square) H_target + ((P_square - P_detect) / P_square) H_back`` — the paper
+prints ``P_detect - P_square`` in the second weight, which would make it negative; SPEC's **(fix)**
+(the two weights sum to one, so ``H_ref`` stays normalised).
+
+``P_detect`` are the marked box's foreground pixels (their histogram is ``H_target``), ``P_square``
+the box's pixels, ``H_back`` the histogram of the **whole** background image.
+
+Where the background comes from (:class:`BackgroundFrames`): the per-pixel median of the frames
+before the marked one (``"before"``: the paper's background subtraction at initialisation, the
+target not yet in the picture); or, when the log starts with the target already there, the median
+of the first frames from the marked one on (``"early"``: a walking target leaves each pixel within
+a few frames, so the median is the background again), the marked frame kept until then. With no
+usable background the reference is the marked box's own histogram (target and its surroundings
+inside the box, i.e. no separate ``H_back``), said once in a notice.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from trackreplay.trackers.appearance.histogram import box_histograms, index_histogram
+from trackreplay.trackers.colorpf.config import ReferenceConfig
+from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners
+from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
+
+
+def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: int, p_square: int) -> np.ndarray:
+    """Eq. (7) with SPEC's fix: ``(P_d / P_s) H_target + ((P_s - P_d) / P_s) H_back``."""
+    if p_square <= 0 or not 0 <= p_detect <= p_square:
+        raise ValueError(f"eq. (7) needs 0 <= P_detect <= P_square and P_square > 0, not {p_detect}, {p_square}")
+    a = p_detect / p_square
+    return a * np.asarray(h_target, dtype=np.float64) + (1.0 - a) * np.asarray(h_back, dtype=np.float64)
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """The reference and how it was made (flat histograms, ``model.n_bins`` long)."""
+
+    histogram: np.ndarray  # H_ref used by eq. (4)
+    kind: str  # "mixed" (eq. 7) | "target" (H_target only) | "box" (the marked box's histogram: no background)
+    background: str  # where the background came from: "before" | "early" | "none"
+    h_target: np.ndarray
+    h_back: np.ndarray  # zeros when there is no background
+    p_detect: int
+    p_square: int
+    mask: np.ndarray  # (h, w) bool foreground of the marked box; (0, 0) without a background
+    mask_offset: np.ndarray  # (2,) int: the box's top-left pixel
+
+
+def box_reference(model: ColourModel, image: np.ndarray, box: np.ndarray) -> Reference:
+    """No background: the marked box's own histogram."""
+    h = _box_hist(model, image, box)
+    x0, y0, x1, y1 = box
+    return Reference(h, "box", "none", h, np.zeros_like(h), 0, int((x1 - x0) * (y1 - y0)),
+                     np.zeros((0, 0), bool), np.array([x0, y0], dtype=np.int64))
+
+
+def _box_hist(model: ColourModel, image: np.ndarray, box: np.ndarray) -> np.ndarray:
+    x0, y0, x1, y1 = (int(v) for v in box)
+    index = model.index(image[y0:y1, x0:x1])
+    return box_histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), model.n_bins)[0][0]
+
+
+def subtract_and_mix(model: ColourModel, cfg: ReferenceConfig, image: np.ndarray, background: np.ndarray,
+                     box: np.ndarray, source: str) -> tuple[Reference | None, str]:
+    """Background subtraction in the marked box, then eq. (7) (or H_target alone for ``mode="target"``).
+
+    Returns ``(None, why)`` when the background is unusable: the foreground fills less than
+    ``min_fill`` of the box (the background still holds the target, or nothing is there) or more
+    than ``max_fill`` (the background is not this scene's).
+    """
+    x0, y0, x1, y1 = (int(v) for v in box)
+    fg = foreground_mask(image[y0:y1, x0:x1], background[y0:y1, x0:x1], cfg.threshold, open_px=cfg.open_px)
+    p_square, p_detect = int(fg.size), int(fg.sum())
+    fill = p_detect / max(p_square, 1)
+    if not cfg.min_fill <= fill <= cfg.max_fill:
+        return None, (f"the foreground fills {fill:.0%} of the marked box (usable: {cfg.min_fill:.0%}-"
+                      f"{cfg.max_fill:.0%})")
+    index = model.index(image[y0:y1, x0:x1])
+    h_target = index_histogram(index, model.n_bins, fg)
+    h_back = index_histogram(model.index(background), model.n_bins)  # the whole background
+    if cfg.mode == "mixed":
+        h_ref, kind = mixed_reference(h_target, h_back, p_detect, p_square), "mixed"
+    else:
+        h_ref, kind = h_target, "target"
+    return Reference(h_ref, kind, source, h_target, h_back, p_detect, p_square, fg,
+                     np.array([x0, y0], dtype=np.int64)), ""
+
+
+class BackgroundFrames:
+    """Collects the frames the background median is taken from, for a mark on frame ``start``.
+
+    ``"before"`` keeps the last ``frames`` frames before ``start``; ``"early"`` the first ``frames``
+    from ``start`` on; ``"auto"`` decides at ``start``: "before" when at least ``min_frames`` frames
+    came before it, else "early". ``"none"``: no background.
+    """
+
+    def __init__(self, cfg: ReferenceConfig, start: int) -> None:
+        self.cfg = cfg
+        self.start = start
+        self.source = cfg.background
+        self._before: list[np.ndarray] = []
+        self._early = MedianBackground(cfg.frames)
+
+    def offer(self, index: int, image: np.ndarray) -> None:
+        """Every frame before the mark and, while "early" is collecting, after it."""
+        if index < self.start:
+            if self.source in ("before", "auto") and index >= self.start - self.cfg.frames:
+                self._before.append(image)
+        elif self.source == "early":
+            self._early.add(image)
+
+    def at_start(self, image: np.ndarray) -> tuple[np.ndarray | None, str]:
+        """At the marked frame: the background now (``"before"``), or None and the source to wait for."""
+        cfg = self.cfg
+        if self.source == "none":
+            return None, "none"
+        if self.source == "auto":
+            self.source = "before" if len(self._before) >= cfg.min_frames else "early"
+        if self.source == "before":
+            frames, self._before = self._before, []
+            if len(frames) < cfg.min_frames:
+                return None, "none"
+            median = MedianBackground(len(frames))
+            for f in frames:
+                median.add(f)
+            return median.model(), "before"
+        self._early.add(image)
+        return None, "early"
+
+    @property
+    def early_ready(self) -> bool:
+        return self.source == "early" and self._early.full
+
+    def early_model(self) -> np.ndarray | None:
+        model = self._early.model()
+        self._early.clear()
+        self.source = "used"
+        return model
+
+
+def marked_box(region_xywh: tuple[float, float, float, float], width: int, height: int) -> np.ndarray:
+    """The marked box's integer corners ``x0, y0, x1, y1`` in the image."""
+    return box_corners(np.array(region_xywh, dtype=np.float64), width, height)[0]

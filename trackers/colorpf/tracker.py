@@ -1,0 +1,213 @@
+"""Colour particle filter robust to background, illumination and size (seed 002): ``ColorPfTracker``, "colorpf".
+
+Per frame, the paper's pipeline (§2-§4), one module per stage:
+
+1. Before the mark: frames are kept for the background (:mod:`.reference`).
+2. At the mark: background subtraction in the marked box, reference ``H_ref`` by eq. (7) (the
+   fix of SPEC), ``S`` of eq. (9) from the marked box's area and its foot's distance, ``R_0`` from
+   the box; the particles start on the box.
+3. Then: select (systematic resampling, the engine's Generator) -> eq. (2) predict, ``w, h`` from
+   the size estimate (:mod:`.motion`, :mod:`.size`, :mod:`.aspect`) -> eqs. (4)-(5) weigh with the
+   H-S histogram intersection (:mod:`.likelihood`) -> eq. (6) estimate -> eqs. (10)-(11) ``R_t``
+   with jump rejection.
+4. Status: "measured" when the estimate box's intersection ``S`` with the reference reaches the
+   aspect threshold's (``L >= l``, l = 25: S >= 0.40 at k = 20), with ``S`` as the confidence;
+   "predicted" otherwise; "lost" (no position) after ``lost_after`` such frames in a row, until
+   the colour is found again.
+
+The first mark in the log (lowest frame; on one frame, the first listed), whatever its label,
+starts the track; later marks are not used (a notice says so).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.base import TrackerBase, TrackState
+from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
+from trackreplay.trackers.colorpf.config import ColorPfConfig
+from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
+from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, measure
+from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition
+from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
+                                                    subtract_and_mix)
+from trackreplay.trackers.colorpf.size import WeakPerspectiveSize, foot_points, ground_distance, horizon_side
+from trackreplay.trackers.filters.particles import ParticleFilter
+from trackreplay.trackers.frame import Frame
+
+NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
+NO_PLANE_NOTICE = ("no ground plane (/camera/ground_plane) in the log: the size estimate takes the distance as constant "
+                   "(S' stays at the marked box's area, eq. (9) with Z = Z_0)")
+
+
+def start_mark(hints: tuple[InitRegion, ...]) -> tuple[InitRegion | None, str]:
+    """The mark that starts the track and, when there are several, a sentence saying which."""
+    if not hints:
+        return None, ""
+    first = min(hints, key=lambda r: r.frame)  # min keeps the first listed among equals
+    if len(hints) == 1:
+        return first, ""
+    return first, (f"the log marks {len(hints)} boxes: the track starts from the first, on frame {first.frame} "
+                   f"(label {first.label!r}); later marks are not used")
+
+
+class ColorPfTracker(TrackerBase):
+    """Seed 002 (SPEC Tracker 2). ``step(frame)`` returns one track (id 1) from the marked frame on."""
+
+    name = "colorpf"
+
+    def __init__(self, config: ColorPfConfig, rng: np.random.Generator) -> None:
+        self.config = config
+        self.rng = rng
+        self.model = ColourModel(config.likelihood)
+        self.pf = ParticleFilter(config.n_particles, 4, rng)
+        self.mark: InitRegion | None = None
+        self.background: BackgroundFrames | None = None
+        self.reference: Reference | None = None
+        self.size: WeakPerspectiveSize | None = None
+        self.aspect: AspectEstimate | None = None
+        self.started = False
+        self.misses = 0
+        self.side = 0.0
+        self.initial_wh = np.zeros(2)
+        self._marked_image: np.ndarray | None = None
+        self._told: set[str] = set()
+        self._pending: list[str] = []
+        self.intermediates = ColorPfIntermediates.idle()
+
+    # --- notices ---------------------------------------------------------------------------------
+    def _say(self, text: str) -> None:
+        if text and text not in self._told:
+            self._told.add(text)
+            self._pending.append(text)
+
+    def _notice(self) -> str:
+        text, self._pending = "; ".join(self._pending), []
+        return text
+
+    # --- the step ---------------------------------------------------------------------------------
+    def step(self, frame: Frame) -> list[TrackState]:
+        if self.mark is None:
+            self.mark, several = start_mark(frame.all_hints + frame.hints)
+            if self.mark is None:
+                self._say(NO_MARK_NOTICE)
+                self.intermediates = ColorPfIntermediates.idle(self._notice())
+                return []
+            self._say(several)
+            self.background = BackgroundFrames(self.config.reference, self.mark.frame)
+        assert self.background is not None
+        if not self.started:
+            if frame.index < self.mark.frame:
+                self.background.offer(frame.index, frame.image)
+                self.intermediates = ColorPfIntermediates.idle(self._notice())
+                return []
+            return self._start(frame)
+        self.background.offer(frame.index, frame.image)
+        mask = None
+        if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
+            mask = self._rebuild_reference(self.background.early_model(), "early")
+        return self._track(frame, mask)
+
+    def _start(self, frame: Frame) -> list[TrackState]:
+        cfg, mark = self.config, self.mark
+        assert mark is not None and self.background is not None
+        height, width = frame.image.shape[:2]
+        box = marked_box((mark.x, mark.y, mark.w, mark.h), width, height)
+        self.reference = box_reference(self.model, frame.image, box)
+        background, source = self.background.at_start(frame.image)
+        mask = None
+        if source == "before":
+            mask = self._rebuild_reference(background, "before", frame.image, box)
+        elif source == "early":
+            self._marked_image = frame.image
+            self._marked_box = box
+        else:
+            self._say(self._no_background("the log has no usable background"
+                                          if cfg.reference.background != "none" else "reference.background = \"none\""))
+        # eq. (9): S from the marked box's area at its foot's distance; R_0 from the box
+        plane = frame.ground_plane
+        foot = foot_points(np.array([[mark.x, mark.y]]), mark.h)
+        if plane is not None:
+            self.side = float(horizon_side(plane, foot)[0])
+        distance0 = float(ground_distance(plane, foot, self.side)[0])
+        if cfg.size.mode == "geometry" and not np.isfinite(distance0):
+            self._say(NO_PLANE_NOTICE if plane is None else
+                      "the marked box's foot is not on the ground plane: the size estimate takes the distance as constant")
+        self.size = WeakPerspectiveSize(cfg.size.r_s, mark.w * mark.h, distance0)
+        self.aspect = AspectEstimate(cfg.aspect, mark.h / mark.w)
+        self.initial_wh = np.array([mark.w, mark.h], dtype=np.float64)
+        sigma = np.concatenate([position_sigma(self.initial_wh, cfg.noise, cfg.min_noise_px), [0.0, 0.0]])
+        self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
+        self.started = True
+        return self._track(frame, mask, weigh_only=True)
+
+    def _no_background(self, why: str) -> str:
+        return (f"no background for the reference histogram ({why}): the reference is the marked box's own "
+                "histogram (target and whatever else the box holds), not eq. (7)")
+
+    def _rebuild_reference(self, background: np.ndarray | None, source: str, image: np.ndarray | None = None,
+                           box: np.ndarray | None = None) -> np.ndarray | None:
+        """Background subtraction on the marked frame and eq. (7); returns the foreground mask."""
+        image = self._marked_image if image is None else image
+        box = self._marked_box if box is None else box
+        self._marked_image = None
+        if background is None or image is None or background.shape != image.shape:
+            self._say(self._no_background("the background frames do not match the marked frame"))
+            return None
+        ref, why = subtract_and_mix(self.model, self.config.reference, image, background, box, source)
+        if ref is None:
+            self._say(self._no_background(f"{source} background: {why}"))
+            return None
+        if source == "early":
+            self._say(f"reference: eq. (7) from the median of {self.config.reference.frames} frames from the mark on "
+                      "(the target was in the picture from the start); until then the marked box's own histogram")
+        self.reference = ref
+        return ref.mask
+
+    def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
+        cfg = self.config
+        assert self.reference is not None and self.size is not None and self.aspect is not None
+        image, plane = frame.image, frame.ground_plane
+        prev = self.pf.estimate()
+        if not weigh_only:
+            self.pf.resample()  # select by the previous weights
+            self.pf.predict(transition(
+                sigma=position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), size=cfg.size, ratio=self.aspect.ratio,
+                box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh))  # eq. (2)
+        m = measure(self.model, image, self.pf.particles, self.reference.histogram)  # eqs. (4)-(5)
+        self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
+        self.pf.weigh(lambda _: m.likelihood)
+        estimate = self.pf.estimate()  # eq. (6)
+        area_a, distance_a = standing_box(estimate[None, :2], estimate[3], self.size, plane, self.side, self.aspect.ratio)
+        area, distance = float(area_a[0]), float(distance_a[0])
+        if cfg.size.mode == "geometry" and cfg.aspect.mode == "likelihood" and not weigh_only:
+            update = self.aspect.update(self.pf.particles[:, :2], m.likelihood, estimate, area)  # eqs. (10)-(11)
+        else:
+            update = AspectUpdate(float("nan"), self.aspect.ratio, True)
+        current = box_histogram(self.model, image, estimate)
+        s_est = float(np.minimum(current, self.reference.histogram).sum())
+        if s_est >= self.model.similarity_for(cfg.measured_likelihood):
+            status, self.misses = "measured", 0
+        else:
+            self.misses += 1
+            status = "lost" if self.misses >= cfg.lost_after else "predicted"
+        ref = self.reference
+        self.intermediates = ColorPfIntermediates(
+            "track", self.pf.particles.copy(), self.pf.weights.copy(), m.similarity, m.likelihood, estimate,
+            ref.histogram.reshape(self.model.shape), current.reshape(self.model.shape), s_est,
+            area if cfg.size.mode == "geometry" else float("nan"), distance, update.measured, update.ratio,
+            update.kept, ref.kind, ref.background,
+            mask if mask is not None else np.zeros((0, 0), bool),
+            ref.mask_offset.copy() if mask is not None else np.zeros(2, np.int64), status, self._notice())
+        if status == "lost":
+            return [TrackState(1, status="lost", confidence=float(np.clip(s_est, 0.0, 1.0)))]
+        x, y, w, h = (float(v) for v in estimate)
+        vx = vy = None
+        if not weigh_only:
+            vx, vy = x - float(prev[0]), y - float(prev[1])
+        return [TrackState(1, x=x, y=y, w=w, h=h, vx=vx, vy=vy, status=status,
+                           confidence=float(np.clip(s_est, 0.0, 1.0)))]
+
+
+__all__ = ["ColorPfTracker", "start_mark", "box_from_area"]
