@@ -44,6 +44,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the export (default linear)")
     p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
+    p.add_argument("--smooth", action="store_true", help="export the offline RTS-smoothed trajectory (trackreplay smooth) "
+                   "instead of interpolating; the digest is the causal replay's")
     p.add_argument("--summary", type=Path, help="write a JSON summary (digest, frames, timings; per-frame digests "
                    "beside it as SUMMARY.frames.parquet, for trackreplay diff)")
     p.add_argument("--expect-digest", help="fail unless the replay's digest equals this hex string")
@@ -63,7 +65,11 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
 
 def run(args: argparse.Namespace) -> int:
     result = replay(request_from_args(args, args.rrd))
-    if args.export:
+    if args.export and args.smooth:
+        from trackreplay.replay.commands.smooth import smooth_and_report
+
+        write_trajectory(smooth_and_report(result.trajectory, args.log, args.max_gap), args.export)
+    elif args.export:
         table = result.trajectory if args.interpolate == "none" else fill_gaps(result.trajectory, args.interpolate, args.max_gap)
         write_trajectory(table, args.export)
     summary = result.summary(args.log)

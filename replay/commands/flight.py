@@ -1,0 +1,63 @@
+"""`trackreplay flight TRAJ LOG`: the golf ball's 3-D flight fitted to its lines of sight."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("flight", help="fit the golf ball's 3-D flight, bounce and roll from one PTZ camera")
+    p.add_argument("trajectory", type=Path, help="golf trajectory from `replay --export` (.parquet or .csv)")
+    p.add_argument("log", type=Path, help="the log it was replayed from (PTZ encoders, lens table, frame times)")
+    p.add_argument("--out", type=Path, help="3-D trajectory at frame times (X, Y, Z rows): .parquet or .csv")
+    p.add_argument("--report", type=Path, help="per-shot report as JSON (values and 1-sigma uncertainties)")
+    p.add_argument("--rrd", type=Path, help="Rerun 3-D view: camera, lines of sight, fitted path")
+    p.add_argument("--track", type=int, help="track id (default: the track with most measured frames)")
+    p.add_argument("--no-size", action="store_true", help="ignore the apparent ball size (lines of sight only)")
+    p.set_defaults(func=run)
+    return p
+
+
+def _clean(value):
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    import polars as pl
+
+    from trackreplay.replay.export import read_trajectory, write_trajectory
+    from trackreplay.replay.flight import FlightConfig, fit_flight, flight_rows, observations
+    from trackreplay.replay.smooth import log_context
+
+    traj = read_trajectory(args.trajectory)
+    track = args.track
+    if track is None and not traj.is_empty():
+        counts = traj.filter(pl.col("status") == "measured").group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
+        track = int(counts["track_id"][0]) if counts.height else None
+    times, cameras = log_context(args.log)
+    obs = observations(traj, cameras, track_id=track, what=str(args.log))
+    fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
+    fit = fit_flight(obs, FlightConfig(use_size=not args.no_size), fps)
+    print(fit.report.describe())
+    rows = flight_rows(fit, times, cameras, track_id=track or 1)
+    if args.out:
+        write_trajectory(rows, args.out)
+        print(f"wrote {args.out}: {rows.height} rows")
+    if args.report:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps(_clean(fit.report.as_dict()), indent=2) + "\n")
+    if args.rrd:
+        from trackreplay.replay.views.flight import write_flight_rrd
+
+        write_flight_rrd(args.rrd, fit, rows, name=Path(args.log).stem)
+        print(f"wrote {args.rrd}")
+    return 0

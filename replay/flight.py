@@ -1,0 +1,520 @@
+"""The golf ball's 3-D flight from one PTZ camera, fitted offline over the whole shot (issue 13).
+
+The golf tracker records, per measured frame, the line of sight from the camera to the ball
+(``dx, dy, dz``: PTZ encoders + lens table) and the ball's apparent size (``w, h``, px). One
+camera gives directions, not distances; but a ball in flight obeys known physics, so the whole
+set of directions pins the flight down. :func:`fit_flight` finds, by nonlinear least squares
+(``scipy.optimize.least_squares``), the shot that best explains every line of sight:
+
+- **flight**: launch time ``t0`` and point ``p0`` (on the ground), launch velocity (speed, elevation,
+  azimuth), drag coefficient ``C_d`` and lift coefficient ``C_L = C_L0 + C_L1 (v0/|v| − 1)`` (lift
+  grows as the ball slows: the spin parameter ``rω/|v|``) with the spin axis' tilt (sidespin),
+  gravity ``g`` fixed at 9.81 m/s²: ``a = −g ẑ − k C_d |v| v + k C_L |v| (ŵ × v)``,
+  ``k = ρ A / 2m`` for a regulation ball (``BallParams``); before ``t0`` the ball rests at ``p0``;
+- **bounce and roll**: at each ground contact (centre at ``Z = D/2``) the vertical speed reverses
+  with restitution ``e`` and the horizontal speed keeps a fraction ``μ_h``; hops with drag only;
+  when a hop would rise less than 1 cm the ball rolls along its last direction, decelerating at
+  ``a_roll`` until it rests.
+
+Residuals: per measured frame, the angle between the measured and the modelled line of sight in
+pixels of that frame (``fx · angle / σ_px``), and the log ratio of the measured apparent size
+to the modelled one (``f D / r``) over ``σ_size`` — the size gives the range where the lines of
+sight alone leave it weak (a camera behind the tee looks along the flight). A soft-L1 loss keeps a
+wrong blob from pulling the fit. Launch point and time come from the frames before the ball moves
+(its line of sight meets the ground there); the launch velocity starts from a few guesses and the
+best is refined with every parameter free.
+
+The report gives launch speed and angles, apex, carry, landing point (world metres), time of
+flight, the bounce/roll parameters and rest point, each with a 1-σ uncertainty from the fit's
+covariance (``(JᵀJ)⁻¹ s²``, propagated by finite differences); :func:`flight_rows` exports the
+fitted 3-D trajectory at frame times as ``X, Y, Z`` rows of the trajectory table.
+
+Without PTZ encoders and a lens table there are no lines of sight: :class:`FlightUnavailable`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+import polars as pl
+from scipy.optimize import least_squares
+
+from trackreplay.replay.trajectory import COLUMNS, SCHEMA
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.geometry.ptz import PtzCamera
+
+G = 9.81
+PHASES = ("tee", "air", "bounce", "roll", "rest")
+MIN_HOP_M = 0.01
+
+
+class FlightUnavailable(TrackreplayError):
+    """The trajectory or log has no lines of sight (no PTZ encoders / lens table): no 3-D."""
+
+
+@dataclass(frozen=True)
+class BallParams:
+    diameter: float = 0.04267  # m
+    mass: float = 0.04593  # kg
+    air_density: float = 1.2  # kg/m³
+
+    @property
+    def k(self) -> float:
+        """``ρ A / 2m`` (1/m): drag acceleration = k C_d |v|²."""
+        return self.air_density * math.pi * (self.diameter / 2) ** 2 / (2.0 * self.mass)
+
+
+@dataclass(frozen=True)
+class FlightConfig:
+    ball: BallParams = BallParams()
+    sigma_px: float = 1.0  # line-of-sight noise, px of the frame
+    sigma_size: float = 0.35  # apparent size, relative (log)
+    use_size: bool = True
+    step_s: float = 1.0 / 120.0  # integration step
+    max_time_s: float = 30.0
+    loss: str = "soft_l1"
+    f_scale: float = 3.0  # residuals beyond ~3 σ count linearly
+
+
+# Parameter vector: names, in order.
+NAMES = ("t0", "X0", "Y0", "Z0", "speed", "elevation", "azimuth", "cd", "cl", "cl_slope", "spin_tilt",
+         "restitution", "retention", "roll_decel")
+
+
+@dataclass(frozen=True)
+class Value:
+    value: float
+    std: float
+
+    def __format__(self, spec: str) -> str:
+        return f"{format(self.value, spec)} ± {format(self.std, spec)}"
+
+
+@dataclass(frozen=True)
+class FlightReport:
+    """One shot, world metres (Z up), seconds on the log clock; every value with its 1-σ."""
+
+    launch_time: Value
+    launch_point: tuple[Value, Value, Value]
+    launch_speed: Value  # m/s
+    launch_elevation: Value  # degrees above horizontal
+    launch_azimuth: Value  # degrees, counter-clockwise from +X
+    drag_cd: Value
+    lift_cl: Value  # at launch
+    lift_cl_slope: Value  # C_L = C_L0 + slope (v0/|v| − 1): lift grows as the ball slows (spin parameter ∝ 1/|v|)
+    spin_tilt: Value  # degrees: 0 = pure backspin
+    apex_height: Value  # m, ball centre above the ground
+    apex_time: Value
+    carry: Value  # horizontal distance launch -> first ground contact, m
+    landing_point: tuple[Value, Value, Value]
+    landing_time: Value
+    time_of_flight: Value
+    restitution: Value
+    retention: Value
+    roll_decel: Value  # m/s²
+    rest_point: tuple[Value, Value, Value]
+    rest_time: Value
+    frames_used: int
+    rms_px: float  # line-of-sight residual, px (frames not down-weighted by the robust loss)
+    size_rms: float  # apparent-size residual, log ratio
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+    def describe(self) -> str:
+        def p3(v: tuple[Value, Value, Value]) -> str:
+            return "(" + ", ".join(f"{c.value:.2f}" for c in v) + ") ± (" + ", ".join(f"{c.std:.2f}" for c in v) + ") m"
+
+        lines = [
+            f"launch       t {self.launch_time:.3f} s at {p3(self.launch_point)}",
+            f"             speed {self.launch_speed:.1f} m/s, elevation {self.launch_elevation:.2f}°, azimuth {self.launch_azimuth:.2f}°",
+            f"air          C_d {self.drag_cd:.3f}, C_L {self.lift_cl:.3f} + {self.lift_cl_slope:.3f} (v0/|v| - 1), spin tilt {self.spin_tilt:.1f}°",
+            f"apex         {self.apex_height:.2f} m at {self.apex_time:.2f} s",
+            f"landing      {p3(self.landing_point)} at {self.landing_time:.3f} s",
+            f"carry        {self.carry:.2f} m, time of flight {self.time_of_flight:.3f} s",
+            f"bounce/roll  restitution {self.restitution:.2f}, horizontal retention {self.retention:.2f}, "
+            f"roll deceleration {self.roll_decel:.2f} m/s²",
+            f"rest         {p3(self.rest_point)} at {self.rest_time:.2f} s",
+            f"fit          {self.frames_used} frames, line-of-sight RMS {self.rms_px:.2f} px, size RMS {self.size_rms:.2f} (log)",
+        ]
+        return "\n".join(lines + [f"note         {n}" for n in self.notes])
+
+
+# --- the model ---------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Shot:
+    """A simulated shot: positions on a fine time grid (s on the log clock), phases, events."""
+
+    t: np.ndarray
+    p: np.ndarray  # (N, 3)
+    v: np.ndarray  # (N, 3)
+    phase: np.ndarray  # (N,) int codes into PHASES
+    landing_time: float
+    landing_point: np.ndarray
+    apex_time: float
+    apex_point: np.ndarray
+    rest_time: float
+    rest_point: np.ndarray
+
+    def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (cubic Hermite between grid points) and phase codes at ``times``."""
+        times = np.asarray(times, dtype=np.float64)
+        t, p, v = self.t, self.p, self.v
+        i = np.clip(np.searchsorted(t, times, side="right") - 1, 0, len(t) - 2)
+        h = (t[i + 1] - t[i])[:, None]
+        s = np.clip((times - t[i]) / np.where(h[:, 0] > 0, h[:, 0], 1.0), 0.0, 1.0)[:, None]
+        s2, s3 = s * s, s * s * s
+        pos = ((2 * s3 - 3 * s2 + 1) * p[i] + (s3 - 2 * s2 + s) * h * v[i] + (-2 * s3 + 3 * s2) * p[i + 1]
+               + (s3 - s2) * h * v[i + 1])
+        before, after = times <= t[0], times >= t[-1]  # t[0] is the launch: the ball waits at p[0] before it
+        pos[before], pos[after] = p[0], p[-1]
+        phase = self.phase[np.clip(np.searchsorted(t, times, side="left"), 0, len(t) - 1)]
+        phase = np.where(before, 0, np.where(after, 4, phase))
+        return pos, phase
+
+
+def _accel(vx: float, vy: float, vz: float, kd: float, kl: tuple[float, float, float],
+           w: tuple[float, float, float]) -> tuple[float, float, float]:
+    """Gravity, drag and lift; ``kl = (k C_L0, k C_L1, v0)``: ``C_L = C_L0 + C_L1 (v0/|v| − 1)``."""
+    s = math.sqrt(vx * vx + vy * vy + vz * vz)
+    ax, ay, az = -kd * s * vx, -kd * s * vy, -kd * s * vz - G
+    if kl[0] or kl[1]:
+        wx, wy, wz = w
+        kl = kl[0] + kl[1] * (kl[2] / max(s, 1e-6) - 1.0)
+        ax += kl * s * (wy * vz - wz * vy)
+        ay += kl * s * (wz * vx - wx * vz)
+        az += kl * s * (wx * vy - wy * vx)
+    return ax, ay, az
+
+
+def _fly(p, v, t, h, kd, kl, w, contact_z, t_end, phase, out):
+    """RK4 until the centre comes down to ``contact_z`` (returns the contact state) or ``t_end``."""
+    px, py, pz = p
+    vx, vy, vz = v
+    out.append((t, px, py, pz, vx, vy, vz, phase))
+    while t < t_end:
+        a1 = _accel(vx, vy, vz, kd, kl, w)
+        b = (vx + 0.5 * h * a1[0], vy + 0.5 * h * a1[1], vz + 0.5 * h * a1[2])
+        a2 = _accel(*b, kd, kl, w)
+        c = (vx + 0.5 * h * a2[0], vy + 0.5 * h * a2[1], vz + 0.5 * h * a2[2])
+        a3 = _accel(*c, kd, kl, w)
+        d = (vx + h * a3[0], vy + h * a3[1], vz + h * a3[2])
+        a4 = _accel(*d, kd, kl, w)
+        nx = px + h / 6 * (vx + 2 * b[0] + 2 * c[0] + d[0])
+        ny = py + h / 6 * (vy + 2 * b[1] + 2 * c[1] + d[1])
+        nz = pz + h / 6 * (vz + 2 * b[2] + 2 * c[2] + d[2])
+        nvx = vx + h / 6 * (a1[0] + 2 * a2[0] + 2 * a3[0] + a4[0])
+        nvy = vy + h / 6 * (a1[1] + 2 * a2[1] + 2 * a3[1] + a4[1])
+        nvz = vz + h / 6 * (a1[2] + 2 * a2[2] + 2 * a3[2] + a4[2])
+        if nz <= contact_z and nvz < 0:
+            f = (pz - contact_z) / (pz - nz) if pz != nz else 1.0  # linear in the last step
+            t += f * h
+            cx, cy = px + f * (nx - px), py + f * (ny - py)
+            cv = (vx + f * (nvx - vx), vy + f * (nvy - vy), vz + f * (nvz - vz))
+            out.append((t, cx, cy, contact_z, *cv, phase))
+            return (cx, cy, contact_z), cv, t, True
+        t += h
+        px, py, pz, vx, vy, vz = nx, ny, nz, nvx, nvy, nvz
+        out.append((t, px, py, pz, vx, vy, vz, phase))
+    return (px, py, pz), (vx, vy, vz), t, False
+
+
+def simulate(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> Shot:
+    """The shot of parameter vector ``theta`` (see ``NAMES``) up to log time ``t_end``."""
+    t0, X0, Y0, Z0, speed, el, az, cd, cl, cl1, tilt, e, mu, a_roll = (float(v) for v in theta)
+    k = cfg.ball.k
+    contact = cfg.ball.diameter / 2
+    el_r, az_r, tilt_r = math.radians(el), math.radians(az), math.radians(tilt)
+    v0 = (speed * math.cos(el_r) * math.cos(az_r), speed * math.cos(el_r) * math.sin(az_r), speed * math.sin(el_r))
+    right = (math.sin(az_r), -math.cos(az_r), 0.0)
+    w = (math.cos(tilt_r) * right[0], math.cos(tilt_r) * right[1], math.sin(tilt_r))  # unit spin axis
+    out: list[tuple] = []
+    h = cfg.step_s
+    p, v, t, hit = _fly((X0, Y0, Z0), v0, t0, h, k * cd, (k * cl, k * cl1, speed), w, contact, t_end, 1, out)
+    air = np.array(out)
+    apex_i = int(np.argmax(air[:, 3]))
+    apex_time, apex_point = float(air[apex_i, 0]), air[apex_i, 1:4].copy()
+    landing_time, landing_point = (t, np.array(p)) if hit else (math.nan, np.full(3, np.nan))
+    rest_time, rest_point = math.nan, np.full(3, np.nan)
+    hops = 0
+    while hit and t < t_end:
+        vz = -e * v[2]
+        vh = (mu * v[0], mu * v[1])
+        if vz * vz / (2 * G) < MIN_HOP_M or hops > 20:
+            # Roll along the last horizontal direction, decelerating at a_roll.
+            s0 = math.hypot(*vh)
+            ux, uy = (vh[0] / s0, vh[1] / s0) if s0 > 1e-9 else (1.0, 0.0)
+            t_rest = t + (s0 / a_roll if a_roll > 1e-9 else 1e3)
+            for tt in np.linspace(t, min(t_rest, t_end + h), max(2, int(math.ceil((min(t_rest, t_end + h) - t) / (4 * h))) + 1))[1:]:
+                dt = tt - t
+                dist = s0 * dt - 0.5 * a_roll * dt * dt
+                sp = s0 - a_roll * dt
+                out.append((tt, p[0] + dist * ux, p[1] + dist * uy, contact, sp * ux, sp * uy, 0.0, 3))
+            if t_rest <= t_end + h:
+                dt = t_rest - t
+                dist = s0 * dt - 0.5 * a_roll * dt * dt
+                rest_time, rest_point = t_rest, np.array([p[0] + dist * ux, p[1] + dist * uy, contact])
+                out.append((t_rest + 1e3, *rest_point, 0.0, 0.0, 0.0, 4))
+            break
+        hops += 1
+        p, v, t, hit = _fly(p, (vh[0], vh[1], vz), t, h, k * cd, (0.0, 0.0, 1.0), w, contact, t_end, 2, out)
+    arr = np.array(out)
+    order = np.argsort(arr[:, 0], kind="stable")
+    arr = arr[order]
+    keep = np.concatenate([[True], np.diff(arr[:, 0]) > 1e-12])
+    arr = arr[keep]
+    return Shot(arr[:, 0], arr[:, 1:4], arr[:, 4:7], arr[:, 7].astype(np.int8), landing_time, landing_point,
+                apex_time, apex_point, rest_time, rest_point)
+
+
+# --- observations --------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Observations:
+    """Measured frames of the ball: times (s), unit lines of sight, apparent size (px), focal length (px)."""
+
+    frame: np.ndarray
+    t: np.ndarray
+    los: np.ndarray  # (n, 3)
+    size_px: np.ndarray  # (n,) NaN where unknown
+    fx: np.ndarray  # (n,)
+    camera: np.ndarray  # (3,)
+
+
+def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id: int | None = None,
+                 what: str = "the trajectory") -> Observations:
+    """The measured rows with a line of sight and a camera pose; :class:`FlightUnavailable` if none."""
+    if not cameras:
+        raise FlightUnavailable(f"3-D not available: {what} comes from a log without PTZ encoders and a lens table, "
+                                f"so the ball has no lines of sight (the golf tracker tracked in image coordinates only)")
+    rows = traj.filter((pl.col("status") == "measured") & pl.col("dx").is_not_null() & pl.col("x").is_not_null())
+    if track_id is not None:
+        rows = rows.filter(pl.col("track_id") == track_id)
+    rows = rows.filter(pl.col("frame").is_in(list(cameras)))
+    if rows.height < 10:
+        raise FlightUnavailable(f"3-D not available: {what} has only {rows.height} measured frames with a line of sight "
+                                f"(at least 10 are needed)")
+    frames = rows["frame"].to_numpy()
+    los = rows.select("dx", "dy", "dz").to_numpy().astype(float)
+    los /= np.linalg.norm(los, axis=1, keepdims=True)
+    w, h = rows["w"].to_numpy().astype(float), rows["h"].to_numpy().astype(float)
+    size = np.sqrt(np.where(np.isfinite(w) & (w > 0), w, np.nan) * np.where(np.isfinite(h) & (h > 0), h, np.nan))
+    fx = np.array([math.sqrt(cameras[int(f)].intrinsics.fx * cameras[int(f)].intrinsics.fy) for f in frames])
+    position = next(iter(cameras.values())).position
+    return Observations(frames, rows["t_ns"].to_numpy().astype(float) * 1e-9, los, size, fx, np.asarray(position, float))
+
+
+def _residuals(theta: np.ndarray, obs: Observations, cfg: FlightConfig, t_end: float, basis: np.ndarray) -> np.ndarray:
+    shot = simulate(theta, cfg, t_end)
+    pos, _ = shot.at(obs.t)
+    rel = pos - obs.camera
+    rng = np.linalg.norm(rel, axis=1)
+    d = rel / rng[:, None]
+    # The modelled direction in the measured ray's own tangent plane, in pixels of that frame.
+    cosang = np.sum(d * obs.los, axis=1)
+    e1 = np.einsum("ij,ij->i", d, basis[:, 0]) / cosang
+    e2 = np.einsum("ij,ij->i", d, basis[:, 1]) / cosang
+    res = [obs.fx * e1 / cfg.sigma_px, obs.fx * e2 / cfg.sigma_px]
+    if cfg.use_size:
+        model_size = obs.fx * cfg.ball.diameter / rng
+        r = np.log(obs.size_px / model_size) / cfg.sigma_size
+        res.append(np.where(np.isfinite(r), r, 0.0))
+    return np.concatenate(res)
+
+
+def _basis(los: np.ndarray) -> np.ndarray:
+    """Two unit vectors perpendicular to each line of sight: (n, 2, 3)."""
+    up = np.array([0.0, 0.0, 1.0])
+    a = np.cross(los, up)
+    a /= np.linalg.norm(a, axis=1, keepdims=True)
+    b = np.cross(los, a)
+    return np.stack([a, b], axis=1)
+
+
+def _ground_point(camera: np.ndarray, los: np.ndarray, z: float) -> np.ndarray | None:
+    if los[2] >= -1e-6:
+        return None
+    s = (z - camera[2]) / los[2]
+    return camera + s * los
+
+
+def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarray, list[str]]:
+    """Launch point and time from the frames before the ball moves; a rough rest direction for the azimuth."""
+    notes: list[str] = []
+    contact = cfg.ball.diameter / 2
+    first = obs.los[0]
+    ang = np.degrees(np.arccos(np.clip(obs.los @ first, -1, 1)))
+    # The ball moves when its line of sight leaves the first one by more than ~3 px of the frame.
+    moved = np.flatnonzero(ang * np.pi / 180 * obs.fx > 3.0)
+    k = int(moved[0]) if moved.size else len(ang) - 1
+    still = slice(0, max(1, k))
+    mean = obs.los[still].mean(axis=0)
+    mean /= np.linalg.norm(mean)
+    p0 = _ground_point(obs.camera, mean, contact)
+    if p0 is None:
+        notes.append("the first frames do not look down at the ground: launch point guessed 10 m in front of the camera")
+        p0 = obs.camera + 10.0 * mean
+        p0[2] = contact
+    t0 = 0.5 * (obs.t[max(0, k - 1)] + obs.t[k]) if k > 0 else obs.t[0] - 0.5 / fps
+    # Azimuth: towards where the ball ends (its last line of sight on the ground), else along the view.
+    end = _ground_point(obs.camera, obs.los[-1], contact)
+    target = end if end is not None and np.linalg.norm(end[:2] - p0[:2]) > 5.0 else obs.camera + 100 * obs.los[-1]
+    az = math.degrees(math.atan2(target[1] - p0[1], target[0] - p0[0]))
+    theta = np.array([t0, *p0, 50.0, 20.0, az, 0.25, 0.2, 0.0, 0.0, 0.4, 0.6, 2.0])
+    return theta, notes
+
+
+# Z0 is held at the ball's resting height (a ball on the tee or the turf): a camera behind the tee
+# looks along the line from itself to the ball, so the lines of sight alone cannot place it.
+FIXED = np.array([n == "Z0" for n in NAMES])
+LOWER = np.array([-np.inf, -np.inf, -np.inf, 0.0, 5.0, 1.0, -np.inf, 0.0, 0.0, -1.0, -60.0, 0.0, 0.0, 0.05])
+UPPER = np.array([np.inf, np.inf, np.inf, 5.0, 120.0, 75.0, np.inf, 1.5, 1.0, 1.0, 60.0, 0.95, 1.0, 20.0])
+
+
+def _solve(theta, obs, cfg, t_end, basis, free: np.ndarray, max_nfev: int):
+    def fun(x):
+        full = theta.copy()
+        full[free] = x
+        return _residuals(full, obs, cfg, t_end, basis)
+
+    x0 = np.clip(theta[free], LOWER[free] + 1e-9, UPPER[free] - 1e-9)
+    res = least_squares(fun, x0, bounds=(LOWER[free], UPPER[free]), loss=cfg.loss, f_scale=cfg.f_scale,
+                        x_scale="jac", max_nfev=max_nfev, diff_step=1e-6)
+    out = theta.copy()
+    out[free] = res.x
+    return out, res
+
+
+@dataclass(frozen=True, eq=False)
+class FlightFit:
+    theta: np.ndarray
+    cov: np.ndarray
+    shot: Shot
+    report: FlightReport
+    observations: Observations
+    config: FlightConfig
+    t_end: float
+
+    def positions(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fitted positions at log times (s), their 1-σ (per axis) and phase codes."""
+        pos, phase = self.shot.at(times)
+        J = []
+        for i in range(len(self.theta)):
+            d = _step(self.theta, i)
+            th = self.theta.copy()
+            th[i] += d
+            J.append((simulate(th, self.config, max(self.t_end, float(times.max()))).at(times)[0] - pos) / d)
+        J = np.stack(J, axis=-1)  # (n, 3, p)
+        var = np.einsum("nap,pq,naq->na", J, self.cov, J)
+        return pos, np.sqrt(np.maximum(var, 0.0)), phase
+
+
+def _step(theta: np.ndarray, i: int) -> float:
+    return 1e-4 * max(1.0, abs(float(theta[i])))
+
+
+def _derived(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> np.ndarray:
+    s = simulate(theta, cfg, t_end)
+    p0 = theta[1:4]
+    carry = float(np.hypot(*(s.landing_point[:2] - p0[:2])))
+    return np.array([s.apex_point[2], s.apex_time, carry, *s.landing_point, s.landing_time, s.landing_time - theta[0],
+                     *s.rest_point, s.rest_time])
+
+
+def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float = 30.0) -> FlightFit:
+    """Fit the shot to the observations (see the module docstring). Deterministic."""
+    t_end = float(obs.t[-1]) + 0.5
+    basis = _basis(obs.los)
+    theta, notes = _initial(obs, cfg, fps)
+    all_free = ~FIXED
+    # Stage 1: launch velocity from a few guesses, physics at typical values.
+    vel = np.zeros(len(NAMES), bool)
+    vel[[4, 5, 6]] = True
+    best = None
+    for speed in (35.0, 55.0, 75.0):
+        for el in (12.0, 25.0):
+            th = theta.copy()
+            th[4], th[5] = speed, el
+            th, res = _solve(th, obs, cfg, t_end, basis, vel, 40)
+            if best is None or res.cost < best[1]:
+                best = (th, res.cost)
+    theta = best[0]
+    # Stage 2: everything free.
+    theta, res = _solve(theta, obs, cfg, t_end, basis, all_free, 400)
+    if not res.success:
+        notes.append(f"least squares stopped early: {res.message}")
+    m, n = res.fun.size, res.x.size
+    J = res.jac
+    s2 = 2.0 * res.cost / max(1, m - n)
+    cov = np.zeros((len(NAMES), len(NAMES)))  # the fixed parameters have no variance
+    cov[np.ix_(all_free, all_free)] = np.linalg.pinv(J.T @ J) * s2
+    n = len(NAMES)
+    # Propagate to the reported quantities.
+    base = _derived(theta, cfg, t_end)
+    D = np.zeros((base.size, n))
+    for i in range(n):
+        d = _step(theta, i)
+        th = theta.copy()
+        th[i] += d
+        D[:, i] = (_derived(th, cfg, t_end) - base) / d
+    dstd = np.sqrt(np.maximum(np.einsum("ap,pq,aq->a", D, cov, D), 0.0))
+    pstd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    shot = simulate(theta, cfg, t_end)
+    resid = _residuals(theta, obs, cfg, t_end, basis)
+    nobs = len(obs.t)
+    los_px = np.hypot(resid[:nobs], resid[nobs:2 * nobs]) * cfg.sigma_px
+    size_r = resid[2 * nobs:] * cfg.sigma_size if cfg.use_size else np.zeros(0)
+    if not math.isfinite(shot.landing_time):
+        notes.append("the fitted ball does not come down within the log: no landing, carry or rest")
+    elif not math.isfinite(shot.rest_time):
+        notes.append("the log ends before the fitted ball rests")
+
+    def v(i: int) -> Value:
+        return Value(float(theta[i]), float(pstd[i]))
+
+    def dv(i: int) -> Value:
+        return Value(float(base[i]), float(dstd[i]))
+
+    inliers = los_px < 3 * cfg.f_scale * cfg.sigma_px
+    report = FlightReport(
+        launch_time=v(0), launch_point=(v(1), v(2), v(3)), launch_speed=v(4), launch_elevation=v(5), launch_azimuth=v(6),
+        drag_cd=v(7), lift_cl=v(8), lift_cl_slope=v(9), spin_tilt=v(10), apex_height=dv(0), apex_time=dv(1), carry=dv(2),
+        landing_point=(dv(3), dv(4), dv(5)), landing_time=dv(6), time_of_flight=dv(7), restitution=v(11),
+        retention=v(12), roll_decel=v(13), rest_point=(dv(8), dv(9), dv(10)), rest_time=dv(11),
+        frames_used=nobs, rms_px=float(np.sqrt(np.mean(los_px[inliers] ** 2))) if inliers.any() else math.nan,
+        size_rms=float(np.sqrt(np.mean(size_r[np.isfinite(obs.size_px)] ** 2))) if size_r.size else math.nan,
+        notes=tuple(notes),
+    )
+    return FlightFit(theta, cov, shot, report, obs, cfg, t_end)
+
+
+def flight_rows(fit: FlightFit, frame_times: dict[int, int], cameras: dict[int, PtzCamera],
+                tracker: str = "golf", track_id: int = 1) -> pl.DataFrame:
+    """The fitted 3-D trajectory at every frame time: ★ trajectory rows (status ``interpolated``:
+    a model value, not a measurement) with ``X, Y, Z``, the line of sight ``dx, dy, dz``, the image
+    position in that frame's camera, and extra columns ``X_std, Y_std, Z_std`` (m) and ``phase``."""
+    frames = np.array(sorted(frame_times), dtype=np.int64)
+    t = np.array([frame_times[int(f)] for f in frames], dtype=np.float64) * 1e-9
+    pos, std, phase = fit.positions(t)
+    rel = pos - fit.observations.camera
+    d = rel / np.linalg.norm(rel, axis=1, keepdims=True)
+    uv = np.full((len(frames), 2), np.nan)
+    for i, f in enumerate(frames):
+        cam = cameras.get(int(f))
+        if cam is not None:
+            p = cam.project_points(pos[i:i + 1])[0]
+            if np.isfinite(p).all() and cam.in_image(p.reshape(1, 2))[0]:
+                uv[i] = p
+    n = len(frames)
+    nan = np.full(n, np.nan)
+    df = pl.DataFrame({
+        "tracker": [tracker] * n, "track_id": np.full(n, track_id, np.int64), "frame": frames,
+        "t_ns": np.array([frame_times[int(f)] for f in frames], dtype=np.int64),
+        "x": uv[:, 0], "y": uv[:, 1], "w": nan, "h": nan, "X": pos[:, 0], "Y": pos[:, 1], "Z": pos[:, 2],
+        "dx": d[:, 0], "dy": d[:, 1], "dz": d[:, 2], "vx": nan, "vy": nan, "status": ["interpolated"] * n,
+        "confidence": nan, "X_std": std[:, 0], "Y_std": std[:, 1], "Z_std": std[:, 2],
+        "phase": [PHASES[int(p)] for p in phase],
+    }, nan_to_null=True)
+    return df.cast(SCHEMA).select(*COLUMNS, "X_std", "Y_std", "Z_std", "phase")

@@ -1,0 +1,124 @@
+"""Offline RTS smoothing (issue 13): better than the causal track, gaps filled with a std, deterministic."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from trackreplay.replay.cli import main
+from trackreplay.replay.export import fill_gaps, read_trajectory, write_trajectory
+from trackreplay.replay.smooth import SMOOTH_COLUMNS, smooth_trajectory
+from trackreplay.replay.trajectory import state_row, trajectory_table
+from trackreplay.trackers.base import TrackState
+
+
+def _truth(n: int = 120) -> np.ndarray:
+    k = np.arange(n, dtype=float)
+    return np.stack([100 + 40 * np.cos(k / 25.0), 80 + 30 * np.sin(k / 25.0)], axis=1)
+
+
+def _noisy_track(gap: tuple[int, int] = (50, 60), seed: int = 0) -> tuple[pl.DataFrame, np.ndarray]:
+    """A causal-looking track: noisy measurements (noise grows as confidence falls), a gap of
+    ``predicted`` then ``lost`` rows, and one wrong blob."""
+    rng = np.random.default_rng(seed)
+    truth = _truth()
+    rows = []
+    for k, (x, y) in enumerate(truth):
+        conf = 0.5 + 0.5 * (k % 3 == 0)
+        if gap[0] <= k < gap[0] + 3:
+            state = TrackState(1, x=x + 8.0 * (k - gap[0] + 1), y=y, w=5.0, h=5.0, status="predicted", confidence=0.1)
+        elif gap[0] + 3 <= k < gap[1]:
+            state = TrackState(1, status="lost")
+        else:
+            sx, sy = rng.normal(0.0, 1.5 / np.sqrt(conf), 2)
+            if k == 90:
+                sx += 60.0  # a wrong blob
+            state = TrackState(1, x=x + sx, y=y + sy, w=5.0, h=5.0, vx=None, vy=None, status="measured", confidence=conf)
+        if k == 70:
+            continue  # a frame without a row at all
+        rows.append(state_row("golf", k, k * 33_333_333, state))
+    return trajectory_table(rows), truth
+
+
+def _rmse(df: pl.DataFrame, truth: np.ndarray, frames: np.ndarray) -> float:
+    d = df.filter(pl.col("frame").is_in(frames.tolist()) & pl.col("x").is_not_null()).sort("frame")
+    assert d.height == len(frames)
+    est = d.select("x", "y").to_numpy()
+    return float(np.sqrt(np.mean(np.sum((est - truth[d["frame"].to_numpy()]) ** 2, axis=1))))
+
+
+def test_rts_beats_the_causal_track_and_linear_gap_filling() -> None:
+    df, truth = _noisy_track()
+    out, fits = smooth_trajectory(df)
+    measured = df.filter((pl.col("status") == "measured") & (pl.col("frame") != 90))["frame"].to_numpy()
+    assert _rmse(out, truth, measured) < 0.6 * _rmse(df, truth, measured)
+    gap = np.arange(50, 60)
+    linear = fill_gaps(df.filter(pl.col("status") != "predicted"), "linear", max_gap=15)
+    assert _rmse(out, truth, gap) < _rmse(linear, truth, gap)  # the arc is curved: a chord cuts it
+    assert fits[0].outliers == 1 and fits[0].observations == len(measured) + 1
+
+
+def test_filled_rows_are_interpolated_with_std_and_say_how() -> None:
+    df, _ = _noisy_track()
+    out, _ = smooth_trajectory(df)
+    assert out.columns == list(SMOOTH_COLUMNS)
+    assert out["frame"].to_list() == list(range(120))  # the absent frame 70 is added
+    gap = out.filter(pl.col("frame").is_between(50, 59))
+    assert gap["status"].to_list() == ["interpolated"] * 10
+    assert gap["fill"].to_list() == ["rts_gap"] * 10
+    assert gap["x_std"].is_not_null().all() and gap["y_std"].is_not_null().all()
+    # the std grows towards the middle of the gap and is larger than on measured frames
+    std = gap["x_std"].to_numpy()
+    assert std.max() > out.filter(pl.col("frame") == 20)["x_std"][0]
+    assert out.filter(pl.col("frame") == 70)["fill"][0] == "rts_gap"
+    assert out.filter(pl.col("frame") == 70)["t_ns"][0] == 70 * 33_333_333
+    assert out.filter(pl.col("frame") == 90)["fill"][0] == "rts_outlier"
+    assert set(out["fill"].drop_nulls().to_list()) <= {"rts", "rts_gap", "rts_outlier"}
+
+
+def test_long_gaps_and_track_ends_are_not_extrapolated() -> None:
+    df, _ = _noisy_track(gap=(40, 80))
+    out, _ = smooth_trajectory(df)
+    gap = out.filter(pl.col("frame").is_between(43, 79))
+    assert set(gap["status"].to_list()) == {"lost"} and gap["x"].null_count() == gap.height
+    kept = out.filter(pl.col("frame").is_between(40, 42))  # the tracker's predictions before a long gap stay its own
+    assert kept["status"].to_list() == ["predicted"] * 3 and kept["fill"].null_count() == 3
+
+
+def test_deterministic_and_written(tmp_path) -> None:
+    df, _ = _noisy_track()
+    a, _ = smooth_trajectory(df)
+    b, _ = smooth_trajectory(df)
+    assert a.equals(b)
+    write_trajectory(a, tmp_path / "s.parquet")
+    back = pl.read_parquet(tmp_path / "s.parquet")
+    assert back.equals(a)
+    assert read_trajectory(tmp_path / "s.parquet").height == a.height  # still a ★ trajectory table
+
+
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
+
+
+def test_cli_smooth_and_replay_smooth_on_the_golden_flow_log(tmp_path) -> None:
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    traj = tmp_path / "t.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--export", str(traj), "--interpolate", "none", "--quiet"]) == 0
+    out = tmp_path / "s.parquet"
+    assert main(["smooth", str(traj), str(log), "--out", str(out)]) == 0
+    smoothed = pl.read_parquet(out)
+    assert smoothed.height == 24 and smoothed["fill"].to_list() == ["rts"] * 24
+    out2 = tmp_path / "s2.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--smooth", "--export", str(out2), "--quiet"]) == 0
+    assert pl.read_parquet(out2).equals(smoothed)
+
+
+def test_empty_and_positionless_tracks() -> None:
+    empty = trajectory_table([])
+    out, fits = smooth_trajectory(empty)
+    assert out.is_empty() and fits == []
+    lost = trajectory_table([state_row("flow", k, k, TrackState(1, status="lost")) for k in range(3)])
+    out, fits = smooth_trajectory(lost)
+    assert out["status"].to_list() == ["lost"] * 3 and fits == []
