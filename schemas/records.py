@@ -14,6 +14,10 @@ from google.protobuf.timestamp_pb2 import Timestamp
 from trackreplay.schemas import messages as m
 
 _OPTIONAL_GT_FIELDS = ("x", "y", "w", "h", "X", "Y", "Z", "vx", "vy", "visible", "group")
+# Record attribute -> protobuf field. World coordinates are ``world_x``… in the schema (``X`` and
+# ``x`` collide under protobuf's JSON names); logs written before the rename call them X, Y, Z
+# (same field numbers), and a log is decoded with the schema it carries, so both are read.
+_GT_PB_NAMES = {"X": "world_x", "Y": "world_y", "Z": "world_z"}
 
 
 def timestamp(t_ns: int) -> Timestamp:
@@ -119,12 +123,17 @@ class GroundTruthObject:
         for name in _OPTIONAL_GT_FIELDS:
             value = getattr(self, name)
             if value is not None:
-                setattr(pb, name, value)
+                setattr(pb, _GT_PB_NAMES.get(name, name), value)
         return pb
 
     @classmethod
     def from_pb(cls, pb) -> GroundTruthObject:
-        values = {name: getattr(pb, name) if pb.HasField(name) else None for name in _OPTIONAL_GT_FIELDS}
+        fields = pb.DESCRIPTOR.fields_by_name
+        values = {}
+        for name in _OPTIONAL_GT_FIELDS:
+            pb_name = _GT_PB_NAMES.get(name, name)
+            pb_name = pb_name if pb_name in fields else name  # a log written before the rename
+            values[name] = getattr(pb, pb_name) if pb.HasField(pb_name) else None
         return cls(id=pb.id, **values)
 
 
