@@ -1,6 +1,6 @@
 """Rewrite the golden logs and their expected digests (run only when a change is intended).
 
-    python tests/golden/regenerate.py
+    python tests/golden/regenerate.py [TRACKER ...]   # all, or only the named ones (others kept as they are)
 
 Review the digest change in the diff: it says which trackers' outputs moved. Each tracker's
 trajectory is kept beside its log (``<tracker>.trajectory.parquet``) so that a digest change
@@ -31,16 +31,27 @@ def _golf(path: Path) -> None:
     ))
 
 
+def _colorpf(path: Path) -> None:
+    from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene
+
+    write_colorpf_scene(path, ColorPfSceneConfig(scene="colorpf-approach", width=320, height=240, frames=32,
+                                                 jpeg_quality=85))
+
+
 GOLDEN = {
     # tracker: (log file, how it is made)
     "flow": ("flow-sim1-24f.mcap", lambda p: write_flow_sim(p, FlowSimConfig(scene="flow-sim1", frames=24))),
     "golf": ("golf-teeshot-640x360.mcap", _golf),
+    "colorpf": ("colorpf-approach-320x240.mcap", _colorpf),
 }
 
 
 def main() -> None:
-    expected = {}
+    only = set(sys.argv[1:]) or set(GOLDEN)
+    expected = json.loads((HERE / "expected.json").read_text()) if (HERE / "expected.json").exists() else {}
     for tracker, (name, make) in GOLDEN.items():
+        if tracker not in only:
+            continue
         path = HERE / name
         make(path)
         result = replay(ReplayRequest(log=path, tracker=tracker, seed=0))

@@ -132,10 +132,13 @@ class ColorPfConfig:
     # image) is followed; per axis, so the particles spread like the box (see motion.py).
     noise: float = 0.2
     min_noise_px: float = 2.0
-    # "measured" when the estimate box's likelihood exp(k S^2) reaches this (the aspect threshold
-    # l = 25, i.e. S >= 0.40); otherwise "predicted", and after lost_after such frames in a row
-    # "lost" (no position) until the colour is found again.
-    measured_likelihood: float = 25.0
+    # Confidence: the estimate box's intersection S placed between what the background scores and
+    # what the marked box scored, c = (S - S_back) / (S_mark - S_back) clipped to [0, 1] (S_back: the
+    # whole background's histogram against H_ref, 0 without a background). A mixed reference gives
+    # any background box S ~ 1 - P_detect/P_square, so an absolute S (or L = exp(k S^2) >= l) says
+    # "measured" on the floor too. "measured" when c >= measured_fraction; otherwise "predicted",
+    # and after lost_after such frames in a row "lost" (no position) until the colour is found again.
+    measured_fraction: float = 0.5
     lost_after: int = 10
     likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
@@ -145,5 +148,5 @@ class ColorPfConfig:
     def __post_init__(self) -> None:
         if self.n_particles < 1:
             raise ValueError("n_particles must be at least 1")
-        if self.noise < 0 or self.min_noise_px < 0 or self.lost_after < 1 or self.measured_likelihood < 1:
-            raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, measured_likelihood >= 1")
+        if self.noise < 0 or self.min_noise_px < 0 or self.lost_after < 1 or not 0.0 <= self.measured_fraction <= 1.0:
+            raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, 0 <= measured_fraction <= 1")

@@ -10,8 +10,8 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
    the size estimate (:mod:`.motion`, :mod:`.size`, :mod:`.aspect`) -> eqs. (4)-(5) weigh with the
    H-S histogram intersection (:mod:`.likelihood`) -> eq. (6) estimate -> eqs. (10)-(11) ``R_t``
    with jump rejection.
-4. Status: "measured" when the estimate box's intersection ``S`` with the reference reaches the
-   aspect threshold's (``L >= l``, l = 25: S >= 0.40 at k = 20), with ``S`` as the confidence;
+4. Status: the confidence places the estimate box's intersection ``S`` between the background's
+   score and the marked box's (see ``ColorPfConfig.measured_fraction``); "measured" from 0.5 on,
    "predicted" otherwise; "lost" (no position) after ``lost_after`` such frames in a row, until
    the colour is found again.
 
@@ -73,6 +73,7 @@ class ColorPfTracker(TrackerBase):
         self.initial_wh = np.zeros(2)
         self._marked_image: np.ndarray | None = None
         self._told: set[str] = set()
+        self._s_mark: float | None = None
         self._pending: list[str] = []
         self.intermediates = ColorPfIntermediates.idle()
 
@@ -89,7 +90,7 @@ class ColorPfTracker(TrackerBase):
     # --- the step ---------------------------------------------------------------------------------
     def step(self, frame: Frame) -> list[TrackState]:
         if self.mark is None:
-            self.mark, several = start_mark(frame.all_hints + frame.hints)
+            self.mark, several = start_mark(frame.all_hints or frame.hints)
             if self.mark is None:
                 self._say(NO_MARK_NOTICE)
                 self.intermediates = ColorPfIntermediates.idle(self._notice())
@@ -107,6 +108,7 @@ class ColorPfTracker(TrackerBase):
         mask = None
         if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
             mask = self._rebuild_reference(self.background.early_model(), "early")
+            self._s_mark = None  # measured against the new reference from now on
         return self._track(frame, mask)
 
     def _start(self, frame: Frame) -> list[TrackState]:
@@ -187,7 +189,12 @@ class ColorPfTracker(TrackerBase):
             update = AspectUpdate(float("nan"), self.aspect.ratio, True)
         current = box_histogram(self.model, image, estimate)
         s_est = float(np.minimum(current, self.reference.histogram).sum())
-        if s_est >= self.model.similarity_for(cfg.measured_likelihood):
+        if weigh_only or self._s_mark is None:
+            self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
+        ref_h = self.reference.histogram
+        s_back = float(np.minimum(self.reference.h_back, ref_h).sum())
+        confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
+        if confidence >= cfg.measured_fraction:
             status, self.misses = "measured", 0
         else:
             self.misses += 1
@@ -201,13 +208,13 @@ class ColorPfTracker(TrackerBase):
             mask if mask is not None else np.zeros((0, 0), bool),
             ref.mask_offset.copy() if mask is not None else np.zeros(2, np.int64), status, self._notice())
         if status == "lost":
-            return [TrackState(1, status="lost", confidence=float(np.clip(s_est, 0.0, 1.0)))]
+            return [TrackState(1, status="lost", confidence=confidence)]
         x, y, w, h = (float(v) for v in estimate)
         vx = vy = None
         if not weigh_only:
             vx, vy = x - float(prev[0]), y - float(prev[1])
         return [TrackState(1, x=x, y=y, w=w, h=h, vx=vx, vy=vy, status=status,
-                           confidence=float(np.clip(s_est, 0.0, 1.0)))]
+                           confidence=confidence)]
 
 
 __all__ = ["ColorPfTracker", "start_mark", "box_from_area"]

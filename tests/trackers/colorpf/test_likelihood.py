@@ -1,0 +1,44 @@
+"""Eqs. (4)-(5): H-S histogram, Swain intersection and L = exp(k S^2), on known answers."""
+
+import numpy as np
+
+from trackreplay.trackers.appearance.color import to_hsv
+from trackreplay.trackers.colorpf.config import LikelihoodConfig
+from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, measure
+
+
+def _two_colour_image() -> np.ndarray:
+    img = np.zeros((40, 60, 3), np.uint8)
+    img[:, :30] = (0, 0, 255)  # red: H 0, S 255
+    img[:, 30:] = (255, 0, 0)  # blue: H 120, S 255
+    return img
+
+
+def test_hs_histogram_known_answer_and_brightness_invariance():
+    model = ColourModel(LikelihoodConfig(max_pixels=None))
+    img = _two_colour_image()
+    h = box_histogram(model, img, np.array([29.5, 19.5, 60.0, 40.0])).reshape(10, 10)
+    assert h.sum() == 1.0
+    assert h[0, 9] == 0.5 and h[6, 9] == 0.5  # red: H bin 0, blue: H 120/18 = bin 6; S bin 9
+    darker = (img * 0.4).astype(np.uint8)  # a uniform brightness change leaves H and S alone
+    assert np.array_equal(box_histogram(model, darker, np.array([29.5, 19.5, 60.0, 40.0])), h.reshape(-1))
+    hsv_model = ColourModel(LikelihoodConfig(histogram="hsv", max_pixels=None))
+    assert hsv_model.n_bins == 110
+    grey = np.full((10, 10, 3), 100, np.uint8)  # not coloured: a V bin
+    hg = box_histogram(hsv_model, grey, np.array([4.5, 4.5, 10.0, 10.0]))
+    assert hg[100 + int(to_hsv(grey)[0, 0, 2]) * 10 // 256] == 1.0
+
+
+def test_intersection_and_likelihood_per_particle():
+    model = ColourModel(LikelihoodConfig(max_pixels=None))
+    img = _two_colour_image()
+    ref = box_histogram(model, img, np.array([14.5, 19.5, 30.0, 40.0]))  # all red
+    states = np.array([[14.5, 19.5, 30.0, 40.0],  # all red: S = 1
+                       [29.5, 19.5, 30.0, 40.0],  # half red: S = 0.5
+                       [44.5, 19.5, 30.0, 40.0],  # all blue: S = 0
+                       [500.0, 500.0, 10.0, 10.0]])  # outside: no pixel
+    m = measure(model, img, states, ref)
+    np.testing.assert_allclose(m.similarity, [1.0, 0.5, 0.0, 0.0])
+    np.testing.assert_allclose(m.likelihood, np.exp(20.0 * np.array([1.0, 0.25, 0.0, 0.0])))
+    assert m.pixels[3] == 0
+    assert abs(model.similarity_for(25.0) - np.sqrt(np.log(25.0) / 20.0)) < 1e-12

@@ -1,0 +1,131 @@
+"""End-to-end replays of the synthetic scenes against their ground truth; ablations; notices; determinism."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.colorpf.config import ColorPfConfig, ReferenceConfig
+from trackreplay.trackers.colorpf.tracker import ColorPfTracker, start_mark
+from trackreplay.trackers.frame import Frame
+
+
+def errors(log: Path, config: dict | None = None) -> tuple[dict[str, float], pl.DataFrame, object]:
+    """Mean absolute error of x, y, w, h over the visible frames where the track has a position (the
+    paper's metric), and ``coverage``: the share of visible frames with a position."""
+    result = replay(ReplayRequest(log=log, tracker="colorpf", seed=0, config=config))
+    gt = read_groundtruth(LogReader(log)).filter((pl.col("id") == 1) & pl.col("visible"))
+    joined = gt.join(result.trajectory, on="frame", how="left", suffix="_pf")
+    placed = joined.filter(pl.col("x_pf").is_not_null())
+    err = {k: float((placed[f"{k}_pf"] - placed[k]).abs().mean()) if len(placed) else np.inf for k in "xywh"}
+    err["coverage"] = len(placed) / max(len(joined), 1)
+    err["false_measured"] = float(((placed["status"] == "measured") & (
+        ((placed["x_pf"] - placed["x"]) ** 2 + (placed["y_pf"] - placed["y"]) ** 2).sqrt() > placed["w"])).sum())
+    return err, result.trajectory, result
+
+
+@pytest.mark.parametrize("scene, config, bound", [
+    ("colorpf-illumination", None, (12, 14, 22, 10)),
+    ("colorpf-approach", None, (6, 10, 6, 10)),
+    # the background scene's clutter has the target's own colours: the mixed reference (H_back from
+    # the whole background, clutter included) loses the walker there, the target-only one holds on
+    ("colorpf-background", {"reference": {"mode": "target"}}, (10, 15, 25, 15)),
+])
+def test_scene_tracked_within_bounds(scene_log, scene, config, bound):
+    err, traj, result = errors(scene_log(scene), config)
+    assert all(err[k] < b for k, b in zip("xywh", bound)), err
+    assert err["coverage"] > 0.9 and err["false_measured"] <= 2, err
+    assert traj.filter(pl.col("frame") < 8).is_empty()  # nothing before the mark
+    assert not any("no background" in n for n in result.notices)  # the empty frames give the background
+
+
+def test_mixed_reference_on_same_coloured_clutter_says_lost_rather_than_guess(scene_log):
+    err, traj, _ = errors(scene_log("colorpf-background"))
+    measured = traj.filter(pl.col("status") == "measured")
+    assert err["false_measured"] <= 0.1 * max(len(measured), 1), err  # off-target frames are not "measured"
+
+
+def test_size_estimation_beats_noise_on_the_approach(scene_log):
+    """Table 3's direction: w, h follow the approach with eq. (9), not with a random walk."""
+    log = scene_log("colorpf-approach")
+    geo, _, _ = errors(log)
+    noise, _, _ = errors(log, {"size": {"mode": "noise"}})
+    fixed, _, _ = errors(log, {"size": {"mode": "fixed"}})
+    assert geo["w"] + geo["h"] < noise["w"] + noise["h"]
+    assert geo["h"] < fixed["h"] / 2
+
+
+def test_hs_is_steadier_than_hsv_under_illumination(scene_log):
+    """Table 1's direction: the V histogram suffers from the brightness steps."""
+    log = scene_log("colorpf-illumination")
+    _, _, r_hs = errors(log)
+    _, _, r_hsv = errors(log, {"likelihood": {"histogram": "hsv"}})
+    # (x, y errors do not move the paper's way on this scene: see docs/colorpf.md)
+    sim = lambda r: r.trajectory["confidence"].drop_nulls().to_numpy()[-10:].mean()  # noqa: E731
+    assert sim(r_hs) > sim(r_hsv)  # the H-S match survives the darkest steps better
+
+
+def _frames(n: int = 6, marks=()) -> list[Frame]:
+    rng = np.random.default_rng(1)
+    out = []
+    for i in range(n):
+        img = rng.integers(60, 90, (60, 80, 3), dtype=np.uint8)
+        img[20:40, 30 + i:42 + i] = (0, 0, 200)
+        out.append(Frame(index=i, t_ns=i * 33_000_000, image=img, all_hints=tuple(marks),
+                         hints=tuple(m for m in marks if m.frame == i)))
+    return out
+
+
+def test_fallback_notice_without_background_and_the_chosen_mark():
+    marks = (InitRegion(0, 0, 35.5, 29.5, 12, 20, "car"), InitRegion(3, 99, 10, 10, 5, 5, "other"))
+    tracker = ColorPfTracker(ColorPfConfig(reference=ReferenceConfig(background="before")), np.random.default_rng(0))
+    notices = []
+    for f in _frames(marks=marks):
+        states = tracker.step(f)
+        notices.append(tracker.intermediates.notice)
+        assert len(states) == 1
+    said = [n for n in notices if n]
+    assert len(said) == 1  # said once, on the first frame
+    assert "no background" in said[0] and "the track starts from the first, on frame 0 (label 'car')" in said[0]
+    assert tracker.intermediates.reference_kind == "box"
+    assert start_mark(()) == (None, "")
+
+
+def test_no_mark_is_said_and_nothing_tracked():
+    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    assert tracker.step(_frames(1)[0]) == []
+    assert "marks no target" in tracker.intermediates.notice
+
+
+def test_lost_carries_no_position_and_prefers_lost_to_a_guess():
+    mark = InitRegion(0, 0, 35.5, 29.5, 12, 20, "target")
+    frames = _frames(3, [mark])
+    tracker = ColorPfTracker(ColorPfConfig(lost_after=3), np.random.default_rng(0))
+    for f in frames:
+        tracker.step(f)
+    grey = np.full((60, 80, 3), 70, np.uint8)  # the target is gone
+    statuses = [tracker.step(Frame(index=3 + i, t_ns=0, image=grey, all_hints=(mark,)))[0] for i in range(4)]
+    assert [s.status for s in statuses] == ["predicted", "predicted", "lost", "lost"]
+    assert statuses[-1].x is None and statuses[-1].confidence is not None
+
+
+def test_two_replays_and_two_processes_agree(scene_log, tmp_path):
+    log = scene_log("colorpf-background")
+    a = replay(ReplayRequest(log=log, tracker="colorpf", seed=3))
+    b = replay(ReplayRequest(log=log, tracker="colorpf", seed=3))
+    assert a.digest == b.digest and a.trajectory.equals(b.trajectory)
+    code = ("import sys; from trackreplay.replay.engine import ReplayRequest, replay; "
+            f"print(replay(ReplayRequest(log={str(log)!r}, tracker='colorpf', seed=3)).digest)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()[-1]
+    assert out == a.digest
+    c = replay(ReplayRequest(log=log, tracker="colorpf", seed=4))
+    assert c.digest != a.digest
