@@ -12,6 +12,7 @@ from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.geometry.stereo import StereoRig
 
 from trackreplay.replay.decode import decode_image
 from trackreplay.replay.reader import LogMessage, LogReader
@@ -27,6 +28,8 @@ class FrameTopics:
     lens: str = T.PTZ_LENS_TABLE
     hints: str = T.ANNOTATIONS_INIT
     ground_plane: str = T.CAMERA_GROUND_PLANE
+    left_calibration: str = T.STEREO_LEFT_CALIBRATION
+    right_calibration: str = T.STEREO_RIGHT_CALIBRATION
 
     @classmethod
     def detect(cls, reader: LogReader, image: str | None = None) -> FrameTopics:
@@ -137,6 +140,21 @@ def read_ground_plane(reader: LogReader, topic: str) -> GroundPlaneCalibration |
         raise LogError(f"{reader.path}: topic {topic} holds an unusable ground plane ({err})") from None
 
 
+def read_stereo_rig(reader: LogReader, topics: FrameTopics) -> StereoRig | None:
+    """The rectified rig from the left and right ``CameraCalibration`` (f, cx, cy from the left
+    ``P``; baseline ``-P_right[3] / P_right[0]``), None unless both are present and usable."""
+    if topics.right is None:
+        return None
+    left, right = reader.first(topics.left_calibration), reader.first(topics.right_calibration)
+    if left is None or right is None:
+        return None
+    lp, rp = list(left.P), list(right.P)
+    if len(lp) != 12 or len(rp) != 12 or lp[0] <= 0 or rp[0] <= 0 or -rp[3] / rp[0] <= 0:
+        raise LogError(f"{reader.path}: topics {topics.left_calibration}/{topics.right_calibration} do not describe "
+                       f"a rectified pair (need 3x4 P with fx > 0 and the right camera to the right)")
+    return StereoRig(f=float(lp[0]), baseline=float(-rp[3] / rp[0]), cx=float(lp[2]), cy=float(lp[6]))
+
+
 def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
     """``(image, regions)`` for every frame the log's init annotations mark, in frame order.
 
@@ -189,6 +207,7 @@ def iter_frames(
     calibration = read_ground_plane(reader, topics.ground_plane)
     ground = None if calibration is None else GroundPlane(
         calibration.matrix, calibration.camera_ground, calibration.camera_height)
+    rig = read_stereo_rig(reader, topics)
     ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, start_ns), ptz_tolerance_ns) if topics.ptz else None
 
     shape: tuple[int, ...] | None = None
@@ -233,6 +252,7 @@ def iter_frames(
             encoded=encoded,
             encoding=encoding,
             ground_plane=ground,
+            stereo=rig,
         )
 
     def skip(item: LogMessage, reason: str) -> None:

@@ -40,7 +40,15 @@ def _colorpf() -> TrackerEntry:
     return TrackerEntry("colorpf", ColorPfConfig, ColorPfTracker, view)
 
 
-_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf, "colorpf": _colorpf}
+def _groups() -> TrackerEntry:
+    from trackreplay.replay.views import groups as view
+    from trackreplay.trackers.groups.config import GroupsConfig
+    from trackreplay.trackers.groups.tracker import GroupTracker
+
+    return TrackerEntry("groups", GroupsConfig, GroupTracker, view)
+
+
+_ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf, "groups": _groups, "colorpf": _colorpf}
 NAMES = tuple(_ENTRIES)
 
 

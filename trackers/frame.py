@@ -9,6 +9,7 @@ import numpy as np
 from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.geometry.stereo import StereoRig
 
 
 @dataclass(frozen=True, eq=False)
@@ -31,6 +32,7 @@ class Frame:
     encoded: bytes | None = None
     encoding: str | None = None
     ground_plane: GroundPlane | None = None  # a fixed camera's image <-> ground homography (/camera/ground_plane)
+    stereo: StereoRig | None = None  # rectified rig (f, baseline, cx, cy) from /stereo/{left,right}/calibration
 
     @property
     def grey(self) -> np.ndarray:

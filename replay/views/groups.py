@@ -1,0 +1,4 @@
+def blueprint(name):
+    return None
+def log(*a):
+    pass

@@ -1,0 +1,297 @@
+"""Group tracker with subtraction stereo (seed 003): ``GroupTracker``, name "groups".
+
+Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
+
+1. §2 background subtraction in both views (median of the first frames) and subtraction stereo:
+   SGBM on foreground crops only (:mod:`trackreplay.trackers.geometry.subtraction_stereo`).
+2. §3.1 KLT on the left foreground, 3-D from the disparity; observation points = features tracked
+   over the whole time window (:mod:`.features`).
+3. §3.2 each group's EKF predicts (:mod:`.ekf`).
+4. §3.3 eq. (8) gate, eqs. (9)–(11) arg max of m_p·m_v (:mod:`.association`); a group with at
+   least ``min_points`` points is updated with their mean ``[u v d]`` and its extent by eq. (7),
+   else it only predicts.
+5. Groups without an update for more than ``tracks.max_empty_frames`` frames are deleted (ours:
+   the paper states no rule).
+6. §3.4 initial grouping of the unassigned points (:mod:`.grouping`).
+7. §3.5 merging of groups whose position and velocity regions overlap (:mod:`.merging`; eqs. 14–15
+   by :func:`trackreplay.trackers.filters.gaussians.merge_gaussians`); the merged group gets a new id.
+
+Outputs per live group (camera frame of the left camera, x right, y down, z forward, metres): X Y Z
+the EKF position, the image box of the foreground pixels whose 3-D points fall in the group's gate
+(else the projected extent), vx vy the projected EKF velocity (px/frame); "measured" when updated
+this frame, "predicted" otherwise; one "lost" row (no position) on the frame a group is deleted or
+merged into another. ``intermediates.extra_rows()`` gives the member count, 3-D velocity and
+extent covariance (the second table, docs/groups.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from trackreplay.trackers.base import TrackerBase, TrackState
+from trackreplay.trackers.filters.gaussians import merge_gaussians
+from trackreplay.trackers.filters.gating import mahalanobis_sq
+from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.stereo import StereoRig
+from trackreplay.trackers.geometry.subtraction_stereo import make_matcher, subtraction_stereo
+from trackreplay.trackers.groups.association import associate
+from trackreplay.trackers.groups.config import GroupsConfig
+from trackreplay.trackers.groups.ekf import POS, VEL, GroupEkf, state_from
+from trackreplay.trackers.groups.features import KltFeatures, ObservationPoints
+from trackreplay.trackers.groups.grouping import initial_groups
+from trackreplay.trackers.groups.intermediates import GroupsIntermediates, GroupSnapshot
+from trackreplay.trackers.groups.merging import merge_sets, overlap_pairs
+
+NO_STEREO = "the log has no stereo pair with calibration (/stereo/{left,right}/image and calibration): groups tracker idle"
+
+
+@dataclass
+class Group:
+    gid: int
+    ekf: GroupEkf
+    extent: np.ndarray  # Σ, 3×3 position extent (eq. 7)
+    velocity_spread: np.ndarray  # the same on the points' velocities
+    members: int
+    empty: int = 0
+    status: str = "measured"
+    merged_from: str = ""
+    box: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.ekf.x[POS]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.ekf.x[VEL]
+
+
+def _cov(values: np.ndarray) -> np.ndarray:
+    if len(values) < 2:
+        return np.zeros((3, 3))
+    d = values - values.mean(axis=0)
+    return d.T @ d / (len(values) - 1)
+
+
+class GroupTracker(TrackerBase):
+    """Seed 003 (SPEC Tracker 3). ``step(frame)`` returns one state per live or just-ended group."""
+
+    name = "groups"
+
+    def __init__(self, config: GroupsConfig, rng: np.random.Generator) -> None:
+        self.config = config
+        self.rng = rng  # handed in by the engine; nothing here is random
+        self.bg = (MedianBackground(config.background.frames), MedianBackground(config.background.frames))
+        self.models: tuple[np.ndarray, np.ndarray] | None = None
+        self.klt = KltFeatures(config.klt, config.stereo.disparity_window)
+        self.matcher = make_matcher(config.stereo.sgbm)
+        self.groups: list[Group] = []
+        self.next_id = 1
+        self.pair_frames: dict[tuple[int, int], int] = {}
+        self.prev_t: int | None = None
+        self.intermediates = GroupsIntermediates.idle("idle", (1, 1))
+
+    # --- the pipeline -------------------------------------------------------------------------
+
+    def step(self, frame: Frame) -> list[TrackState]:
+        cfg = self.config
+        shape = frame.image.shape[:2]
+        rig = frame.stereo
+        if frame.right is None or rig is None:
+            self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, cfg.klt.window)
+            return []
+        dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
+        self.prev_t = frame.t_ns
+        if self.models is None:  # §2: learn the background of both views
+            self.bg[0].add(frame.image)
+            self.bg[1].add(frame.right)
+            if self.bg[0].full:
+                self.models = (self.bg[0].model(), self.bg[1].model())
+                self.bg[0].clear()
+                self.bg[1].clear()
+            self.intermediates = GroupsIntermediates.idle("learning", shape, "", cfg.klt.window)
+            return []
+
+        bgc, stc = cfg.background, cfg.stereo
+        fg_left = foreground_mask(frame.image, self.models[0], bgc.threshold, open_px=bgc.open_px)
+        fg_right = foreground_mask(frame.right, self.models[1], bgc.threshold, open_px=bgc.open_px)
+        stereo = subtraction_stereo(frame.image, frame.right, fg_left, stc.sgbm, right_mask=fg_right,
+                                    margin=stc.margin_px, right_tolerance_px=stc.right_tolerance_px, matcher=self.matcher)
+        grey = frame.image if frame.image.ndim == 2 else cv2.cvtColor(frame.image, cv2.COLOR_BGR2GRAY)
+        self.klt.step(grey, fg_left, stereo.disparity)
+        points = self.klt.observation_points(rig)
+
+        for g in self.groups:  # §3.2
+            g.ekf.predict()
+        labels = self._associate_and_update(points, rig)  # §3.3
+        labels, ended, events = self._delete(labels)
+        labels = self._start_groups(points, labels, rig, events)  # §3.4
+        labels, merged = self._merge(labels, events)  # §3.5
+        ended = np.array(sorted(ended + merged), np.int64)
+        self._boxes(stereo.disparity, rig)
+
+        point_ids = np.array([self.groups[j].gid if j >= 0 else -1 for j in labels.tolist()], np.int64)
+        snapshot = self._snapshot()
+        self.intermediates = GroupsIntermediates(
+            "tracking", fg_left, fg_right, stereo.disparity, stereo.crops, self.klt.uv.copy(), points, point_ids,
+            snapshot, ended, tuple(events), dt_s)
+        states = [self._state(g, rig) for g in self.groups]
+        states += [TrackState(int(gid), status="lost") for gid in ended.tolist()]
+        return sorted(states, key=lambda s: s.track_id)
+
+    def _associate_and_update(self, points: ObservationPoints, rig: StereoRig) -> np.ndarray:
+        acfg = self.config.association
+        floor = np.eye(3) * acfg.min_extent_m**2
+        if not self.groups:
+            return np.full(len(points), -1, np.int64)
+        centres = np.array([g.position for g in self.groups])
+        gate = np.array([g.extent + floor + g.ekf.P[np.ix_(POS, POS)] for g in self.groups])
+        vmeans = np.array([g.velocity for g in self.groups])
+        vcovs = np.array([g.velocity_spread + g.ekf.P[np.ix_(VEL, VEL)] + np.eye(3) * 1e-6 for g in self.groups])
+        assoc = associate(points.xyz, points.velocity, centres, gate, vmeans, vcovs, acfg.gamma, acfg.k_p, acfg.k_v)
+        a = acfg.alpha_s
+        for j, g in enumerate(self.groups):
+            idx = np.flatnonzero(assoc.labels == j)
+            g.members = len(idx)
+            g.merged_from = ""
+            if len(idx) >= acfg.min_points:
+                g.ekf.update(points.uvd[idx].mean(axis=0))
+                g.extent = a * g.extent + (1.0 - a) * _cov(points.xyz[idx])  # eq. (7)
+                g.velocity_spread = a * g.velocity_spread + (1.0 - a) * _cov(points.velocity[idx])
+                g.empty, g.status = 0, "measured"
+            else:
+                g.empty, g.status = g.empty + 1, "predicted"
+        return assoc.labels
+
+    def _delete(self, labels: np.ndarray) -> tuple[np.ndarray, list[int], list[str]]:
+        limit = self.config.tracks.max_empty_frames
+        alive = np.array([g.empty <= limit for g in self.groups], bool)
+        ended = [g.gid for g, a in zip(self.groups, alive) if not a]
+        self.groups = [g for g, a in zip(self.groups, alive) if a]
+        index_map = np.where(alive, np.cumsum(alive) - 1, -1) if len(alive) else np.zeros(0, np.int64)
+        labels = np.where(labels >= 0, index_map[np.maximum(labels, 0)] if len(alive) else -1, -1)
+        return labels.astype(np.int64), ended, [f"group {gid} deleted: no update for {limit + 1} frames" for gid in ended]
+
+    def _start_groups(self, points: ObservationPoints, labels: np.ndarray, rig: StereoRig, events: list[str]) -> np.ndarray:
+        gcfg, ecfg = self.config.grouping, self.config.ekf
+        free = np.flatnonzero(labels == -1)
+        labels = labels.copy()
+        for members in initial_groups(points.xyz[free], gcfg.radius_m, gcfg.min_points):
+            idx = free[members]
+            pos, vel = points.xyz[idx].mean(axis=0), points.velocity[idx].mean(axis=0)
+            extent = _cov(points.xyz[idx])
+            P0 = np.zeros((6, 6))
+            P0[np.ix_(POS, POS)] = extent / len(idx) + np.eye(3) * 0.05**2
+            P0[np.ix_(VEL, VEL)] = np.eye(3) * ecfg.init_velocity_sigma**2
+            g = Group(self.next_id, GroupEkf(ecfg, rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx))
+            self.next_id += 1
+            labels[idx] = len(self.groups)
+            self.groups.append(g)
+            events.append(f"group {g.gid} started with {len(idx)} points")
+        return labels
+
+    def _merge(self, labels: np.ndarray, events: list[str]) -> tuple[np.ndarray, list[int]]:
+        mcfg, floor = self.config.merge, np.eye(3) * self.config.association.min_extent_m**2
+        if len(self.groups) < 2:
+            self.pair_frames = {}
+            return labels, []
+        centres = np.array([g.position for g in self.groups])
+        extents = np.array([g.extent + floor for g in self.groups])
+        vel = np.array([g.velocity for g in self.groups])
+        vcov = np.array([g.ekf.P[np.ix_(VEL, VEL)] + g.velocity_spread / max(g.members, 1) + np.eye(3) * 1e-8
+                         for g in self.groups])
+        both, _, _ = overlap_pairs(centres, extents, vel, vcov, mcfg.gamma_position, mcfg.gamma_velocity)
+        ids = [g.gid for g in self.groups]
+        counts: dict[tuple[int, int], int] = {}
+        ready = np.zeros_like(both)
+        for i, j in zip(*np.nonzero(np.triu(both))):
+            key = (ids[i], ids[j])
+            counts[key] = self.pair_frames.get(key, 0) + 1
+            ready[i, j] = ready[j, i] = counts[key] >= mcfg.frames
+        self.pair_frames = counts
+        sets = merge_sets(ready)
+        if not sets:
+            return labels, []
+        merged_ids: list[int] = []
+        new_groups: list[Group] = []
+        index_map = np.arange(len(self.groups))
+        gone = set()
+        for s in sets:
+            parts = [self.groups[k] for k in s.tolist()]
+            n = np.array([max(p.members, 1) for p in parts], np.float64)
+            x, P = merge_gaussians(n, np.array([p.ekf.x for p in parts]), np.array([p.ekf.P for p in parts]))  # eqs. 14-15
+            _, extent = merge_gaussians(n, np.array([p.position for p in parts]), np.array([p.extent for p in parts]))
+            _, vspread = merge_gaussians(n, np.array([p.velocity for p in parts]), np.array([p.velocity_spread for p in parts]))
+            big = int(np.argmax(n))
+            absorbed = n[big] >= mcfg.keep_id_share * n.sum()
+            gid = parts[big].gid if absorbed else self.next_id
+            g = Group(gid, parts[big].ekf, extent, vspread, int(sum(p.members for p in parts)),
+                      status="measured" if any(p.status == "measured" for p in parts) else "predicted",
+                      merged_from=",".join(str(p.gid) for p in parts))
+            g.empty = min(p.empty for p in parts)
+            g.ekf.set(x, P)
+            if not absorbed:
+                self.next_id += 1
+            merged_ids += [p.gid for p in parts if p.gid != gid]
+            verb = "absorbed by" if absorbed else "merged into"
+            events.append(f"groups {g.merged_from} {verb} group {g.gid}")
+            gone.update(s.tolist())
+            new_groups.append(g)
+        keep = [k for k in range(len(self.groups)) if k not in gone]
+        for t, s in enumerate(sets):
+            index_map[s] = len(keep) + t
+        for rank, k in enumerate(keep):
+            index_map[k] = rank
+        self.groups = [self.groups[k] for k in keep] + new_groups
+        labels = np.where(labels >= 0, index_map[np.maximum(labels, 0)], -1)
+        return labels, merged_ids
+
+    def _boxes(self, disparity: np.ndarray, rig: StereoRig) -> None:
+        """Each group's image box: the foreground pixels whose 3-D point it gates best (every 2nd pixel)."""
+        if not self.groups:
+            return
+        sub = disparity[::2, ::2]
+        v, u = np.nonzero(np.isfinite(sub) & (sub > 0))
+        uvd = np.stack([u * 2.0, v * 2.0, sub[v, u].astype(np.float64)], axis=1)
+        gamma = self.config.association.gamma
+        floor = np.eye(3) * self.config.association.min_extent_m**2
+        if len(uvd):
+            xyz = rig.to_points(uvd)
+            d2 = np.stack([mahalanobis_sq(xyz, g.position, g.extent + floor + g.ekf.P[np.ix_(POS, POS)])
+                           for g in self.groups], axis=1)
+            best = np.argmin(d2, axis=1)
+            ok = d2[np.arange(len(d2)), best] < gamma
+        for j, g in enumerate(self.groups):
+            sel = uvd[(best == j) & ok] if len(uvd) else uvd
+            if len(sel) >= 20:
+                g.box = np.array([sel[:, 0].min(), sel[:, 1].min(), sel[:, 0].max() + 2.0, sel[:, 1].max() + 2.0])
+            else:  # the extent projected: ±√3 σ (a uniform spread's half-width)
+                z = max(float(g.position[2]), 0.1)
+                c = rig.to_uvd(g.position[None])[0]
+                half = rig.f * np.sqrt(3.0 * np.maximum(np.diag(g.extent + floor)[:2], 0.0)) / z
+                g.box = np.array([c[0] - half[0], c[1] - half[1], c[0] + half[0], c[1] + half[1]])
+
+    def _snapshot(self) -> GroupSnapshot:
+        gs = self.groups
+        if not gs:
+            return GroupSnapshot.empty()
+        order = np.argsort([g.gid for g in gs], kind="stable")
+        gs = [gs[k] for k in order]
+        self.groups = gs
+        return GroupSnapshot(np.array([g.gid for g in gs], np.int64), np.array([g.ekf.x for g in gs]),
+                             np.array([g.ekf.P for g in gs]), np.array([g.extent for g in gs]),
+                             np.array([g.velocity_spread for g in gs]), np.array([g.members for g in gs], np.int64),
+                             tuple(g.status for g in gs), np.array([g.box for g in gs]), tuple(g.merged_from for g in gs))
+
+    @staticmethod
+    def _state(g: Group, rig: StereoRig) -> TrackState:
+        X, Y, Z = (float(c) for c in g.position)
+        J = rig.jacobian(g.position)
+        du, dv, _ = J @ g.velocity
+        x0, y0, x1, y1 = (float(c) for c in g.box)
+        return TrackState(g.gid, x=(x0 + x1) / 2, y=(y0 + y1) / 2, w=x1 - x0, h=y1 - y0, X=X, Y=Y, Z=Z,
+                          vx=float(du), vy=float(dv), status=g.status)
