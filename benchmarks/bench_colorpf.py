@@ -1,0 +1,98 @@
+"""Colour-PF step cost vs N (linear?) and vs OpenCV's CSRT per frame on the same sequence, in one run.
+
+    python benchmarks/bench_colorpf.py [--csrt-venv DIR]
+
+CSRT lives only in opencv-contrib-python-headless, which must never share a venv with our
+opencv-python-headless: the CSRT side runs in its own venv (built here on first use:
+``python -m venv DIR && DIR/bin/pip install opencv-contrib-python-headless numpy``), fed image files.
+Both sides: one OpenCV thread, the tracker's step alone timed (decode excluded). Results with the
+machine in benchmarks/results/colorpf.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from benchmarks.machine import describe  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.colorpf.config import ColorPfConfig  # noqa: E402
+from trackreplay.trackers.colorpf.tracker import ColorPfTracker  # noqa: E402
+
+DEFAULT_VENV = Path.home() / ".cache" / "trackreplay" / "csrt-venv"
+
+
+def ensure_venv(venv: Path) -> Path:
+    py = venv / "bin" / "python"
+    if not py.exists():
+        subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+        subprocess.run([str(venv / "bin" / "pip"), "install", "-q", "opencv-contrib-python-headless", "numpy"], check=True)
+    return py
+
+
+def colorpf_times(frames, n: int, repeats: int = 3) -> np.ndarray:
+    """Per-frame step times (s), the median over ``repeats`` passes."""
+    runs = []
+    for _ in range(repeats):
+        tracker = ColorPfTracker(ColorPfConfig(n_particles=n), np.random.default_rng(0))
+        t = []
+        for f in frames:
+            t0 = time.perf_counter()
+            tracker.step(f)
+            t.append(time.perf_counter() - t0)
+        runs.append(t)
+    return np.median(np.array(runs), axis=0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("log", type=Path, help="a marked log (e.g. otb_crossing recorded and annotated)")
+    ap.add_argument("--csrt-venv", type=Path, default=DEFAULT_VENV)
+    ap.add_argument("--out", type=Path, default=HERE / "results" / "colorpf.json")
+    args = ap.parse_args()
+    cv2.setNumThreads(1)
+    frames = list(iter_frames(LogReader(args.log), FrameTopics()))
+    mark = frames[0].all_hints[0]
+    start = [f for f in frames if f.index >= mark.frame]
+    result = {"machine": describe(), "log": args.log.name, "frames": len(start), "image": list(start[0].image.shape)}
+    per_n = {}
+    for n in (10, 20, 40, 80, 160, 320):
+        t = colorpf_times(start, n)
+        per_n[n] = float(np.median(t[1:]) * 1e3)
+    result["colorpf_step_ms_by_N"] = per_n
+    ns = np.array(sorted(per_n)), np.array([per_n[k] for k in sorted(per_n)])
+    slope, intercept = np.polyfit(ns[0], ns[1], 1)
+    result["linear_fit_ms"] = {"per_particle": float(slope), "fixed": float(intercept),
+                               "max_relative_residual": float(np.max(np.abs(slope * ns[0] + intercept - ns[1]) / ns[1]))}
+    result["ratio_320_over_40"] = per_n[320] / per_n[40]
+    py = ensure_venv(args.csrt_venv)
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        for f in start:
+            cv2.imwrite(str(folder / f"{f.index:06d}.png"), f.image)
+        box = f"{mark.x - mark.w / 2 + 0.5},{mark.y - mark.h / 2 + 0.5},{mark.w},{mark.h}"
+        out = folder / "csrt.json"
+        subprocess.run([str(py), str(HERE / "csrt_side.py"), str(folder), box, str(out)], check=True)
+        csrt = json.loads(out.read_text())
+    result["csrt_opencv"] = csrt["opencv"]
+    result["csrt_step_ms"] = float(np.median(csrt["times"]) * 1e3)
+    result["csrt_over_colorpf_N40"] = result["csrt_step_ms"] / per_n[40]
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps({k: v for k, v in result.items() if k != "machine"}, indent=2))
+
+
+if __name__ == "__main__":
+    main()

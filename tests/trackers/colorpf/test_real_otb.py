@@ -1,0 +1,26 @@
+"""otb_crossing (../shared/data/real, skipped when absent): record, mark the first OTB box, track."""
+
+from pathlib import Path
+
+import pytest
+
+from trackreplay.replay.cli import main
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.eval import evaluate
+from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.reader import LogReader
+
+OTB = Path(__file__).resolve().parents[4] / "shared" / "data" / "real" / "otb_crossing"
+pytestmark = pytest.mark.skipif(not OTB.is_dir(), reason="../shared/data/real/otb_crossing is absent")
+
+
+def test_otb_crossing_is_followed(tmp_path):
+    log, marked = tmp_path / "c.mcap", tmp_path / "m.mcap"
+    assert main(["record", str(log), "--images", str(OTB / "img"), "--fps", "30", "--groundtruth",
+                 str(OTB / "groundtruth_rect.txt"), "--quiet"]) == 0
+    x, y, w, h = (float(v) for v in (OTB / "groundtruth_rect.txt").read_text().split()[0].split(","))
+    assert main(["annotate", str(log), "--frame", "0", "--box", f"{x - 1},{y - 1},{w},{h}", "--out", str(marked)]) == 0
+    result = replay(ReplayRequest(log=marked, tracker="colorpf", seed=0))
+    summary, _ = evaluate(result.trajectory, read_groundtruth(LogReader(marked)))
+    assert summary.coverage > 0.75 and summary.precision_at_20px > 0.7 and summary.success_auc > 0.3, summary
+    assert any("no ground plane" in n for n in result.notices)  # said, not silently assumed
