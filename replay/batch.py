@@ -113,13 +113,14 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
 
     row: dict[str, Any] = {"task": task.name, "log": str(task.log), "tracker": task.tracker, "seed": task.seed,
                            "params": json.dumps(task.params, sort_keys=True), "status": "ok", "error": None,
-                           "digest": None, "frames": None, "seconds": None, "node": socket.gethostname(),
+                           "digest": None, "frames": None, "frames_lost": None, "seconds": None,
+                           "node": socket.gethostname(),
                            **{m: None for m in METRICS}}
     shipped = log_bytes is not None
     tmp = tempfile.TemporaryDirectory(prefix="trackreplay-task-") if shipped else None
     started = time.perf_counter()
+    out = Path(tmp.name) if shipped else opts.out / "tasks" / task.name
     try:
-        out = Path(tmp.name) if shipped else opts.out / "tasks" / task.name
         out.mkdir(parents=True, exist_ok=True)
         log = task.log
         if shipped:
@@ -127,7 +128,8 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
             log.write_bytes(log_bytes)
         result = replay(ReplayRequest(log=log, tracker=task.tracker, config=task.config, seed=task.seed,
                                       rrd=out / "replay.rrd" if opts.rrd else None))
-        row.update(digest=result.digest, frames=result.frames, seconds=round(result.seconds, 4))
+        row.update(digest=result.digest, frames=result.frames, frames_lost=len(result.report.lost),
+                   seconds=round(result.seconds, 4))
         table = result.trajectory if opts.interpolate == "none" else fill_gaps(result.trajectory, opts.interpolate, opts.max_gap)
         table.write_parquet(out / "trajectory.parquet")
         summary = result.summary(task.log) | {"params": task.params}
@@ -141,7 +143,10 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
     except BaseException as err:  # noqa: BLE001 - a task reports, it never takes the batch down
         if isinstance(err, KeyboardInterrupt):
             raise
-        row.update(status="error", error=_one_line(err))
+        message = _one_line(err)
+        if shipped:  # name the log as the user knows it, not the task's temporary copy
+            message = message.replace(str(out / task.log.name), str(task.log))
+        row.update(status="error", error=message)
     finally:
         row["task_seconds"] = round(time.perf_counter() - started, 4)  # replay + outputs + eval, in the task
         if tmp is not None:
@@ -214,10 +219,16 @@ def start_ray(address: str | None, workers: int | None) -> bool:
         kwargs["num_cpus"] = workers or os.cpu_count() or 1
     else:
         kwargs["address"] = address
+        # Ray >= 2.5x clusters use token authentication by default; a driver joining one does not
+        # switch it on by itself (measured with 2.60: "InvalidAuthToken"), so do it when a token is at hand.
+        if "RAY_AUTH_MODE" not in os.environ and (os.environ.get("RAY_AUTH_TOKEN") or os.environ.get("RAY_AUTH_TOKEN_PATH")
+                                                  or (Path.home() / ".ray" / "auth_token").exists()):
+            os.environ["RAY_AUTH_MODE"] = "token"
     try:
         ray.init(**kwargs)
     except ConnectionError as err:
-        raise TrackreplayError(f"cannot join the Ray cluster at {address} ({_one_line(err)})") from None
+        raise TrackreplayError(f"cannot join the Ray cluster at {address} ({_one_line(err)}); a cluster with token "
+                               f"authentication needs its token here (~/.ray/auth_token or RAY_AUTH_TOKEN)") from None
     return True
 
 
@@ -271,13 +282,13 @@ def summary_table(rows: list[dict[str, Any]], tasks: list[BatchTask]) -> pl.Data
     data: dict[str, list] = {c: [] for c in ("task", "log", "tracker", "seed")}
     for key in keys:
         data[key] = []
-    for c in ("digest", "frames", "seconds", *METRICS, "status", "error", "node", "task_seconds"):
+    for c in ("digest", "frames", "frames_lost", "seconds", *METRICS, "status", "error", "node", "task_seconds"):
         data[c] = []
     for row, task in zip(rows, tasks):
         for c in data:
             data[c].append(task.params.get(c) if c in keys else row.get(c))
     schema = {"task": pl.String, "log": pl.String, "tracker": pl.String, "seed": pl.Int64, "digest": pl.String,
-              "frames": pl.Int64, "seconds": pl.Float64, **{m: pl.Float64 for m in METRICS}, "status": pl.String,
+              "frames": pl.Int64, "frames_lost": pl.Int64, "seconds": pl.Float64, **{m: pl.Float64 for m in METRICS}, "status": pl.String,
               "error": pl.String, "node": pl.String, "task_seconds": pl.Float64}
     columns = []
     for c, values in data.items():
@@ -301,6 +312,7 @@ def format_table(table: pl.DataFrame) -> str:
                                pl.when(pl.col("status") == "ok").then(pl.lit("ok"))
                                .otherwise(pl.lit("error: ") + pl.col("error")).alias("status"))
     drop = [c for c in ("task", "node", "task_seconds", "error") if c in shown.columns]
+    drop += ["frames_lost"] if not (table["frames_lost"].fill_null(0) > 0).any() else []
     drop += [m for m in METRICS if shown[m].null_count() == shown.height]
     shown = shown.drop(drop).rename({k: v for k, v in SHORT.items() if k in shown.columns and k not in drop})
     with pl.Config(tbl_rows=-1, tbl_cols=-1, tbl_width_chars=250, fmt_str_lengths=70, tbl_hide_dataframe_shape=True,

@@ -236,6 +236,7 @@ def record_run(spec: RunSpec) -> Iterator[tuple[int, Any, str | None]]:
             yield step.frame.index, outputs, None
     finally:
         steps.close()
+    digest.add_lost([(x.topic, x.index, x.t_ns) for x in steps.report.lost])  # as replay() does
     yield -1, None, digest.finish(trajectory_table(rows))
 
 

@@ -100,7 +100,7 @@ def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: lis
     if leaf is not None:
         h.update(name.encode() + b"\0" + leaf)  # one update: sha256 streams, the digest is the same
         if leaves is not None:
-            leaves.append((path, hashlib.blake2b(leaf, digest_size=8).digest(), _small(value)))
+            leaves.append((path, _leaf_hash(leaf), _small(value)))
         return
     h.update(name.encode() + b"\0")
     if dataclasses.is_dataclass(value):
@@ -109,7 +109,7 @@ def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: lis
     elif isinstance(value, (tuple, list)):
         h.update(np.int64(len(value)).tobytes())
         if leaves is not None:
-            leaves.append((_join(path, "len"), np.int64(len(value)).tobytes(), np.array([len(value)], np.float64)))
+            leaves.append((_join(path, "len"), np.int64(len(value)).tobytes(), [len(value)]))
         for i, item in enumerate(value):
             _feed(h, str(i), item, _join(path, str(i)), leaves)
     elif isinstance(value, dict):
@@ -122,17 +122,28 @@ def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: lis
 SMALL = 32  # numeric fields of at most this many elements keep their values beside their hash
 
 
-def _small(value: Any) -> np.ndarray | None:
-    """A numeric leaf of ≤ SMALL elements as float64 (kept so ``diff`` can give max |Δ|), else None."""
+def _leaf_hash(leaf: bytes) -> bytes:
+    """8 bytes naming a leaf's hashed bytes: the bytes themselves when they fit (a scalar: most
+    leaves, and no hashing), else their 8-byte blake2b."""
+    n = len(leaf)
+    if n < 8:
+        return leaf + bytes(7 - n) + bytes((n,))
+    return leaf if n == 8 else hashlib.blake2b(leaf, digest_size=8).digest()
+
+
+def _small(value: Any) -> list | None:
+    """A numeric leaf of ≤ SMALL elements as a flat list (kept so ``diff`` can give max |Δ|), else None."""
     kind = type(value)
     if kind is float or kind is int or kind is bool:
-        return np.array((value,), np.float64)
+        return [value]
     if kind is str or value is None:
         return None
+    if isinstance(value, np.ndarray):
+        if value.size > SMALL or value.dtype.kind not in "biuf":
+            return None
+        return value.ravel().tolist()
     arr = np.asarray(value)
-    if arr.dtype.kind not in "biuf" or arr.size > SMALL:
-        return None
-    return arr.astype(np.float64).ravel()
+    return arr.ravel().tolist() if arr.dtype.kind in "biuf" and arr.size <= SMALL else None
 
 
 def _join(path: str, name: str) -> str:
@@ -174,14 +185,19 @@ class FrameDigests:
         self._values: list[bytes] = []
         self._layouts: dict[tuple, tuple] = {}
 
-    def add(self, index: int, leaves: list[tuple[str, bytes, np.ndarray | None]]) -> None:
+    def add(self, index: int, leaves: list[tuple[str, bytes, Any]]) -> None:
+        """One frame: (path, 8-byte hash, kept values — a flat list or array of numbers, or None) per field."""
         paths = tuple(p for p, _, _ in leaves)
-        sizes = tuple(-1 if v is None else v.size for _, _, v in leaves)
+        sizes = tuple(-1 if v is None else len(v) for _, _, v in leaves)
+        flat: list = []
+        for _, _, v in leaves:
+            if v is not None:
+                flat.extend(v)
         self.frames.append(index)
         self._paths.append(self._layouts.setdefault(paths, paths))
         self._sizes.append(self._layouts.setdefault(sizes, sizes))
         self._hashes.append(b"".join(d for _, d, _ in leaves))
-        self._values.append(b"".join(v.tobytes() for _, _, v in leaves if v is not None))
+        self._values.append(np.array(flat, dtype=np.float64).tobytes())
 
     def values(self, i: int) -> dict[str, np.ndarray]:
         """Field path -> kept values (flattened float64) of the i-th recorded frame."""
