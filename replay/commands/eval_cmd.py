@@ -20,13 +20,29 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--gt-id", type=int, help="ground-truth object (default: the one seen most)")
     p.add_argument("--json", type=Path, help="also write the metrics as JSON")
     p.add_argument("--per-frame", type=Path, help="also write the per-frame errors (.csv or .parquet)")
+    p.add_argument("--mot", action="store_true",
+                   help="multi-object metrics over every track: MOTA, MOTP, IDF1, ID switches on image boxes (IoU >= 0.5) "
+                        "and on 3-D positions (--max-distance-m)")
+    p.add_argument("--gt-topic", default=None, help="ground-truth topic (default /groundtruth/objects; "
+                   "the groups scenes also write /groundtruth/groups)")
+    p.add_argument("--max-distance-m", type=float, default=1.0, help="3-D match distance for --mot (default 1 m)")
     p.set_defaults(func=run)
     return p
 
 
 def run(args: argparse.Namespace) -> int:
     traj = read_trajectory(args.trajectory)
-    gt = read_groundtruth(LogReader(args.log))
+    gt = read_groundtruth(LogReader(args.log), *([args.gt_topic] if args.gt_topic else []))
+    if args.mot:
+        from trackreplay.replay.mot import format_mot, mot_metrics
+
+        image = mot_metrics(traj, gt, space="image")
+        space = mot_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m)
+        print(format_mot(image, "image boxes (IoU >= 0.5)"))
+        print(format_mot(space, f"3-D positions (<= {args.max_distance_m:g} m)"))
+        if args.json:
+            args.json.write_text(json.dumps({"image": image.as_dict(), "3d": space.as_dict()}, indent=2) + "\n")
+        return 0
     summary, frames = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
     print(format_summary(summary))
     if args.json:

@@ -13,6 +13,7 @@ from trackreplay.recorder.synth.flow_sims import SCENES as FLOW_SCENES
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
 from trackreplay.recorder.synth.golf.scene import CAMERA_PLACES, SCENE as GOLF_SCENE
 from trackreplay.recorder.synth.golf.scene import SIZES, GolfSceneConfig, write_golf_teeshot
+from trackreplay.recorder.synth.groups.scene import SCENES as GROUP_SCENES
 from trackreplay.recorder.synth.texture import PHOTOS
 from trackreplay.schemas.errors import TrackreplayError
 
@@ -26,7 +27,7 @@ _GOLF_ONLY = (("size", "--size"), ("fps", "--fps"), ("no_bounce", "--no-bounce")
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("synth", help="write a synthetic scene with ground truth to MCAP")
-    p.add_argument("scene", choices=(*FLOW_SCENES, GOLF_SCENE, *COLORPF_SCENES),
+    p.add_argument("scene", choices=(*FLOW_SCENES, GOLF_SCENE, *COLORPF_SCENES, *GROUP_SCENES),
                    help="flow-sim1|2|3: the gradient-flow paper's simulations; golf-teeshot: a broadcast tee shot with PTZ encoders; "
                         "colorpf-illumination|background|approach: walkers before a fixed camera (colour PF, Tables 1-3)")
     p.add_argument("out", type=Path, help="output .mcap")
@@ -61,6 +62,8 @@ def _reject(args: argparse.Namespace, options: tuple[tuple[str, str], ...], scen
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.scene in GROUP_SCENES:
+        return _run_groups(args)
     if args.scene == GOLF_SCENE:
         return _run_golf(args)
     if args.scene in COLORPF_SCENES:
@@ -119,5 +122,19 @@ def _run_colorpf(args: argparse.Namespace) -> int:
     except ValueError as err:
         raise TrackreplayError(str(err)) from None
     summary = write_colorpf_scene(args.out, cfg)
+    print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
+    return 0
+
+
+def _run_groups(args: argparse.Namespace) -> int:
+    """Stereo crowds for the groups tracker (seed 003); --fps and --duration apply, the rest is the paper's rig."""
+    from trackreplay.recorder.synth.groups.scene import GroupSceneConfig, write_group_scene
+
+    _reject(args, tuple(o for o in _FLOW_ONLY + _GOLF_ONLY if o[0] not in ("fps", "duration")), args.scene)
+    if not args.out.parent.is_dir():
+        raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
+    cfg = GroupSceneConfig(scene=args.scene, seed=args.seed, fps=48.0 if args.fps is None else args.fps,
+                           duration=4.0 if args.duration is None else args.duration)
+    summary = write_group_scene(args.out, cfg)
     print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
     return 0
