@@ -30,7 +30,8 @@ from tqdm import tqdm
 from trackreplay.replay import registry
 from trackreplay.replay.config import ConfigSource, config_to_dict, load_config
 from trackreplay.replay.digest import FrameDigests, ReplayDigest
-from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images
+from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images, read_hints
+from trackreplay.replay.marks import check_labels
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
 from trackreplay.replay.trajectory import state_row, trajectory_table
@@ -53,6 +54,7 @@ class ReplayRequest:
     start_s: float | None = None  # seconds from the first message of the log
     end_s: float | None = None
     image_topic: str | None = None
+    stereo_topics: tuple[str, str] | None = None  # (left, right) image topics of a stereo pair
     progress: bool = False
     opencv_threads: int = 1
     prefetch: int = 4  # frames decoded ahead in a reader thread; 0 = read in the loop
@@ -116,12 +118,14 @@ class ReplaySteps(Iterator[ReplayStep]):
         cv2.setNumThreads(req.opencv_threads)
         cv2.setRNGSeed(req.seed)
         reader = LogReader(req.log)
-        topics = FrameTopics.detect(reader, req.image_topic)
+        topics = FrameTopics.detect(reader, req.image_topic, req.stereo_topics)
         reader.require(topics.image)
         t0, _ = reader.time_range()
         start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
         end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
+        check_labels({r.label for r in read_hints(reader, topics.hints, topics.image)}, req.tracker,
+                     self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
         self.tracker.prepare(marked_images(reader, topics))  # a no-op for trackers that need no look ahead
         self.report = BundleReport()
         self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)

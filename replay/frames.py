@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import LogError
+from trackreplay.schemas.messages import IMAGE_SCHEMAS
 from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.frame import Frame
@@ -32,14 +33,52 @@ class FrameTopics:
     right_calibration: str = T.STEREO_RIGHT_CALIBRATION
 
     @classmethod
-    def detect(cls, reader: LogReader, image: str | None = None) -> FrameTopics:
-        """Mono camera if present, else the stereo pair; PTZ encoders when the log has them."""
+    def detect(cls, reader: LogReader, image: str | None = None,
+               stereo: tuple[str, str] | None = None) -> FrameTopics:
+        """The pair ``stereo`` or the topic ``image`` when given; else ``/camera/image``, else the
+        ``/stereo/left|right/image`` pair, else the log's only image topic (any image schema: a ROS 2
+        bag's ``sensor_msgs/msg/Image`` too); PTZ encoders when the log has them."""
         present = reader.topics()
-        if image is None:
-            image = T.CAMERA_IMAGE if T.CAMERA_IMAGE in present or T.STEREO_LEFT_IMAGE not in present else T.STEREO_LEFT_IMAGE
-        right = T.STEREO_RIGHT_IMAGE if image == T.STEREO_LEFT_IMAGE and T.STEREO_RIGHT_IMAGE in present else None
         ptz = T.PTZ_ENCODERS if T.PTZ_ENCODERS in present else None
+        if stereo is not None:
+            for topic in stereo:
+                require_image_topic(reader, topic)
+            return cls(image=stereo[0], right=stereo[1], ptz=ptz)
+        if image is None:
+            image = choose_image_topic(reader)
+        else:
+            require_image_topic(reader, image)
+        right = T.STEREO_RIGHT_IMAGE if image == T.STEREO_LEFT_IMAGE and T.STEREO_RIGHT_IMAGE in present else None
         return cls(image=image, right=right, ptz=ptz)
+
+
+def _listed(reader: LogReader) -> str:
+    return ", ".join(f"{t} ({info.schema or 'no schema'})" for t, info in sorted(reader.topics().items())) or "none"
+
+
+def require_image_topic(reader: LogReader, topic: str) -> None:
+    """``topic`` is in the log and holds images (any schema of ``IMAGE_SCHEMAS``)."""
+    reader.require(topic)
+    schema = reader.topics()[topic].schema
+    if schema not in IMAGE_SCHEMAS:
+        raise LogError(f"{reader.path}: topic {topic} holds {schema or 'messages without a schema'}, not images "
+                       f"({', '.join(IMAGE_SCHEMAS)})")
+
+
+def choose_image_topic(reader: LogReader) -> str:
+    """``/camera/image``, else ``/stereo/left/image``, else the one topic whose schema is an image's."""
+    present = reader.topics()
+    for topic in (T.CAMERA_IMAGE, T.STEREO_LEFT_IMAGE):
+        if topic in present:
+            return topic
+    images = sorted(t for t, info in present.items() if info.schema in IMAGE_SCHEMAS)
+    if len(images) == 1:
+        return images[0]
+    if not images:
+        raise LogError(f"{reader.path} has no image topic (schemas {', '.join(IMAGE_SCHEMAS)}); "
+                       f"topics present: {_listed(reader)}")
+    raise LogError(f"{reader.path} has {len(images)} image topics ({', '.join(images)}): choose one with "
+                   f"--image-topic TOPIC, or a stereo pair with --stereo-topics LEFT RIGHT")
 
 
 @dataclass

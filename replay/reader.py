@@ -2,11 +2,16 @@
 
 Messages come in a total, reproducible order: log_time, then channel id, then
 sequence (ARCHITECTURE.md ★ Log contract).
+
+Channels are decoded by their encoding: protobuf (ours and Foxglove's), ROS 2 CDR with a
+``ros2msg`` schema (rosbag2's MCAP profile, via ``mcap-ros2-support``), and JSON (Foxglove's
+JSON-encoded schemas; decoded into attribute namespaces, ``bytes`` fields still base64 text).
 """
 
 from __future__ import annotations
 
 import heapq
+import json
 import struct
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
@@ -16,6 +21,7 @@ from typing import Any, Callable
 from mcap.exceptions import McapError
 from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
+from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
 
 from trackreplay.replay.chunks import DamagedChunk, iter_checked
 from trackreplay.schemas.errors import LogError, TruncatedLogError
@@ -57,6 +63,31 @@ class LogMessage:
             ) from None
 
 
+class JsonMessage(dict):
+    """A decoded JSON message: keys read as attributes too (``msg.data``), like protobuf and ROS 2 ones."""
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def _to_message(value: Any) -> Any:
+    if isinstance(value, dict):
+        return JsonMessage({k: _to_message(v) for k, v in value.items()})
+    if isinstance(value, list):
+        return [_to_message(v) for v in value]
+    return value
+
+
+def _json_decode(data: bytes) -> JsonMessage:
+    value = json.loads(data)
+    if not isinstance(value, dict):
+        raise ValueError(f"a JSON message is an object, not {type(value).__name__}")
+    return _to_message(value)
+
+
 def _truncation_hint(path: Path) -> str:
     return f"{path} is truncated or corrupt (no valid MCAP footer); run `trackreplay recover {path} FIXED.mcap` to salvage every complete chunk"
 
@@ -87,6 +118,7 @@ class LogReader:
             raise TruncatedLogError(_truncation_hint(self.path))
         self._summary = summary
         self._factory = DecoderFactory()
+        self._ros2 = Ros2DecoderFactory()
         self._decoders: dict[int, Callable[[bytes], Any]] = {}
 
     # -- what the log holds -------------------------------------------------
@@ -123,13 +155,21 @@ class LogReader:
     def _decoder(self, schema, channel) -> Callable[[bytes], Any]:
         dec = self._decoders.get(channel.id)
         if dec is None:
+            encoding = channel.message_encoding
             try:
-                dec = self._factory.decoder_for(channel.message_encoding, schema)
+                if encoding == "json":
+                    dec = _json_decode
+                elif encoding == "cdr":
+                    dec = self._ros2.decoder_for(encoding, schema)
+                else:
+                    dec = self._factory.decoder_for(encoding, schema)
             except Exception as err:
                 raise LogError(f"{self.path}: schema of topic {channel.topic} cannot be loaded ({err})") from None
             if dec is None:
+                schema_encoding = schema.encoding if schema else "no schema"
                 raise LogError(
-                    f"{self.path}: topic {channel.topic} is not protobuf-encoded ({channel.message_encoding}); trackreplay reads protobuf channels only"
+                    f"{self.path}: topic {channel.topic} is encoded as {encoding or 'nothing'} ({schema_encoding}); "
+                    f"trackreplay reads protobuf, ROS 2 CDR (ros2msg schemas) and JSON channels"
                 )
             self._decoders[channel.id] = dec
         return dec

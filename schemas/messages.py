@@ -26,4 +26,8 @@ __all__ = [
     "RawImage",
 ]
 
-IMAGE_SCHEMAS = ("foxglove.RawImage", "foxglove.CompressedImage")
+# Image and calibration schemas replay reads: Foxglove's (protobuf or JSON) and ROS 2's (CDR).
+COMPRESSED_IMAGE_SCHEMAS = ("foxglove.CompressedImage", "sensor_msgs/msg/CompressedImage", "sensor_msgs/CompressedImage")
+RAW_IMAGE_SCHEMAS = ("foxglove.RawImage", "sensor_msgs/msg/Image", "sensor_msgs/Image")
+IMAGE_SCHEMAS = RAW_IMAGE_SCHEMAS + COMPRESSED_IMAGE_SCHEMAS
+CALIBRATION_SCHEMAS = ("foxglove.CameraCalibration", "sensor_msgs/msg/CameraInfo", "sensor_msgs/CameraInfo")

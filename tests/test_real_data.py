@@ -21,7 +21,9 @@ def test_foreign_mcap_is_read_and_replay_says_what_is_missing(bag: Path, capsys:
     assert main(["info", str(bag)]) == 0
     assert main(["replay", str(bag), "--quiet"]) == 2
     err = capsys.readouterr().err
-    assert "has no topic /camera/image; topics present:" in err
+    assert "has no image topic (schemas foxglove.RawImage, " in err and "; topics present: " in err
+    for topic in reader.topics():  # each named with its schema
+        assert f"{topic} ({reader.topics()[topic].schema}" in err
 
 
 def test_otb_image_folder_records_and_tracks_with_its_ground_truth(tmp_path: Path) -> None:

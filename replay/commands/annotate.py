@@ -6,8 +6,12 @@ import argparse
 from pathlib import Path
 
 from trackreplay.recorder.annotate import annotate, parse_box, read_marks_csv
-from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import TrackreplayError
+
+from trackreplay.replay import registry
+from trackreplay.replay.commands.frame import frame_image, image_topic
+from trackreplay.replay.marks import check_inside, check_labels
+from trackreplay.replay.reader import LogReader
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -17,7 +21,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--box", action="append", default=[], help="x,y,w,h top-left corner and size in pixels (repeatable)")
     p.add_argument("--from-csv", type=Path, help="marks as rows frame,x,y,w,h[,label]")
     p.add_argument("--label", default="target", help="label of the marks (e.g. ball; default target)")
-    p.add_argument("--image-topic", default=T.CAMERA_IMAGE)
+    p.add_argument("--image-topic", help="image topic the frames count on (default: as replay chooses it)")
+    p.add_argument("--tracker", choices=registry.NAMES,
+                   help="refuse labels this tracker would ignore (flow reads only 'target'; golf any)")
     dest = p.add_mutually_exclusive_group(required=True)
     dest.add_argument("--out", type=Path, help="write the annotated log here")
     dest.add_argument("--in-place", action="store_true", help="replace LOG atomically once the new log is complete")
@@ -36,6 +42,13 @@ def run(args: argparse.Namespace) -> int:
     if not marks:
         raise TrackreplayError("nothing to add: give --frame N --box x,y,w,h or --from-csv FILE")
     out = args.log if args.in_place else args.out
-    regions = annotate(args.log, out, marks, args.image_topic)
+    reader = LogReader(args.log)
+    topic = image_topic(reader, args.image_topic)
+    first = min(mk.frame for mk in marks)
+    height, width = frame_image(reader, topic, first).shape[:2]  # also: the frame exists
+    check_inside(((mk.frame, mk.x, mk.y, mk.w, mk.h) for mk in marks), width, height, f"{args.log}: {topic}")
+    if args.tracker:
+        check_labels({mk.label for mk in marks}, args.tracker, registry.get(args.tracker).tracker_cls, "annotate")
+    regions = annotate(args.log, out, marks, topic)
     print(f"wrote {out}: {len(regions)} marked region(s) on frames {sorted({r.frame for r in regions})}")
     return 0

@@ -27,7 +27,9 @@ def add_replay_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
     p.add_argument("--config", type=Path, help="tracker config TOML (keys of the tracker's config dataclass)")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the tracker's random generator (default 0)")
-    p.add_argument("--image-topic", help="image topic (default /camera/image, else the stereo left)")
+    p.add_argument("--image-topic", help="image topic (default /camera/image, else the stereo left, else the log's "
+                   "only image topic)")
+    p.add_argument("--stereo-topics", nargs=2, metavar=("LEFT", "RIGHT"), help="stereo pair: left and right image topics")
     p.add_argument("--start", type=non_negative_float, help="start, seconds from the log's first message")
     p.add_argument("--end", type=non_negative_float, help="end (exclusive), seconds from the log's first message")
     p.add_argument("--opencv-threads", type=positive_int, default=1, help="OpenCV threads (results do not depend on it)")
@@ -59,6 +61,7 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
     return ReplayRequest(
         log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
+        stereo_topics=tuple(args.stereo_topics) if args.stereo_topics else None,
         progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads, strict=args.strict,
     )
 

@@ -49,6 +49,9 @@ class FlowTracker(TrackerBase):
     """Tracks one moving object with the gradient method (seed 004); ``name = "flow"``."""
 
     name: ClassVar[str] = "flow"
+    # Mark labels this tracker reads (trackers without the attribute read any); replay refuses
+    # marks with other labels instead of silently starting from the image centre.
+    mark_labels: ClassVar[tuple[str, ...]] = ("target",)
 
     def __init__(self, config: FlowConfig, rng: np.random.Generator) -> None:
         self.config = config
@@ -141,7 +144,7 @@ class FlowTracker(TrackerBase):
     def _start(self, frame: Frame, grey: np.ndarray) -> list[TrackState]:
         """Frame 0: the window starts on the marked target (or the configured or image centre)."""
         cfg = self.config
-        hint = next((h for h in frame.hints if h.label == "target"), None)
+        hint = next((h for h in frame.hints if h.label in self.mark_labels), None)
         if hint is not None:
             start = (float(hint.x), float(hint.y))
             self._extent = (float(hint.w), float(hint.h))

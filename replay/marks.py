@@ -1,0 +1,34 @@
+"""Checks on the marks (``/annotations/init``) a user gives a tracker: inside the picture, and
+with labels the chosen tracker reads."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from trackreplay.schemas.errors import LogError, SourceError
+
+
+def tracker_labels(tracker_cls) -> tuple[str, ...] | None:
+    """The mark labels a tracker reads; None when it reads every label (e.g. golf: ball, sky, ground)."""
+    return getattr(tracker_cls, "mark_labels", None)
+
+
+def check_labels(labels: Iterable[str], tracker: str, tracker_cls, where: str) -> None:
+    """Refuse labels ``tracker`` would ignore (the flow tracker reads only ``target``)."""
+    known = tracker_labels(tracker_cls)
+    if known is None:
+        return
+    ignored = sorted(set(labels) - set(known))
+    if ignored:
+        raise LogError(f"{where}: marks labelled {', '.join(repr(x) for x in ignored)} would be ignored by the "
+                       f"{tracker} tracker, which reads only {', '.join(repr(x) for x in known)} marks "
+                       f"(annotate again with --label {known[0]})")
+
+
+def check_inside(boxes: Iterable[tuple[int, float, float, float, float]], width: int, height: int, where: str) -> None:
+    """Each ``(frame, x, y, w, h)`` (top-left corner and size, pixels) lies inside a ``width`` x ``height`` image."""
+    for frame, x, y, w, h in boxes:
+        if x < 0 or y < 0 or x + w > width or y + h > height:
+            raise SourceError(f"{where}: the box {x:g},{y:g},{w:g},{h:g} on frame {frame} is not inside the "
+                              f"{width}x{height} image (x from 0 to {width}, y from 0 to {height}, top-left corner "
+                              f"and size; `trackreplay frame` shows the pixel grid)")

@@ -1,0 +1,50 @@
+"""`trackreplay frame` (a PNG with a pixel grid) and the checks `annotate`/replay make on marks."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from trackreplay.replay.cli import main
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.reader import LogReader
+from trackreplay.schemas.errors import LogError
+
+
+def test_frame_png_has_the_pixels_and_a_grid(short_sim: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "f.png"
+    assert main(["frame", str(short_sim), "3", "--out", str(out), "--grid", "10", "--scale", "2"]) == 0
+    assert "frame 3 of /camera/image" in capsys.readouterr().out
+    plain = tmp_path / "p.png"
+    assert main(["frame", str(short_sim), "3", "--out", str(plain), "--plain"]) == 0
+    pixels = cv2.imread(str(plain), cv2.IMREAD_UNCHANGED)
+    item = [m for m in LogReader(short_sim).messages(["/camera/image"]) if m.index == 3][0]
+    expected = cv2.imdecode(np.frombuffer(item.decode().data, np.uint8), cv2.IMREAD_UNCHANGED)
+    assert np.array_equal(pixels, expected)
+    grid = cv2.imread(str(out))
+    h, w = expected.shape[:2]
+    assert grid.shape[0] > 2 * h and grid.shape[1] > 2 * w  # enlarged, plus margins for the labels
+    assert main(["frame", str(short_sim), "99", "--out", str(out)]) == 2
+    assert "has no frame 99 on /camera/image (it has 12 frames)" in capsys.readouterr().err
+
+
+def test_annotate_refuses_boxes_outside_the_image(short_sim: Path, tmp_path: Path, capsys) -> None:
+    width = cv2.imdecode(np.frombuffer(LogReader(short_sim).first("/camera/image").data, np.uint8), 0).shape[1]
+    out = tmp_path / "m.mcap"
+    assert main(["annotate", str(short_sim), "--frame", "0", "--box", f"{width - 5},10,10,10", "--out", str(out)]) == 2
+    assert "is not inside the" in capsys.readouterr().err and not out.exists()
+    assert main(["annotate", str(short_sim), "--frame", "0", "--box=-1,10,10,10", "--out", str(out)]) == 2
+
+
+def test_labels_a_tracker_ignores_are_refused(short_sim: Path, tmp_path: Path, capsys) -> None:
+    out = tmp_path / "ball.mcap"
+    assert main(["annotate", str(short_sim), "--frame", "0", "--box", "10,10,8,8", "--label", "ball",
+                 "--tracker", "flow", "--out", str(out)]) == 2
+    assert "reads only 'target'" in capsys.readouterr().err
+    assert main(["annotate", str(short_sim), "--frame", "0", "--box", "10,10,8,8", "--label", "ball",
+                 "--tracker", "golf", "--out", str(out)]) == 0
+    with pytest.raises(LogError, match="labelled 'ball' would be ignored by the flow tracker"):
+        replay(ReplayRequest(log=out, tracker="flow"))
