@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import LogError
-from trackreplay.schemas.messages import IMAGE_SCHEMAS
+from trackreplay.schemas.messages import CALIBRATION_SCHEMAS, IMAGE_SCHEMAS
 from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.frame import Frame
@@ -15,7 +15,7 @@ from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
 from trackreplay.trackers.geometry.stereo import StereoRig
 
-from trackreplay.replay.decode import decode_image
+from trackreplay.replay.decode import decode_image, projection
 from trackreplay.replay.reader import LogMessage, LogReader
 
 
@@ -43,6 +43,10 @@ class FrameTopics:
         if stereo is not None:
             for topic in stereo:
                 require_image_topic(reader, topic)
+            left_cal, right_cal = (calibration_topic(reader, t) for t in stereo)
+            if left_cal and right_cal:  # a ROS 2 pair: each image topic's sibling camera_info
+                return cls(image=stereo[0], right=stereo[1], ptz=ptz, left_calibration=left_cal,
+                           right_calibration=right_cal)
             return cls(image=stereo[0], right=stereo[1], ptz=ptz)
         if image is None:
             image = choose_image_topic(reader)
@@ -54,6 +58,18 @@ class FrameTopics:
 
 def _listed(reader: LogReader) -> str:
     return ", ".join(f"{t} ({info.schema or 'no schema'})" for t, info in sorted(reader.topics().items())) or "none"
+
+
+def calibration_topic(reader: LogReader, image_topic: str) -> str | None:
+    """The calibration beside ``image_topic`` by ROS convention (``/cam/left/image_rect`` ->
+    ``/cam/left/camera_info``, a ``sensor_msgs/msg/CameraInfo`` or ``foxglove.CameraCalibration``)."""
+    present = reader.topics()
+    base = image_topic.rsplit("/", 1)[0]
+    for name in ("camera_info", "calibration"):
+        topic = f"{base}/{name}"
+        if topic in present and present[topic].schema in CALIBRATION_SCHEMAS:
+            return topic
+    return None
 
 
 def require_image_topic(reader: LogReader, topic: str) -> None:
@@ -187,7 +203,7 @@ def read_stereo_rig(reader: LogReader, topics: FrameTopics) -> StereoRig | None:
     left, right = reader.first(topics.left_calibration), reader.first(topics.right_calibration)
     if left is None or right is None:
         return None
-    lp, rp = list(left.P), list(right.P)
+    lp, rp = projection(left) or [], projection(right) or []  # CameraCalibration P or ROS 2 CameraInfo p
     if len(lp) != 12 or len(rp) != 12 or lp[0] <= 0 or rp[0] <= 0 or -rp[3] / rp[0] <= 0:
         raise LogError(f"{reader.path}: topics {topics.left_calibration}/{topics.right_calibration} do not describe "
                        f"a rectified pair (need 3x4 P with fx > 0 and the right camera to the right)")

@@ -116,9 +116,9 @@ def test_stereo_pair_from_two_image_topics(tmp_path: Path) -> None:
     frames = list(iter_frames(reader, topics))
     assert len(frames) == 5 and all(f.right is not None for f in frames)
     assert np.array_equal(frames[1].right, _scene(3))
-    rig = getattr(frames[0], "stereo", None)
-    if rig is not None:  # CameraInfo p: f, cx, cy and the baseline -p[3]/p[0]
-        assert (rig.f, rig.cx, rig.cy) == (80.0, 32.0, 24.0) and rig.baseline == pytest.approx(0.12)
+    rig = frames[0].stereo  # from the sibling CameraInfo topics' p: f, cx, cy and the baseline -p[3]/p[0]
+    assert topics.left_calibration == "/stereo_cam/left/camera_info"
+    assert (rig.f, rig.cx, rig.cy) == (80.0, 32.0, 24.0) and rig.baseline == pytest.approx(0.12)
     single = FrameTopics.detect(reader, "/stereo_cam/right/image_rect")
     assert single.right is None and len(list(iter_frames(reader, single))) == 5
     with pytest.raises(LogError, match="holds sensor_msgs/msg/CameraInfo, not images"):
