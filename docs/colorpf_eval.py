@@ -89,8 +89,9 @@ def main() -> None:
             boxes = json.loads(out.read_text())["boxes"]
             rows = [{"tracker": "csrt", "track_id": 1, "frame": i, "x": b[0] + b[2] / 2 - 0.5 if b else None,
                      "y": b[1] + b[3] / 2 - 0.5 if b else None, "w": b[2] if b else None, "h": b[3] if b else None,
-                     "status": "measured" if b else "lost"} for i, b in enumerate(boxes)]
-            s, _ = evaluate(pl.DataFrame(rows), gt)
+                     "vx": None, "vy": None, "status": "measured" if b else "lost"} for i, b in enumerate(boxes)]
+            table = pl.DataFrame(rows, schema_overrides={c: pl.Float64 for c in ("x", "y", "w", "h", "vx", "vy")})
+            s, _ = evaluate(table, gt)
             results["otb"]["CSRT (opencv-contrib 5.0)"] = {"auc": s.success_auc, "precision20": s.precision_at_20px,
                                                           "coverage": s.coverage}
             print(json.dumps(results["otb"], indent=1))
