@@ -88,8 +88,8 @@ class MergeConfig:
     """§3.5 eq. (13): merge trackers whose position AND velocity regions overlap."""
 
     gamma_position: float = 11.34  # squared Mahalanobis of the centres under Σ_i + Σ_j (extent)
-    gamma_velocity: float = 11.34  # of the velocities under P_v,i + P_v,j (+ their points' spread / N)
-    frames: int = 4  # the overlap must hold this many consecutive frames (ours: no merge on one noisy frame)
+    gamma_velocity: float = 6.25  # (χ² 3 dof, 90 %) of the velocities under P_v,i + P_v,j (+ their points' spread / N)
+    frames: int = 8  # the overlap must hold this many consecutive frames (ours: no merge on one noisy frame)
     # Ours: a merge in which one group holds at least this share of the members keeps that group's
     # id (it absorbed a splinter, e.g. feet that started a tracker of their own); otherwise the
     # merged group is new, as in the paper (Group0 + Group1 -> Group2).
