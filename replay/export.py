@@ -96,15 +96,18 @@ def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl
 
 
 def write_mot(df: pl.DataFrame, path: Path) -> None:
-    """MOTChallenge: ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z`` (1-based frames)."""
+    """MOTChallenge: ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z``, 1-based frames **and
+    pixels** (the top-left pixel is (1, 1) there, (0, 0) here): ``bb_left = x - w/2 + 1``.
+    ``recorder.sources.groundtruth.read_mot`` undoes it, so MOT ground truth imported, tracked
+    and exported compares in ``motmetrics`` without a 1 px offset."""
     rows = df.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost")).with_columns(
         w=pl.col("w").fill_null(1.0), h=pl.col("h").fill_null(1.0)
     )
     out = rows.select(
         (pl.col("frame") + 1).alias("frame"),
         pl.col("track_id").alias("id"),
-        (pl.col("x") - pl.col("w") / 2).alias("bb_left"),
-        (pl.col("y") - pl.col("h") / 2).alias("bb_top"),
+        (pl.col("x") - pl.col("w") / 2 + 1).alias("bb_left"),
+        (pl.col("y") - pl.col("h") / 2 + 1).alias("bb_top"),
         pl.col("w").alias("bb_width"),
         pl.col("h").alias("bb_height"),
         pl.when(pl.col("status") == "measured").then(1.0).otherwise(0.5).alias("conf"),

@@ -1,8 +1,9 @@
 """Import annotations (MOTChallenge, OTB) as per-frame ground truth.
 
 Frames become 0-based (file frame 1 = recorded frame 0). Boxes become centre/size in
-image pixels; pixel coordinates are taken as they are, the same convention
-``replay.export.write_mot`` uses, so an exported trajectory imports back unchanged.
+image pixels. MOTChallenge pixels are 1-based (top-left pixel (1, 1)) and become 0-based
+(``x = bb_left - 1 + w/2``), the inverse of ``replay.export.write_mot``, so an exported
+trajectory imports back unchanged. OTB boxes are taken as they are (unchanged so far).
 
 - MOTChallenge (``frame,id,bb_left,bb_top,bb_width,bb_height,conf[,x,y,z]``, comma
   separated): rows whose ``conf`` is 0 are skipped (MOT ground truth's "ignore this entry").
@@ -105,7 +106,7 @@ def read_mot(path: Path) -> GroundTruthTable:
             if len(v) == 10 and not (v[7] == v[8] == v[9] == -1):
                 X, Y, Z = v[7:10]
             obj = GroundTruthObject(
-                id=int(oid), x=left + w / 2, y=top + h / 2, w=w, h=h, X=X, Y=Y, Z=Z, visible=True
+                id=int(oid), x=left - 1 + w / 2, y=top - 1 + h / 2, w=w, h=h, X=X, Y=Y, Z=Z, visible=True
             )
             frames.setdefault(int(frame) - 1, []).append(obj)
     return GroundTruthTable(str(path), "mot", {f: tuple(sorted(o, key=lambda o: o.id)) for f, o in frames.items()}, dense=True)

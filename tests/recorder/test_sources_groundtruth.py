@@ -21,8 +21,8 @@ def test_mot_rows_become_centre_boxes_on_zero_based_frames(tmp_path):
     table = read_groundtruth(gt)
     assert table.format == "mot"
     assert table.objects_at(0) == (
-        GroundTruthObject(id=1, x=5.0, y=5.0, w=10.0, h=10.0, X=1.5, Y=2.5, Z=0.0, visible=True),
-        GroundTruthObject(id=3, x=12.0, y=23.0, w=4.0, h=6.0, visible=True),
+        GroundTruthObject(id=1, x=4.0, y=4.0, w=10.0, h=10.0, X=1.5, Y=2.5, Z=0.0, visible=True),  # 1-based pixels
+        GroundTruthObject(id=3, x=11.0, y=22.0, w=4.0, h=6.0, visible=True),
     )
     assert table.objects_at(1) == ()  # no rows: no objects, still a message
     assert [o.id for o in table.objects_at(2)] == [1]

@@ -52,8 +52,23 @@ def test_round_trip_formats(tmp_path: Path) -> None:
         path = write_trajectory(df, tmp_path / f"t{suffix}")
         assert table_digest(read_trajectory(path)) == table_digest(df)
     mot = write_trajectory(df, tmp_path / "t.txt").read_text().splitlines()
-    assert mot[0] == "1,1,8.000,18.000,4.000,4.000,1.000,-1.000,-1.000,-1.000"
+    assert mot[0] == "1,1,9.000,19.000,4.000,4.000,1.000,-1.000,-1.000,-1.000"  # 1-based frame and pixels
     assert len(mot) == 3
+
+
+def test_mot_ground_truth_round_trips_through_a_trajectory(tmp_path: Path) -> None:
+    """MOT ground truth imported, 'tracked' perfectly and exported gives the file's own boxes back."""
+    from trackreplay.recorder.sources.groundtruth import read_groundtruth
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,1,1.000,1.000,10.000,8.000,1,-1,-1,-1\n2,1,3.500,2.000,10.000,8.000,1,-1,-1,-1\n")
+    table = read_groundtruth(gt, "mot")
+    xs = [table.objects_at(f)[0].x for f in (0, 1)]
+    ys = [table.objects_at(f)[0].y for f in (0, 1)]
+    assert xs == [5.0, 7.5]  # the top-left pixel (1, 1) is our (0, 0): a 10 px box from it is centred at 5
+    df = _table([0, 1], xs).with_columns(pl.Series("y", ys), pl.lit(10.0).alias("w"), pl.lit(8.0).alias("h"))
+    lines = write_trajectory(df, tmp_path / "out.txt").read_text().splitlines()
+    assert [line.split(",")[2:6] for line in lines] == [r.split(",")[2:6] for r in gt.read_text().splitlines()]
 
 
 def test_schema_is_the_contract() -> None:
