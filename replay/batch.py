@@ -127,7 +127,7 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
             log = out / task.log.name
             log.write_bytes(log_bytes)
         result = replay(ReplayRequest(log=log, tracker=task.tracker, config=task.config, seed=task.seed,
-                                      rrd=out / "replay.rrd" if opts.rrd else None))
+                                      rrd=out / "replay.rrd" if opts.rrd else None, frame_digests=True))
         row.update(digest=result.digest, frames=result.frames, frames_lost=len(result.report.lost),
                    seconds=round(result.seconds, 4))
         table = result.trajectory if opts.interpolate == "none" else fill_gaps(result.trajectory, opts.interpolate, opts.max_gap)

@@ -273,7 +273,8 @@ def recording_of_run(spec: RunSpec) -> Recording:
     """One replay of ``spec`` as a Recording (per-frame hashes, kept small values, digest)."""
     from trackreplay.replay.engine import ReplayRequest, replay
 
-    result = replay(ReplayRequest(log=spec.log, tracker=spec.tracker, config=spec.config, seed=spec.seed))
+    result = replay(ReplayRequest(log=spec.log, tracker=spec.tracker, config=spec.config, seed=spec.seed,
+                                  frame_digests=True))
     return Recording(result.frame_digests, result.digest, label=str(spec.log))
 
 

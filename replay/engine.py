@@ -58,6 +58,10 @@ class ReplayRequest:
     progress: bool = False
     opencv_threads: int = 1
     prefetch: int = 4  # frames decoded ahead in a reader thread; 0 = read in the loop
+    # Record per-frame, per-field hashes for `trackreplay diff` (ReplayResult.frame_digests; the
+    # digest itself is the same either way). Costs ~0.1-0.2 ms a frame, so only when asked:
+    # `replay --summary` and every batch task ask.
+    frame_digests: bool = False
     strict: bool = False  # a damaged or undecodable frame stops the replay (else it is skipped and reported)
 
 
@@ -73,7 +77,7 @@ class ReplayResult:
     rrd: Path | None = None
     notices: tuple[str, ...] = ()  # each distinct tracker notice, in the order first seen
     config: Any = None  # the tracker's config as replayed (its dataclass)
-    frame_digests: FrameDigests | None = None  # per-frame, per-field hashes (``trackreplay diff``)
+    frame_digests: FrameDigests | None = None  # per-frame, per-field hashes when requested (``trackreplay diff``)
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
@@ -155,7 +159,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
         from trackreplay.replay.rerun_sink import RerunSink
 
         sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker))
-    digest = ReplayDigest(per_frame=True)
+    digest = ReplayDigest(per_frame=req.frame_digests)
     rows: list[tuple] = []
     notices: list[str] = []
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.

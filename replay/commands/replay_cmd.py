@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -67,7 +68,10 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
 
 
 def run(args: argparse.Namespace) -> int:
-    result = replay(request_from_args(args, args.rrd))
+    request = request_from_args(args, args.rrd)
+    if args.summary:  # the summary's sidecar holds per-frame digests (for `trackreplay diff`)
+        request = dataclasses.replace(request, frame_digests=True)
+    result = replay(request)
     if args.export and args.smooth:
         from trackreplay.replay.commands.smooth import smooth_and_report
 

@@ -31,7 +31,8 @@ def _same(a, b) -> bool:
 
 def test_per_frame_recording_leaves_the_digest_unchanged(short_sim: Path) -> None:
     plain, recorded = ReplayDigest(), ReplayDigest(per_frame=True)
-    result = replay(ReplayRequest(log=short_sim, tracker="flow"))
+    result = replay(ReplayRequest(log=short_sim, tracker="flow", frame_digests=True))
+    assert replay(ReplayRequest(log=short_sim, tracker="flow")).frame_digests is None  # only when asked
     for step in iter_steps(ReplayRequest(log=short_sim, tracker="flow")):
         plain.add_frame(step.frame.index, (step.intermediates, step.states))
         recorded.add_frame(step.frame.index, (step.intermediates, step.states))
