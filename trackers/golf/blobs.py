@@ -160,9 +160,10 @@ def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, w
 
 
 def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, targets: BlobTargets, misses: int,
-                cfg: BlobConfig, scale: float) -> GatedBlobs:
-    """Blobs of the silhouette, gated (widened by ``misses``), and the accepted one nearest ``predicted``."""
-    widen = min(1.0 + cfg.widen_per_miss * misses, cfg.widen_max)
+                cfg: BlobConfig, scale: float, *, lost: bool = False) -> GatedBlobs:
+    """Blobs of the silhouette, gated (widened by ``misses``, ``widen_lost`` once the track is lost),
+    and the accepted one nearest ``predicted``."""
+    widen = cfg.widen_lost if lost else min(1.0 + cfg.widen_per_miss * misses, cfg.widen_max)
     blobs = find_blobs(mask, offset, predicted, cfg, scale)
     reason = gate(blobs, targets, cfg, scale, widen=widen)
     selected = nearest(blobs.centroid, reason == OK, predicted)

@@ -99,6 +99,22 @@ class LutConfig:
 
 
 @dataclass(frozen=True)
+class ContrastConfig:
+    """Ours: the fallback detector when neither LUT finds the ball near the prediction
+    (:func:`~trackreplay.trackers.golf.silhouette.contrast_silhouette`); ``[golf.contrast]``."""
+
+    enabled: bool = True
+    min_contrast: float = 40.0  # luminance levels above the local background (a white ball on blue sky: ~90)
+    noise_sigmas: float = 6.0  # ... and this many robust sigmas of the region's top-hat
+    kernel_diameters: float = 3.0  # the opening's disc, in ball diameters (the background is what is wider)
+    max_kernel_px: float = 61.0  # ... at most this wide (reference height)
+
+    def __post_init__(self) -> None:
+        if self.min_contrast <= 0 or self.kernel_diameters <= 1:
+            raise ValueError("contrast: need min_contrast > 0 and kernel_diameters > 1")
+
+
+@dataclass(frozen=True)
 class BlobConfig:
     """Blob gating on area and circularity against targets from past balls (§2.1); ``[golf.blobs]``."""
 
@@ -111,6 +127,10 @@ class BlobConfig:
     initial_circularity: float = 0.9
     widen_per_miss: float = 0.25  # the area gate (log tolerance) grows by this per frame without a ball...
     widen_max: float = 3.0  # ...up to this factor (3: a ball 27x smaller or larger than the target)
+    # Once lost the targets are stale (the ball receded or came closer, the lens zoomed): the area
+    # gate opens this far (6: 729x) and a candidate must instead be confirmed over several frames
+    # whose blobs agree with one another (validate.track_fit).
+    widen_lost: float = 6.0
     max_blobs: int = 48  # blobs measured per frame (the nearest to the prediction); others "excess"
 
     def __post_init__(self) -> None:
@@ -130,7 +150,9 @@ class ValidateConfig:
     min_confidence: float = 0.25  # below this the row is "predicted" (about 1.7 s off with a perfect fit)
     confirm_frames: int = 3  # a blob outside the gate (or after a loss) must be seen this many frames running
     confirm_px: float = 12.0  # ... each within this (+ a diameter) of the previous ones' extrapolation
-    confirm_fit: float = 0.5  # ... and fit the target area and roundness at least this well
+    entry_margin_px: float = 24.0  # fixed camera, ball gone out of the picture: a new track starts this near the edge
+    confirm_min_area_px: float = 2.0  # ... each blob of at least this many pixels (not scaled: one pixel has no shape)
+    confirm_fit: float = 0.5  # ... and agree with each other in area and be round (validate.track_fit) at least this well
 
     def __post_init__(self) -> None:
         if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1:
@@ -149,8 +171,17 @@ class EkfConfig:
     landing_arm_height_m: float = 2.0  # a landing fires only after the EKF saw the ball this high
     landing_horizon_s: float = 12.0
     landing_step_s: float = 0.02
+    # A gap between frames longer than this is a restart, not a flight to integrate: the filter
+    # forgets the ball (and the tracker calls it lost) instead of sub-stepping across the gap
+    # (a 1-day gap would be 5 million 1/60 s steps; a log time near 2**63 ns, forever).
+    max_gap_s: float = 2.0
     restitution: float = 0.4  # after the bounce: vertical speed *= -restitution
     bounce_friction: float = 0.7  # ... horizontal speed *= this
+
+
+    def __post_init__(self) -> None:
+        if not 0 < self.max_gap_s < 3600:
+            raise ValueError("ekf.max_gap_s must be positive and under an hour")
 
 
 @dataclass(frozen=True)
@@ -194,6 +225,7 @@ class GolfConfig:
     particles: ParticleConfig = field(default_factory=ParticleConfig)
     search: SearchConfig = field(default_factory=SearchConfig)
     lut: LutConfig = field(default_factory=LutConfig)
+    contrast: ContrastConfig = field(default_factory=ContrastConfig)
     blobs: BlobConfig = field(default_factory=BlobConfig)
     ekf: EkfConfig = field(default_factory=EkfConfig)
     range: RangeConfig = field(default_factory=RangeConfig)

@@ -141,11 +141,22 @@ class BallisticEkf:
         self.initialised = True
         self.rejections = 0
 
+    def forget(self) -> None:
+        """Back to "not started": the next measurement initialises the filter again."""
+        self.initialised = False
+        self.armed = False
+        self.rejections = 0
+
     def predict(self, dt: float) -> None:
-        """Propagate ``x`` and ``P`` by ``dt`` seconds (substeps of at most 1/60 s)."""
-        if not self.initialised or dt <= 0:
+        """Propagate ``x`` and ``P`` by ``dt`` seconds (substeps of at most 1/60 s). A gap longer
+        than ``max_gap_s`` is not integrated: the filter forgets the ball (:meth:`forget`), so the
+        work per frame is bounded whatever the timestamps (at most ``max_gap_s * 60`` substeps)."""
+        if not self.initialised or not dt > 0:
             return
         cfg = self.config
+        if not dt <= cfg.max_gap_s:
+            self.forget()
+            return
         steps = max(1, int(math.ceil(dt / MAX_SUBSTEP_S)))
         h = dt / steps
         G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
@@ -193,6 +204,8 @@ class BallisticEkf:
             return None
         previous = self.kf.x.copy()
         self.predict(dt)
+        if not self.initialised:  # a time gap: forgotten
+            return None
         contact = self.ground_contact(previous)
         if contact is None:
             return None

@@ -3,6 +3,11 @@
 The search region's pixels are converted to (Y, Cb, Cr) (only the crop: the HD frame is never
 converted whole), the sky or ground LUT is chosen from the crop's luminance histogram
 (:meth:`GolfLuts.choose`), and one lookup gives the binary silhouette.
+
+Ours, when neither LUT finds the ball near the prediction: :func:`contrast_silhouette`, the pixels
+clearly brighter than their local background (a white top-hat of the luminance, the opening's
+disc a few ball diameters wide). A white ball against open sky keeps that contrast while its
+colour drifts away from what the LUT learned (fading with distance, sun, compression).
 """
 
 from __future__ import annotations
@@ -11,10 +16,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
+import cv2
+
 from trackreplay.trackers.appearance.color import to_ycbcr
 from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
+from trackreplay.trackers.golf.config import ContrastConfig
 from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
+
+CONTRAST = "contrast"  # lut_name of a contrast silhouette
 
 
 @dataclass(frozen=True, eq=False)
@@ -45,3 +55,20 @@ def lut_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, current: 
     name, scores = luts.choose(ycc[..., 0], current)
     mask = silhouette(ycc, luts.lut(name))
     return LutSilhouette(name, scores, mask, np.array(offset, np.int64)), ycc
+
+
+def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+    """Pixels of the crop ``ycc`` brighter than their local background: the white top-hat of Y with
+    a disc ``kernel_diameters`` ball diameters wide, above ``min_contrast`` levels and above
+    ``noise_sigmas`` times the top-hat's robust spread (so textured ground, where many pixels stand
+    out a little, needs more). A 0/1 uint8 mask the size of the crop."""
+    y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
+    if y.size == 0:
+        return np.zeros(y.shape, np.uint8)
+    side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
+    side += 1 - side % 2
+    hat = cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+    med = float(np.median(hat))
+    noise = 1.4826 * float(np.median(np.abs(hat.astype(np.float32) - med)))
+    threshold = max(cfg.min_contrast, med + cfg.noise_sigmas * noise)
+    return (hat >= threshold).astype(np.uint8)

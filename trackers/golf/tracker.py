@@ -42,7 +42,7 @@ from trackreplay.trackers.golf.particles import (DIM, ParticleSet, likelihood, m
 from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.search_region import search_region
-from trackreplay.trackers.golf.silhouette import LutSilhouette, box_silhouette, lut_silhouette
+from trackreplay.trackers.golf.silhouette import CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette
 from trackreplay.trackers.foreground.silhouette import silhouette
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
 from trackreplay.trackers.golf.validate import Validator
@@ -106,8 +106,8 @@ class GolfTracker(TrackerBase):
                                width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
         sil, ycc = lut_silhouette(frame.image, search.box, self.luts, self.lut_name)  # §2.1 I_c
         self.lut_name = sil.lut_name
-        gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale)  # §2.1
         lost = self.misses > cfg.max_predicted_frames
+        gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost)  # §2.1
         found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
                                                   diameter=diameter, size=(width, height), scale=scale, lost=lost)
         if not lost and (found is None or found.verdict != "measured"):
@@ -121,9 +121,13 @@ class GolfTracker(TrackerBase):
                 if seen_alt is not None and seen_alt.verdict == "measured":
                     sil, gated, self.lut_name = other, alt, name
                     break
+            else:
+                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost)
+                if found is not None:
+                    sil, gated = found
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
-                                        diameter=diameter, size=(width, height), scale=scale,
-                                        lost=lost)
+                                        diameter=diameter, size=(width, height), scale=scale, lost=lost,
+                                        entry_only=not self.reinit.centre_search(camera, width, height))
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
@@ -131,6 +135,8 @@ class GolfTracker(TrackerBase):
             self.pf.initialise(state(point, self.validator.confirmed_velocity()),
                                spread_sigma(sigma, cfg.particles.init_velocity_spread_px * scale))
             reinit = Reinit("confirmed", point.copy(), np.full(2, sigma))
+            area, rnd = self.validator.confirmed_shape()  # the ball's size starts again from what was confirmed
+            self.targets = BlobTargets(area, float(min(max(rnd, 0.6), 1.0)))
             observed = gated.blobs.centroid[[check.candidate]]
             self.validator.reset()
         else:
@@ -165,6 +171,20 @@ class GolfTracker(TrackerBase):
         return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))]
 
     # --- stages ------------------------------------------------------------------------------------
+    def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
+                           scale: float, lost: bool) -> tuple[LutSilhouette, GatedBlobs] | None:
+        """Neither LUT saw the ball near the prediction: the local-contrast silhouette, taken only
+        when it finds a blob the validation gate measures (same gate, same confidence)."""
+        cfg = self.config
+        if not cfg.contrast.enabled:
+            return None
+        mask = contrast_silhouette(ycc, diameter, cfg.contrast, scale)
+        other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
+        gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost)
+        seen, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
+                                                 diameter=diameter, size=size, scale=scale, lost=lost)
+        return (other, gated) if seen is not None and seen.verdict == "measured" else None
+
     def _start(self, frame: Frame, region: InitRegion, scale: float) -> Reinit:
         """§2.3 initialisation: targets from the marked box's own silhouette, samples around the box."""
         cfg = self.config
@@ -190,6 +210,11 @@ class GolfTracker(TrackerBase):
         prev_camera, prev_index, prev_t_ns = self._prev
         steps = max(1, frame.index - prev_index) if prev_index is not None else 1
         dt = (frame.t_ns - prev_t_ns) / 1e9 if prev_t_ns is not None else 0.0
+        if not abs(dt) <= cfg.ekf.max_gap_s:  # a time gap (or a log time jumping back): the ball is lost, not coasted
+            self.misses = max(self.misses, cfg.max_predicted_frames + 1)
+            self.validator.reset()
+            self.ekf.forget()
+            steps = 1
         landing = self.ekf.advance(dt)
         height, width = frame.image.shape[:2]
         reinit = self.reinit.choose(index=frame.index, size=(width, height), scale=scale, misses=self.misses,

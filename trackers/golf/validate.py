@@ -14,11 +14,16 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   track is lost, or while the prediction has left the picture, starts or extends a *tentative*
   track. Only when it has been seen on ``confirm_frames`` consecutive frames, each within
   ``confirm_px + D`` of the constant-velocity extrapolation of the previous ones, is it accepted:
-  the particles start again there (re-initialisation kind ``"confirmed"``), provided it then fits
-  the target area and roundness (``confirm_fit``);
+  the particles start again there (re-initialisation kind ``"confirmed"``), provided the tentative
+  blobs agree with *each other*: their areas within ``area_tolerance`` of one another and their
+  roundness within the shape tolerance of a disc (``confirm_fit`` of :func:`track_fit`). The
+  targets are not asked: after a loss they are stale (a receding ball under a zooming lens, a
+  streak's fragments), and the ball's size starts again from the confirmed blobs;
 - **gone**: when the predicted mean is more than a ball diameter outside the picture nothing in
   the picture is accepted directly (the ball left it); the track is ``predicted`` and then
-  ``lost`` (no position) after ``max_predicted_frames`` misses, like any other miss.
+  ``lost`` (no position) after ``max_predicted_frames`` misses, like any other miss. When the
+  camera does not follow the ball (``entry_only``), a tentative track must then start within
+  ``entry_margin_px`` (+ 2 D) of the picture's edge: the ball comes back in through it.
 """
 
 from __future__ import annotations
@@ -63,6 +68,22 @@ def blob_fit(gated: GatedBlobs, k: int, cfg: BlobConfig, scale: float) -> float:
     return math.exp(-0.5 * ratio * ratio) * math.exp(-0.5 * short * short)
 
 
+def track_fit(areas: np.ndarray, rounds: np.ndarray, cfg: BlobConfig, scale: float, min_area: float = 2.0) -> float:
+    """How well the blobs of a tentative track agree with one another and with a disc, in [0, 1]:
+    the spread of their log-areas (in units of ``log area_tolerance``) and how far their median
+    roundness falls short of a disc's (in units of the shape tolerance). 0 when a blob has fewer
+    than ``min_area`` pixels: a single pixel has no shape, and noise specks are single pixels."""
+    if np.asarray(areas, float).size and float(np.min(areas)) < min_area:
+        return 0.0
+    slack = cfg.area_slack_px * scale * scale
+    la = np.log(np.asarray(areas, float) + slack)
+    spread = float(la.max() - la.min()) / math.log(cfg.area_tolerance) if la.size else 0.0
+    r = float(np.nanmedian(rounds)) if np.isfinite(rounds).any() else 0.0
+    tol = float(shape_tolerance(np.median(areas), cfg, scale))
+    short = max(0.0, 1.0 - cfg.circularity_tolerance - r) / tol
+    return math.exp(-0.5 * spread * spread) * math.exp(-0.5 * short * short)
+
+
 class Validator:
     """Decides per frame whether the ball was seen, with a tentative track for jumps."""
 
@@ -70,9 +91,11 @@ class Validator:
         self.cfg = cfg
         self.blobs = blobs
         self.tentative: list[tuple[int, float, float]] = []
+        self.shapes: list[tuple[float, float]] = []  # (area, roundness) of each tentative blob
 
     def reset(self) -> None:
         self.tentative = []
+        self.shapes = []
 
     def gate(self, spread: np.ndarray, diameter: float, scale: float) -> tuple[float, float]:
         """``(s, radius)``: the motion scale and the gate radius for this frame."""
@@ -102,7 +125,10 @@ class Validator:
         return Validation(verdict, confidence, fit, motion, radius, k, np.zeros((0, 3)), in_gate), in_gate, outside
 
     def validate(self, *, index: int, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
-                 size: tuple[int, int], scale: float, lost: bool) -> Validation:
+                 size: tuple[int, int], scale: float, lost: bool, entry_only: bool = False) -> Validation:
+        """The frame's verdict. ``entry_only``: the camera does not follow the ball, so once the
+        prediction has left the picture a new tentative track may only start near the border (a
+        ball comes back into a fixed view through its edge, not out of a white cap mid-picture)."""
         cfg = self.cfg
         _, radius = self.gate(spread, diameter, scale)
         ok = gated.accepted
@@ -110,12 +136,18 @@ class Validator:
                                                     size=size, scale=scale, lost=lost)
         if found is not None:
             if found.verdict == "measured":
-                self.tentative = []
+                self.reset()
                 return found
             return dataclasses.replace(found, tentative=self._rows())
         verdict = "outside_image" if outside else "lost" if lost else "outside_gate" if ok.any() else "no_candidate"
-        k = self._extend(index, gated, predicted, diameter, scale)
-        fit = blob_fit(gated, k, self.blobs, scale) if k >= 0 else 0.0
+        border = None
+        if outside and entry_only:
+            border = (size, cfg.entry_margin_px * scale + 2.0 * diameter)
+        k = self._extend(index, gated, predicted, diameter, scale, border)
+        fit = 0.0
+        if k >= 0:
+            shapes = np.array(self.shapes[-cfg.confirm_frames:], float).reshape(-1, 2)
+            fit = track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, cfg.confirm_min_area_px)
         if k >= 0 and len(self.tentative) >= cfg.confirm_frames and fit >= cfg.confirm_fit:
             return Validation("confirmed", fit, fit, 0.0, radius, k, self._rows(), in_gate)
         return Validation(verdict, 0.0, 0.0, 0.0, radius, k, self._rows(), in_gate)
@@ -128,12 +160,14 @@ class Validator:
     def _rows(self) -> np.ndarray:
         return np.array(self.tentative, float).reshape(-1, 3)
 
-    def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float) -> int:
-        """Continue the tentative track with a shape-accepted blob (or start one); the blob row or -1."""
+    def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float,
+                border: tuple[tuple[int, int], float] | None = None) -> int:
+        """Continue the tentative track with a shape-accepted blob (or start one: only within
+        ``border = ((width, height), margin)`` of the picture's edge when given); the blob row or -1."""
         ok = np.flatnonzero(gated.accepted)
         if not ok.size:
             if self.tentative and index - self.tentative[-1][0] > 1:
-                self.tentative = []
+                self.reset()
             return -1
         c = gated.blobs.centroid
         if self.tentative and index - self.tentative[-1][0] == 1:
@@ -145,8 +179,22 @@ class Validator:
             if dist[j] <= self.cfg.confirm_px * scale + diameter:
                 k = int(ok[j])
                 self.tentative.append((index, float(c[k, 0]), float(c[k, 1])))
+                self.shapes.append((float(gated.blobs.area[k]), float(roundness(gated.blobs)[k])))
                 return k
+        if border is not None:
+            (width, height), margin = border
+            x, y = c[ok, 0], c[ok, 1]
+            ok = ok[(x < margin) | (y < margin) | (x > width - 1 - margin) | (y > height - 1 - margin)]
+            if not ok.size:
+                self.reset()
+                return -1
         dist = np.hypot(c[ok, 0] - predicted[0], c[ok, 1] - predicted[1])
         k = int(ok[int(np.argmin(dist))])
         self.tentative = [(index, float(c[k, 0]), float(c[k, 1]))]
+        self.shapes = [(float(gated.blobs.area[k]), float(roundness(gated.blobs)[k]))]
         return k
+
+    def confirmed_shape(self) -> tuple[float, float]:
+        """Median area and roundness of the confirmed tentative blobs: the ball's new targets."""
+        shapes = np.array(self.shapes, float).reshape(-1, 2)
+        return float(np.median(shapes[:, 0])), float(np.nanmedian(shapes[:, 1])) if np.isfinite(shapes[:, 1]).any() else 0.9
