@@ -42,6 +42,7 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
     times: dict[int, array] = {}
     attachments: list[str] = []
     metadata: list[str] = []
+    metadata_values: list[dict[str, Any]] = []
     damage: list[Damage] = []
     header: Header | None = None
     ended = False
@@ -71,6 +72,7 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
                 attachments.append(record.name)
             elif isinstance(record, Metadata):
                 metadata.append(record.name)
+                metadata_values.append({"name": record.name, "values": dict(record.metadata)})
             elif isinstance(record, Header):
                 header = record
             elif isinstance(record, Footer):
@@ -134,7 +136,43 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
         ],
         "attachments": attachments,
         "metadata": metadata,
+        "metadata_values": metadata_values,
+        "file_bytes": path.stat().st_size,
+        **_chunking(path),
     }
+
+
+def _chunking(path: Path) -> dict[str, Any]:
+    """Chunk count and compression from the summary's chunk index (None when it cannot be read)."""
+    from mcap.reader import make_reader
+
+    try:
+        with open(path, "rb") as fh:
+            summary = make_reader(fh).get_summary()
+        indexes = summary.chunk_indexes if summary else None
+    except Exception:  # a truncated log: the scan above already says what is readable
+        indexes = None
+    if indexes is None:
+        return {"chunks": None, "compression": None}
+    return {"chunks": len(indexes), "compression": sorted({ci.compression or "none" for ci in indexes}) or ["none"]}
+
+
+def _calendar(t: int | None) -> str:
+    """UTC date and time for a log_time in ns since the epoch; '' for a time near zero (a synthetic log's)."""
+    if t is None or t < 10**17:  # before 1973: a relative clock, not a date
+        return ""
+    from datetime import datetime, timezone
+
+    stamp = datetime.fromtimestamp(t // 10**9, tz=timezone.utc).strftime("%Y-%m-%d %H:%M:%S")
+    return f" ({stamp}.{t % 10**9 // 1000:06d} UTC)"
+
+
+def _size(n: int) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n} B"
 
 
 def _records(items, damage: list[Damage]):
@@ -214,13 +252,24 @@ def format_info(info: dict[str, Any]) -> str:
     """A human-readable report of ``log_info``'s result."""
     lines = [f"{info['path']}" + ("  [TRUNCATED: showing the readable part]" if info["truncated"] else "")]
     dur = info["duration_s"]
-    lines.append(f"  start {_ns(info['start_ns'])}, end {_ns(info['end_ns'])}, duration "
-                 f"{'-' if dur is None else f'{dur:.3f} s'}, {info['messages']} messages")
+    if info.get("file_bytes") is not None:
+        chunks = "-" if info.get("chunks") is None else info["chunks"]
+        compression = "/".join(info.get("compression") or ["-"])
+        lines.append(f"  size {_size(info['file_bytes'])}, {chunks} chunks, compression {compression}, "
+                     f"library {info.get('library') or '-'}")
+    lines.append(f"  start {_ns(info['start_ns'])}{_calendar(info['start_ns'])}")
+    lines.append(f"  end   {_ns(info['end_ns'])}{_calendar(info['end_ns'])}")
+    lines.append(f"  duration {'-' if dur is None else f'{dur:.3f} s'}, {info['messages']} messages")
     width = max((len(e["topic"]) for e in info["topics"]), default=5)
+    swidth = max((len(e["schema"]) for e in info["topics"]), default=6)
+    cwidth = max((len(str(e["count"])) for e in info["topics"]), default=5)
     lines.append("  topics:")
     for e in info["topics"]:
         rate = "-" if e["rate_hz"] is None else f"{e['rate_hz']:.2f} Hz"
-        lines.append(f"    {e['topic']:<{width}}  {e['schema']:<28} {e['count']:>7}  {rate}")
+        lines.append(f"    {e['topic']:<{width}}  {e['schema']:<{swidth}}  {e['count']:>{cwidth}}  {rate}")
+    for meta in info.get("metadata_values", []):
+        lines.append(f"  metadata {meta['name']}:")
+        lines.extend(f"    {k}: {v}" for k, v in sorted(meta["values"].items()))
     for topic, g in info["gaps"].items():
         if g["gaps"]:
             lines.append(f"  time gaps on {topic} (> {GAP_FACTOR}x median {g['median_interval_ns'] / 1e6:.2f} ms): {len(g['gaps'])}")
