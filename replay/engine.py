@@ -78,6 +78,9 @@ class ReplayResult:
     notices: tuple[str, ...] = ()  # each distinct tracker notice, in the order first seen
     config: Any = None  # the tracker's config as replayed (its dataclass)
     frame_digests: FrameDigests | None = None  # per-frame, per-field hashes when requested (``trackreplay diff``)
+    # A tracker whose intermediates have ``extra_rows()`` (groups: members, 3-D velocity, extent) gives
+    # a second table; its rows here, each with tracker, frame and t_ns (None for other trackers).
+    extra_rows: tuple[dict, ...] | None = None
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
@@ -161,6 +164,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
         sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker))
     digest = ReplayDigest(per_frame=req.frame_digests)
     rows: list[tuple] = []
+    extra: list[dict] | None = [] if hasattr(getattr(steps.tracker, "intermediates", None), "extra_rows") else None
     notices: list[str] = []
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
     started = time.perf_counter()
@@ -173,6 +177,9 @@ def replay(req: ReplayRequest) -> ReplayResult:
                 print(f"trackreplay: {req.tracker}: {notice}", file=sys.stderr)
             digest.add_frame(frame.index, (step.intermediates, step.states))
             rows.extend(state_row(req.tracker, frame.index, frame.t_ns, s) for s in step.states)
+            if extra is not None:
+                extra.extend({"tracker": req.tracker, "frame": frame.index, "t_ns": frame.t_ns, **r}
+                             for r in step.intermediates.extra_rows())
             if sink is not None:
                 sink.begin_frame(frame)
                 steps.entry.view.log(sink.logger, req.tracker, frame, step.intermediates, list(step.states))
@@ -184,4 +191,4 @@ def replay(req: ReplayRequest) -> ReplayResult:
     digest.add_lost([(x.topic, x.index, x.t_ns) for x in steps.report.lost])
     table = trajectory_table(rows)
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
-                        req.rrd, tuple(notices), steps.config, digest.frames)
+                        req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra))

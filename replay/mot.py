@@ -30,7 +30,7 @@ class MotSummary:
     id_switches: int
     false_positives: int
     misses: int
-    matches: int
+    matches: int  # matched pairs, switches included (motmetrics' num_detections; its num_matches = matches − id_switches)
     objects: int  # ground-truth detections
     hypotheses: int  # tracker detections
     idtp: int

@@ -79,6 +79,10 @@ def run(args: argparse.Namespace) -> int:
     elif args.export:
         table = result.trajectory if args.interpolate == "none" else fill_gaps(result.trajectory, args.interpolate, args.max_gap)
         write_trajectory(table, args.export)
+    if args.export and result.extra_rows is not None:  # groups: the second table beside it, TRAJ.groups.parquet
+        from trackreplay.replay.group_table import group_table, write_group_table
+
+        write_group_table(group_table(result.extra_rows), args.export)
     summary = result.summary(args.log)
     if args.summary:  # the per-frame digests go beside it, for `trackreplay diff`
         from trackreplay.replay.diff import sidecar_path, write_sidecar

@@ -38,11 +38,21 @@ def _colorpf(path: Path) -> None:
                                                  jpeg_quality=85))
 
 
+def _groups(path: Path) -> None:
+    from trackreplay.recorder.synth.groups.scene import GroupSceneConfig, write_group_scene
+
+    # 32 stereo pairs, 320x240 (the paper's f on a quarter of its VGA picture), JPEG 75, 24 fps, from
+    # 0.6 s into the crossing: both groups start (frames 13 and 18) and are tracked for the rest
+    write_group_scene(path, GroupSceneConfig(scene="groups-crossing", fps=24.0, lead_in=8, duration=24 / 24.0,
+                                             start_s=0.6, encoding="jpeg", jpeg_quality=75, width=320, height=240))
+
+
 GOLDEN = {
     # tracker: (log file, how it is made)
     "flow": ("flow-sim1-24f.mcap", lambda p: write_flow_sim(p, FlowSimConfig(scene="flow-sim1", frames=24))),
     "golf": ("golf-teeshot-640x360.mcap", _golf),
     "colorpf": ("colorpf-approach-320x240.mcap", _colorpf),
+    "groups": ("groups-crossing-320x240.mcap", _groups),
 }
 
 

@@ -87,14 +87,16 @@ class GroupSceneConfig:
     lead_in: int = 10  # empty frames first (the background)
     noise: float = 2.0  # grey levels, Gaussian, per pixel and view
     merge_s: float = 2.0  # groups-merging: when the two groups become one
+    start_s: float = 0.0  # script time of the first frame after the lead-in (a short clip from mid-scene)
     encoding: str = "png"
+    jpeg_quality: int = 95
     width: int = 640
     height: int = 480
 
     def validate(self) -> None:
         if self.scene not in SCENES:
             raise ValueError(f"unknown scene {self.scene!r}; choose one of {', '.join(SCENES)}")
-        if self.fps <= 0 or self.duration <= 0 or self.lead_in < 1:
+        if self.fps <= 0 or self.duration <= 0 or self.lead_in < 1 or self.start_s < 0:
             raise ValueError("fps and duration must be positive and lead_in at least 1 frame")
 
 
@@ -171,7 +173,7 @@ class GroupScene:
         """Left, right (BGR uint8), the left id image (person id, 0 background), time t (None in the lead-in)."""
         left, right = self.backgrounds[0].copy(), self.backgrounds[1].copy()
         ids = np.zeros(left.shape[:2], np.int32)
-        t = None if index < self.cfg.lead_in else (index - self.cfg.lead_in) / self.cfg.fps
+        t = None if index < self.cfg.lead_in else self.cfg.start_s + (index - self.cfg.lead_in) / self.cfg.fps
         if t is not None:
             faces, textures, owners = [], [], []
             for p in self.people:
@@ -238,6 +240,7 @@ def write_group_scene(out: str | Path, cfg: GroupSceneConfig,
         log.add_metadata("groups_scene", {
             "scene": cfg.scene, "seed": str(cfg.seed), "fps": repr(cfg.fps), "rig_height_m": repr(scene.rig.height),
             "rig_tilt_deg": repr(scene.rig.tilt_deg), "lead_in": str(cfg.lead_in), "merge_s": repr(cfg.merge_s),
+            "start_s": repr(cfg.start_s),
             "person_height_m": repr(HEIGHT),
         })
         for index in range(total):
@@ -246,8 +249,8 @@ def write_group_scene(out: str | Path, cfg: GroupSceneConfig,
                 log.write(T.STEREO_LEFT_CALIBRATION, left_cal.to_pb(t_ns, "left"), t_ns)
                 log.write(T.STEREO_RIGHT_CALIBRATION, right_cal.to_pb(t_ns, "right"), t_ns)
             left, right, ids, t = scene.render(index)
-            log.write(T.STEREO_LEFT_IMAGE, image_message(left, cfg.encoding, t_ns, frame_id="left"), t_ns)
-            log.write(T.STEREO_RIGHT_IMAGE, image_message(right, cfg.encoding, t_ns, frame_id="right"), t_ns)
+            log.write(T.STEREO_LEFT_IMAGE, image_message(left, cfg.encoding, t_ns, frame_id="left", jpeg_quality=cfg.jpeg_quality), t_ns)
+            log.write(T.STEREO_RIGHT_IMAGE, image_message(right, cfg.encoding, t_ns, frame_id="right", jpeg_quality=cfg.jpeg_quality), t_ns)
             if t is not None:
                 persons, groups, _ = scene.truth(index, t, ids)
                 log.write(T.GROUNDTRUTH, persons.to_pb(), t_ns)
