@@ -6,6 +6,7 @@ import numpy as np
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
+from trackreplay.trackers.golf.config import ValidateConfig
 from trackreplay.trackers.golf.blobs import BlobTargets, disc_circularity, roundness
 from trackreplay.trackers.foreground.blobs import measure_blobs
 
@@ -102,3 +103,35 @@ def test_roundness_is_about_one_for_discs_of_every_size():
     for _ in range(50):  # following one-pixel blobs no longer walks the target above 1
         t = t.follow(1.0, 1.0, 0.3)
     assert t.circularity <= 1.0 + 1e-9
+
+
+def test_fading_ball_over_sky_is_held_by_the_contrast_fallback(backdrop, draw_ball):
+    # Marked white; from frame 8 on the ball takes a colour the LUT never saw (sunlit, yellowish),
+    # still clearly brighter than the sky around it: the local-contrast fallback keeps it.
+    path = [(600.0 + 2 * k, 300.0 - 5 * k) for k in range(30)]
+    base = backdrop()
+    regions = (InitRegion(0, 0, *path[0], 14, 14, "ball"),)
+    frames = []
+    for k, p in enumerate(path):
+        colour = (240, 242, 244) if k < 8 else (150, 235, 255)
+        frames.append(Frame(k, k * NS, draw_ball(base, p, 3.0, colour), hints=regions if k == 0 else (), all_hints=regions))
+    results = run(frames)
+    used = [inter.silhouette.lut_name for (s,), inter in results if s.status == "measured"]
+    assert "contrast" in used
+    for (s,), _ in results[8:]:
+        assert s.status == "measured"
+    for ((s,), _), p in zip(results, path):
+        assert abs(s.x - p[0]) < 2.0 and abs(s.y - p[1]) < 2.0
+
+
+def test_fixed_camera_ball_gone_a_white_object_mid_picture_is_not_the_ball(backdrop, draw_ball):
+    # The ball leaves the top of a fixed view at frame 15; from frame 18 a round white object sits
+    # inside the picture, within the grown search region but away from the edge (a cap): it is never
+    # confirmed as the ball (a ball comes back into a fixed view through its edge).
+    path = [(640.0, 150.0 - 10 * k) for k in range(40)]
+    positions = [p if p[1] > -5 else None for p in path]
+    extra = {k: [(650.0, 70.0)] for k in range(18, 40)}
+    frames = sequence(backdrop, draw_ball, positions, [(0, path[0])], extra=extra)
+    assert "measured" not in statuses(run(frames))[16:]
+    anywhere = GolfTracker(GolfConfig(validate=ValidateConfig(entry_margin_px=1e6)), np.random.default_rng(0))
+    assert "measured" in [anywhere.step(f)[0].status for f in frames][16:]  # without the rule it would be taken
