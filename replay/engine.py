@@ -63,6 +63,9 @@ class ReplayRequest:
     # `replay --summary` and every batch task ask.
     frame_digests: bool = False
     strict: bool = False  # a damaged or undecodable frame stops the replay (else it is skipped and reported)
+    # Keep the trackers' raw measurements (replay/smooth.py observation_rows) for the offline
+    # smoother: ReplayResult.observations. Not part of the digest.
+    observations: bool = False
 
 
 @dataclass(frozen=True)
@@ -81,6 +84,7 @@ class ReplayResult:
     # A tracker whose intermediates have ``extra_rows()`` (groups: members, 3-D velocity, extent) gives
     # a second table; its rows here, each with tracker, frame and t_ns (None for other trackers).
     extra_rows: tuple[dict, ...] | None = None
+    observations: pl.DataFrame | None = None  # raw measurements when ReplayRequest.observations (smooth.OBS_SCHEMA)
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
@@ -166,6 +170,11 @@ def replay(req: ReplayRequest) -> ReplayResult:
     rows: list[tuple] = []
     extra: list[dict] | None = [] if hasattr(getattr(steps.tracker, "intermediates", None), "extra_rows") else None
     notices: list[str] = []
+    observed: list[dict] | None = None
+    if req.observations:
+        from trackreplay.replay.smooth import observation_rows, observations_table
+
+        observed = []
     # The clock is read before and after the loop only; tqdm reads it for display, never for results.
     started = time.perf_counter()
     try:
@@ -180,6 +189,9 @@ def replay(req: ReplayRequest) -> ReplayResult:
             if extra is not None:
                 extra.extend({"tracker": req.tracker, "frame": frame.index, "t_ns": frame.t_ns, **r}
                              for r in step.intermediates.extra_rows())
+            if observed is not None:
+                observed.extend(observation_rows(req.tracker, frame.index, step.intermediates, step.states,
+                                                 getattr(frame, "stereo", None)))
             if sink is not None:
                 sink.begin_frame(frame)
                 steps.entry.view.log(sink.logger, req.tracker, frame, step.intermediates, list(step.states))
@@ -191,4 +203,5 @@ def replay(req: ReplayRequest) -> ReplayResult:
     digest.add_lost([(x.topic, x.index, x.t_ns) for x in steps.report.lost])
     table = trajectory_table(rows)
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
-                        req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra))
+                        req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra),
+                        observations=None if observed is None else observations_table(observed))

@@ -13,8 +13,15 @@ model of the flow tracker's image-plane position (seed 004 §4.3, whose third st
 Gauss–Markov acceleration, is the white acceleration here) and of the colour particle filter
 (seed 002: ``x ← x + ω``). The golf tracker's image position follows a ball the operator keeps
 near the centre, so the same model is used for it; its 3-D flight has its own offline fit
-(:mod:`trackreplay.replay.flight`). The group tracker's 3-D constant-velocity EKF (seed 003) is
-not in the project yet (``trackers/groups``): its tracks get the image model until it lands.
+(:mod:`trackreplay.replay.flight`). Group tracks are smoothed in 3-D with the group EKF's own model
+(:class:`GroupModel`, seed 003 §3.2): state ``[X Ẋ Y Ẏ Z Ż]`` in the left camera frame, columns
+``VX, VY, VZ`` (m/s) and ``X_std, Y_std, Z_std`` (m) added.
+
+**Raw observations.** A tracker's output is already filtered; smoothing it again gains little
+(flow-sim1 got slightly worse). Where the replay kept the trackers' raw measurements
+(``ReplayRequest(observations=True)``, :func:`observation_rows`: the flow tracker's centroid of the
+moving set, eq. 11; a group's mean ``[u v d]`` carried to 3-D with its covariance), those are the
+observations instead.
 
 **Observations.** ``measured`` rows are observations of ``(x, y)``; their noise is
 ``σ₀ / √confidence`` (the tracker's own confidence, floored at ``min_confidence``; ``σ₀`` when the
@@ -60,6 +67,17 @@ from trackreplay.trackers.geometry.ptz import PtzCamera
 
 EXTRA_SCHEMA: dict[str, pl.DataType] = {
     "x_std": pl.Float64, "y_std": pl.Float64, "vx_std": pl.Float64, "vy_std": pl.Float64, "fill": pl.String,
+    # 3-D models (groups): smoothed velocity (m/s, the log's frame rate) and position std (m)
+    "VX": pl.Float64, "VY": pl.Float64, "VZ": pl.Float64, "X_std": pl.Float64, "Y_std": pl.Float64, "Z_std": pl.Float64,
+}
+# Raw observations (the tracker's measurement before its own filter), one row per track and frame:
+# image position/velocity (flow: centroid and mean flow) or a 3-D point with its covariance (groups:
+# the mean [u v d] of the group's points carried through the rig, R = J⁻¹ diag(σ_u², σ_v², σ_d²) J⁻ᵀ).
+OBS_SCHEMA: dict[str, pl.DataType] = {
+    "tracker": pl.String, "track_id": pl.Int64, "frame": pl.Int64,
+    "zx": pl.Float64, "zy": pl.Float64, "zvx": pl.Float64, "zvy": pl.Float64,
+    "zX": pl.Float64, "zY": pl.Float64, "zZ": pl.Float64,
+    "rXX": pl.Float64, "rXY": pl.Float64, "rXZ": pl.Float64, "rYY": pl.Float64, "rYZ": pl.Float64, "rZZ": pl.Float64,
 }
 SMOOTH_COLUMNS = (*COLUMNS, *EXTRA_SCHEMA)
 FILLS = ("rts", "rts_outlier", "rts_gap", "linear", "cubic")
@@ -89,6 +107,11 @@ class ImageModel:
 
     name: str = "image constant velocity"
     observe_velocity: bool = False
+    # With raw observations (flow): observe the raw velocity (mean flow, eq. 11) instead of the
+    # tracker's filtered one. Off: on flow-sim1-3 the raw mean flow made the smoothed velocity worse
+    # (0.54 vs 0.48 px/frame RMSE) while the raw centroid made positions better (docs/smoothing.md).
+    raw_velocity: bool = False
+    velocity_lag: int = 0  # a raw velocity observed at frame k measures the state's velocity at k - lag
 
     @staticmethod
     def F() -> np.ndarray:  # noqa: N802 (textbook symbol)
@@ -108,13 +131,48 @@ class ImageModel:
 
 # The motion model each tracker's tracks are smoothed with (see the module docstring).
 MODELS: dict[str, ImageModel] = {
-    "flow": ImageModel("flow: image constant velocity, positions and velocities observed (seed 004 §4.3)",
+    "flow": ImageModel("flow: image constant velocity; raw centroid (eq. 11) and the tracker's velocity observed (seed 004 §4.3)",
                        observe_velocity=True),
     "colorpf": ImageModel("colorpf: image constant velocity (seed 002 transition)"),
     "golf": ImageModel("golf: image constant velocity (3-D: trackreplay flight)"),
-    "groups": ImageModel("groups: image constant velocity (the group EKF's 3-D model is not in the project yet)"),
 }
 DEFAULT_MODEL = ImageModel()
+
+
+@dataclass(frozen=True)
+class GroupModel:
+    """The group EKF's own model (seed 003 §3.2, trackers/groups/ekf.py): state ``[X Ẋ Y Ẏ Z Ż]`` in
+    the left camera frame (m, m/frame), ``Φ`` block-diagonal ``[[1, 1], [0, 1]]``, process noise
+    ``q ΓΓᵀ`` with ``ΓΓᵀ = [[1/4, 1/2], [1/2, 1]]`` per axis (``q = σ_a²``, the EKF's own). Observed:
+    the 3-D position, either the raw group measurement (mean ``[u v d]`` of its points through the
+    rig, covariance ``R`` from the EKF's σ_u, σ_v, σ_d, scaled by ``s²`` chosen by maximum
+    likelihood) or, without intermediates, the tracker's own ``X, Y, Z`` with noise ``σ`` (m)."""
+
+    name: str = "groups: the group EKF's 3-D constant velocity (seed 003 §3.2)"
+    # The EKF's own process noise (EkfConfig.accel_sigma = 0.004 m/frame²): the raw measurement (the
+    # mean of the members' points) wanders as members hide and show, and maximum likelihood over q then
+    # follows the wander (velocity RMSE 0.82 -> 1.15 m/s on groups-crossing); with the EKF's q the
+    # smoothed velocity is 0.82 -> 0.31 m/s. Only the scale of R is chosen by maximum likelihood.
+    q_grid: tuple[float, ...] = (0.004**2,)  # (m/frame²)²
+    scale_grid: tuple[float, ...] = (0.3, 1.0, 3.0)  # on the raw R (unitless)
+    sigma_grid: tuple[float, ...] = (0.01, 0.03, 0.1, 0.3)  # m, on the tracker's X, Y, Z
+
+    @staticmethod
+    def F() -> np.ndarray:  # noqa: N802
+        return np.kron(np.eye(3), np.array([[1.0, 1.0], [0.0, 1.0]]))
+
+    @staticmethod
+    def Q(q: float) -> np.ndarray:  # noqa: N802
+        return np.kron(np.eye(3), q * np.array([[0.25, 0.5], [0.5, 1.0]]))
+
+    @staticmethod
+    def H() -> np.ndarray:  # noqa: N802
+        H = np.zeros((3, 6))
+        H[0, 0] = H[1, 2] = H[2, 4] = 1.0
+        return H
+
+
+GROUP_MODEL = GroupModel()
 
 
 @dataclass(frozen=True)
@@ -241,9 +299,12 @@ def _interp(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.nda
 
 
 def _smooth_one(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int, int] | None,
-                cameras: Mapping[int, PtzCamera] | None) -> tuple[pl.DataFrame, TrackFit | None]:
+                cameras: Mapping[int, PtzCamera] | None,
+                raw: pl.DataFrame | None = None) -> tuple[pl.DataFrame, TrackFit | None]:
     head = track.row(0, named=True)
     tracker, track_id = head["tracker"], head["track_id"]
+    if tracker == "groups":
+        return _smooth_group(track, cfg, frame_times, raw)
     positioned = track.filter(pl.col("x").is_not_null() & pl.col("y").is_not_null() & (pl.col("status") != "lost"))
     if positioned.height == 0:
         return track.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items())).select(SMOOTH_COLUMNS), None
@@ -261,6 +322,23 @@ def _smooth_one(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int
     vx = full["vx"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
     vy = full["vy"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
     z = np.where(measured[:, None], np.stack([x, y, vx, vy], axis=1), np.nan)
+    if raw is not None and raw.height and raw["zx"].is_not_null().any():
+        # The tracker's raw measurements (before its own filter) replace its filtered output: the
+        # smoother then filters them once, with the future, instead of smoothing a filtered track.
+        r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
+        zx, zy = r["zx"].to_numpy().astype(float), r["zy"].to_numpy().astype(float)
+        zv = np.stack([r["zvx"].to_numpy().astype(float), r["zvy"].to_numpy().astype(float)], axis=1)
+        if model.velocity_lag:
+            zv = np.concatenate([zv[model.velocity_lag:], np.full((model.velocity_lag, 2), np.nan)])
+        if not model.raw_velocity:
+            zv = np.where(measured[:, None], np.stack([vx, vy], axis=1), np.nan)
+        ok = measured & np.isfinite(zx) & np.isfinite(zy)
+        z = np.full((n, 4), np.nan)
+        z[ok, 0], z[ok, 1] = zx[ok], zy[ok]
+        if model.observe_velocity:
+            z[:, 2:] = zv
+        # a raw observation on a frame the tracker also measured; the others fall back to nothing
+        measured = measured & (ok | np.isfinite(zv).all(axis=1))
     if measured.sum() == 0:  # only predictions: nothing to smooth; keep the rows as they are
         out = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items()))
         return _finish(out, tracker, track_id, frame_times), None
@@ -313,7 +391,7 @@ def _smooth_one(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int
         *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in cols.items()),
         pl.Series("confidence", confidence, dtype=pl.Float64, nan_to_null=True),
         pl.Series("status", new_status, dtype=pl.String),
-        pl.Series("fill", fill, dtype=pl.String),
+        pl.Series("fill", fill.tolist(), dtype=pl.String),
     )
     fit = TrackFit(tracker, int(track_id), q, s, sv, ll, int(measured.sum()), int(outliers.sum()), int(filled.sum()))
     # Rows of the track outside its positioned span (lost before the first / after the last position).
@@ -332,6 +410,7 @@ def _finish(full: pl.DataFrame, tracker: str, track_id: int, frame_times: Mappin
         if frame_times:
             t[missing] = [frame_times.get(int(k), np.nan) for k in frames[missing]]
         t = _interp(frames.astype(float), t, ~np.isfinite(t))
+    full = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items() if c not in full.columns))
     return full.with_columns(
         pl.lit(tracker).alias("tracker"),
         pl.lit(track_id, dtype=pl.Int64).alias("track_id"),
@@ -341,8 +420,13 @@ def _finish(full: pl.DataFrame, tracker: str, track_id: int, frame_times: Mappin
 
 def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *,
                       frame_times: Mapping[int, int] | None = None,
-                      cameras: Mapping[int, PtzCamera] | None = None) -> tuple[pl.DataFrame, list[TrackFit]]:
+                      cameras: Mapping[int, PtzCamera] | None = None,
+                      observations: pl.DataFrame | None = None) -> tuple[pl.DataFrame, list[TrackFit]]:
     """RTS-smooth every track of a trajectory table (see the module docstring).
+
+    ``observations`` (:data:`OBS_SCHEMA`, from :func:`observation_rows` during the replay, e.g.
+    ``ReplayRequest(observations=True)``): the trackers' raw measurements, used instead of their
+    filtered output where present.
 
     ``frame_times`` (frame -> t_ns) gives added frames their log time; ``cameras`` (frame -> posed
     camera) lets lines of sight follow the smoothed pixels. Deterministic: no randomness, a fixed
@@ -353,12 +437,194 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
     if df.is_empty():
         return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items())).select(SMOOTH_COLUMNS), []
     parts, fits = [], []
-    for _, track in df.select(COLUMNS).sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
-        out, fit = _smooth_one(track, config, frame_times, cameras)
+    raw_by_track: dict = {}
+    if observations is not None and observations.height:
+        for key, part in observations.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
+            raw_by_track[tuple(key)] = part.drop("tracker", "track_id")
+    for key, track in df.select(COLUMNS).sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
+        out, fit = _smooth_one(track, config, frame_times, cameras, raw_by_track.get(tuple(key)))
         parts.append(out.cast({**SCHEMA, **EXTRA_SCHEMA}))
         if fit is not None:
             fits.append(fit)
     return pl.concat(parts).sort(["tracker", "track_id", "frame"], maintain_order=True), fits
+
+
+def _run_group(z: np.ndarray, R: np.ndarray, q: float, smooth: bool):
+    """Kalman filter (and RTS) of the group model over ``z`` (n, 3), NaN rows unobserved, with
+    per-frame measurement covariances ``R`` (n, 3, 3). Returns (log-likelihood, x, P)."""
+    m = GROUP_MODEL
+    n = len(z)
+    have = np.isfinite(z).all(axis=1)
+    first = int(np.flatnonzero(have)[0])
+    kf = KalmanFilter(dim_x=6, dim_z=3)
+    kf.F, kf.H, kf.Q = m.F(), m.H(), m.Q(q)
+    x0 = np.zeros(6)
+    x0[[0, 2, 4]] = z[first]
+    kf.x = x0
+    kf.P = np.diag([1.0, 0.05, 1.0, 0.05, 1.0, 0.05]) ** 2 + np.kron(R[first], np.diag([1.0, 0.0]))
+    zs = [z[k] if have[k] else None for k in range(n)]
+    Rs = [R[k] if have[k] else np.eye(3) for k in range(n)]
+    means, covs, means_p, covs_p = kf.batch_filter(zs, Rs=Rs)
+    H = kf.H
+    ll = 0.0
+    for k in np.flatnonzero(have):
+        if k == first:
+            continue
+        y = z[k] - H @ means_p[k]
+        S = H @ covs_p[k] @ H.T + Rs[k]
+        ll -= 0.5 * (float(y @ np.linalg.solve(S, y)) + math.log(np.linalg.det(S)) + 3 * math.log(2.0 * math.pi))
+    if not smooth:
+        return ll, means, covs
+    xs, Ps, _, _ = kf.rts_smoother(means, covs)
+    return ll, xs, Ps
+
+
+def _smooth_group(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int, int] | None,
+                  raw: pl.DataFrame | None) -> tuple[pl.DataFrame, TrackFit | None]:
+    """A group track through :class:`GroupModel`: 3-D position and velocity smoothed, gaps filled."""
+    head = track.row(0, named=True)
+    tracker, track_id = head["tracker"], head["track_id"]
+    positioned = track.filter(pl.col("X").is_not_null() & (pl.col("status") != "lost"))
+    if positioned.height == 0:
+        return _finish(track, tracker, track_id, frame_times).sort("frame"), None
+    lo, hi = int(positioned["frame"].min()), int(positioned["frame"].max())
+    frames = np.arange(lo, hi + 1, dtype=np.int64)
+    full = pl.DataFrame({"frame": frames}).join(track, on="frame", how="left")
+    n = len(frames)
+    status = full["status"].fill_null("lost").to_numpy().astype(object)
+    P3 = np.stack([full[c].to_numpy().astype(float) for c in ("X", "Y", "Z")], axis=1)
+    has_pos = np.isfinite(P3).all(axis=1) & (status != "lost")
+    measured = has_pos & (status == "measured")
+    use_raw = raw is not None and raw.height > 0 and raw["zX"].is_not_null().any()
+    if use_raw:
+        r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
+        z = np.stack([r[c].to_numpy().astype(float) for c in ("zX", "zY", "zZ")], axis=1)
+        c = {k: r[k].to_numpy().astype(float) for k in ("rXX", "rXY", "rXZ", "rYY", "rYZ", "rZZ")}
+        R0 = np.stack([np.stack([c["rXX"], c["rXY"], c["rXZ"]], -1), np.stack([c["rXY"], c["rYY"], c["rYZ"]], -1),
+                       np.stack([c["rXZ"], c["rYZ"], c["rZZ"]], -1)], axis=1)
+        ok = measured & np.isfinite(z).all(axis=1) & np.isfinite(R0).all(axis=(1, 2))
+        grid = GROUP_MODEL.scale_grid
+    else:
+        z = P3.copy()
+        R0 = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        ok = measured.copy()
+        grid = GROUP_MODEL.sigma_grid
+    z[~ok] = np.nan
+    R0[~ok] = np.eye(3)
+    if ok.sum() < 2:
+        return _finish(full, tracker, track_id, frame_times).sort("frame"), None
+
+    def run(q, s, smooth):
+        return _run_group(z, R0 * s * s, q, smooth)
+
+    best = (GROUP_MODEL.q_grid[0], grid[0], -math.inf)
+    for q in GROUP_MODEL.q_grid:
+        for s in grid:
+            ll = run(q, s, False)[0]
+            if ll > best[2]:
+                best = (q, s, ll)
+    q, s, ll = best
+    _, xs, Ps = run(q, s, True)
+    outliers = np.zeros(n, bool)
+    if ok.sum() > 4:  # a wrong measurement (a splinter, a merge) beyond outlier_sigma of its own noise
+        resid = z - xs[:, [0, 2, 4]]
+        d2 = np.full(n, 0.0)
+        for k in np.flatnonzero(ok):
+            d2[k] = float(resid[k] @ np.linalg.solve(R0[k] * s * s, resid[k])) / 3.0
+        bad = ok & (np.sqrt(d2) > cfg.outlier_sigma)
+        if bad.any() and (ok & ~bad).sum() >= 2:
+            outliers = bad
+            z[bad] = np.nan
+            R0[bad] = np.eye(3)
+            ok = ok & ~bad
+            _, xs, Ps = run(q, s, True)
+    fill_gap = np.zeros(n, bool)
+    for a, b in _gap_runs(~ok):
+        if a > 0 and b < n and b - a <= cfg.max_gap:
+            fill_gap[a:b] = True
+    smoothed = ok | fill_gap
+    keep = smoothed | has_pos
+    filled = fill_gap & ~measured
+    fill = np.full(n, None, dtype=object)
+    fill[ok] = "rts"
+    fill[fill_gap & measured] = "rts_outlier"
+    fill[filled] = "rts_gap"
+    new_status = np.where(filled, "interpolated", np.where(keep, status, "lost")).astype(object)
+    t = full["t_ns"].to_numpy().astype(float)
+    if frame_times:
+        t = np.where(np.isfinite(t), t, [frame_times.get(int(k), np.nan) for k in frames])
+    dt = np.nanmedian(np.diff(t)) * 1e-9 if np.isfinite(t).sum() >= 2 else math.nan
+    per_s = 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+    f = frames.astype(float)
+    cols: dict[str, np.ndarray] = {}
+    for k, name in enumerate(("X", "Y", "Z")):
+        cols[name] = np.where(keep, np.where(smoothed, xs[:, 2 * k], P3[:, k]), np.nan)
+        cols[f"{name}_std"] = np.where(smoothed, np.sqrt(np.maximum(Ps[:, 2 * k, 2 * k], 0.0)), np.nan)
+        cols[f"V{name}"] = np.where(smoothed, xs[:, 2 * k + 1] * per_s, np.nan)
+    # Image columns: the tracker's own box on its rows, linear across filled frames (the 3-D model
+    # says nothing about the box).
+    for name in ("x", "y", "w", "h", "vx", "vy"):
+        values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
+        cols[name] = np.where(keep, _interp(f, values, filled), np.nan)
+    out = full.with_columns(
+        *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in cols.items()),
+        pl.Series("confidence", np.where(filled, np.nan, full["confidence"].to_numpy().astype(float)), dtype=pl.Float64, nan_to_null=True),
+        pl.Series("status", new_status, dtype=pl.String),
+        pl.Series("fill", fill.tolist(), dtype=pl.String),
+    )
+    fit = TrackFit(tracker, int(track_id), q, s, math.nan, ll, int(ok.sum() + outliers.sum()), int(outliers.sum()), int(filled.sum()))
+    outside = track.filter((pl.col("frame") < lo) | (pl.col("frame") > hi))
+    out = pl.concat([_finish(out, tracker, track_id, frame_times), _finish(outside, tracker, track_id, frame_times)])
+    return out.sort("frame"), fit
+
+
+def observation_rows(tracker: str, frame_index: int, intermediates, states, rig=None) -> list[dict]:
+    """The raw measurements of one replay step (:data:`OBS_SCHEMA` rows; empty for trackers whose
+    output is already their measurement). Flow: the centroid of the moving set and the mean flow
+    (eq. 11) before its Kalman filter. Groups: per group updated this frame (and not born of a merge),
+    the mean ``[u v d]`` of its points, carried to 3-D with the covariance of the EKF's σ_u, σ_v, σ_d."""
+    if intermediates is None:
+        return []
+    rows: list[dict] = []
+    if tracker == "flow":
+        c = getattr(intermediates, "centroid", None)
+        v = getattr(intermediates, "raw_velocity", None)
+        if c is None or v is None or not states:
+            return []
+        tid = int(states[0].track_id)
+        if np.isfinite(c).all() or np.isfinite(v).all():
+            rows.append({"tracker": tracker, "track_id": tid, "frame": int(frame_index), "zx": float(c[0]), "zy": float(c[1]),
+                         "zvx": float(v[0]), "zvy": float(v[1])})
+    elif tracker == "groups":
+        g = getattr(intermediates, "groups", None)
+        if g is None or rig is None or not len(g.ids):
+            return []
+        from trackreplay.trackers.groups.config import EkfConfig
+
+        e = EkfConfig()
+        Ruvd = np.diag([e.sigma_u**2, e.sigma_v**2, e.sigma_d**2])
+        uvd, labels = intermediates.points.uvd, intermediates.labels
+        for k, gid in enumerate(g.ids.tolist()):
+            if g.status[k] != "measured" or g.merged_from[k]:
+                continue
+            sel = labels == gid
+            if not sel.any():
+                continue
+            m = uvd[sel].mean(axis=0)
+            if not (np.isfinite(m).all() and m[2] > 0):
+                continue
+            p = rig.to_points(m[None])[0]
+            Ji = np.linalg.inv(rig.jacobian(p))
+            R = Ji @ Ruvd @ Ji.T
+            rows.append({"tracker": tracker, "track_id": int(gid), "frame": int(frame_index),
+                         "zX": float(p[0]), "zY": float(p[1]), "zZ": float(p[2]),
+                         "rXX": R[0, 0], "rXY": R[0, 1], "rXZ": R[0, 2], "rYY": R[1, 1], "rYZ": R[1, 2], "rZZ": R[2, 2]})
+    return rows
+
+
+def observations_table(rows: list[dict]) -> pl.DataFrame:
+    full = [{k: r.get(k) for k in OBS_SCHEMA} for r in rows]
+    return pl.DataFrame(full, schema=OBS_SCHEMA, orient="row", nan_to_null=False) if full else pl.DataFrame(schema=OBS_SCHEMA)
 
 
 def log_context(log) -> tuple[dict[int, int], dict[int, PtzCamera]]:

@@ -71,11 +71,13 @@ def run(args: argparse.Namespace) -> int:
     request = request_from_args(args, args.rrd)
     if args.summary:  # the summary's sidecar holds per-frame digests (for `trackreplay diff`)
         request = dataclasses.replace(request, frame_digests=True)
+    if args.export and args.smooth:  # the smoother observes the trackers' raw measurements
+        request = dataclasses.replace(request, observations=True)
     result = replay(request)
     if args.export and args.smooth:
         from trackreplay.replay.commands.smooth import smooth_and_report
 
-        write_trajectory(smooth_and_report(result.trajectory, args.log, args.max_gap), args.export)
+        write_trajectory(smooth_and_report(result.trajectory, args.log, args.max_gap, result.observations), args.export)
     elif args.export:
         table = result.trajectory if args.interpolate == "none" else fill_gaps(result.trajectory, args.interpolate, args.max_gap)
         write_trajectory(table, args.export)

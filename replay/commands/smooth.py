@@ -9,7 +9,8 @@ from trackreplay.replay.commands.values import non_negative_int
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = sub.add_parser("smooth", help="smooth every track over the whole log (offline RTS) and fill its gaps")
+    p = sub.add_parser("smooth", help="smooth every track over the whole log (offline RTS) and fill its gaps; "
+                       "`replay --smooth` also uses the trackers' raw measurements (better for flow and groups)")
     p.add_argument("trajectory", type=Path, help="trajectory from `replay --export` (.parquet or .csv, not gap-filled)")
     p.add_argument("log", type=Path, help="the log it was replayed from (frame times, camera poses)")
     p.add_argument("--out", type=Path, required=True, help="smoothed trajectory: .parquet or .csv")
@@ -18,15 +19,19 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def smooth_and_report(table, log: Path, max_gap: int):
-    """Smooth ``table`` with the log's frame times and cameras; print one line per track."""
+def smooth_and_report(table, log: Path, max_gap: int, observations=None):
+    """Smooth ``table`` with the log's frame times and cameras (and the trackers' raw measurements,
+    which only ``replay --smooth`` has); print one line per track."""
     from trackreplay.replay.smooth import SmoothConfig, log_context, smooth_trajectory
 
     times, cameras = log_context(log)
-    out, fits = smooth_trajectory(table, SmoothConfig(max_gap=max_gap), frame_times=times, cameras=cameras)
+    out, fits = smooth_trajectory(table, SmoothConfig(max_gap=max_gap), frame_times=times, cameras=cameras,
+                                  observations=observations)
     for f in fits:
+        noise = (f"q {f.q:g} (m/frame²)², R scale {f.sigma:g}" if f.tracker == "groups"
+                 else f"q {f.q:g} px²/frame³, σ {f.sigma:g} px")
         print(f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
-              f"{f.filled} frames filled; q {f.q:g} px²/frame³, σ {f.sigma:g} px")
+              f"{f.filled} frames filled; {noise}")
     return out
 
 
