@@ -36,6 +36,29 @@ def noop(x: int) -> int:
     return x
 
 
+TASK_MEMORY = """
+import resource, sys, tracemalloc
+from pathlib import Path
+sys.path.insert(0, {root!r})
+from trackreplay.replay.batch import BatchOptions, plan, run_task
+task = plan([Path({log!r})], "flow", [0], [])[0]
+tracemalloc.start()
+row = run_task(task, BatchOptions(out=Path({out!r})))
+assert row["status"] == "ok", row["error"]
+print(row["frames"], resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, tracemalloc.get_traced_memory()[1] // 1024)
+"""
+
+
+def task_memory(log: Path, out: Path) -> tuple[int, int, int]:
+    """(frames, peak RSS KiB, peak traced Python/numpy KiB) of one batch task in a fresh process."""
+    import subprocess
+
+    code = TASK_MEMORY.format(root=str(ROOT), log=str(log), out=str(out))
+    frames, rss, traced = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                                         text=True).stdout.split()
+    return int(frames), int(rss), int(traced)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", type=int, default=300)
@@ -78,6 +101,12 @@ def main() -> int:
         ray.shutdown()
         shutdown_s = time.perf_counter() - t
 
+        # memory of one task (replay + per-frame digests + outputs + eval) for a log 10x longer
+        long = tmp / "long.mcap"
+        write_flow_sim(long, FlowSimConfig(scene="flow-sim1", frames=10 * args.frames))
+        mem_base = task_memory(logs[0], tmp / "mem-base")
+        mem_long = task_memory(long, tmp / "mem-long")
+
     same = all(a["digest"] == b["digest"] and a["digest"] is not None for a, b in zip(serial, batch))
     inside = sum(r["task_seconds"] for r in batch)
     per_task_overhead = (args.workers * batch_s - inside) / len(tasks)
@@ -99,6 +128,9 @@ def main() -> int:
         "noop_task_ms_pipelined": noop_ms,
         "noop_task_ms_round_trip": noop_sequential_ms,
         "digests_equal_serial": same,
+        "task_memory": {"frames": [mem_base[0], mem_long[0]], "peak_rss_kib": [mem_base[1], mem_long[1]],
+                        "traced_peak_kib": [mem_base[2], mem_long[2]], "traced_ratio": mem_long[2] / max(1, mem_base[2]),
+                        "rss_ratio": mem_long[1] / max(1, mem_base[1]), "target": "<= 1.2 (flat in log length)"},
     }
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")
@@ -112,6 +144,9 @@ def main() -> int:
           f"in the batch {per_task_overhead:.2f} s of worker time per task outside the task (worker start and imports, "
           f"scheduling, idle tail)")
     print(f"every batch digest equals its serial replay: {same}")
+    m = results["task_memory"]
+    print(f"one task's memory, {m['frames'][1]} vs {m['frames'][0]} frames: peak RSS ratio {m['rss_ratio']:.3f}, "
+          f"traced allocations {m['traced_peak_kib'][1]} vs {m['traced_peak_kib'][0]} KiB: ratio {m['traced_ratio']:.3f}")
     return 0 if same else 1
 
 

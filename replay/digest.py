@@ -218,25 +218,43 @@ class FrameDigests:
         return {p: blob[8 * k:8 * k + 8].hex() for k, p in enumerate(self._paths[i])}
 
     def table(self) -> pl.DataFrame:
-        """Long table (the sidecar): frame, field, hash (hex), values (kept values or null), one row per field per frame."""
-        frames, fields, hashes, values = [], [], [], []
-        for i, index in enumerate(self.frames):
-            kept = self.values(i)
-            for path, digest in self.fields(i).items():
-                frames.append(index)
-                fields.append(path)
-                hashes.append(digest)
-                values.append(kept[path].tolist() if path in kept else None)
-        return pl.DataFrame({"frame": frames, "field": fields, "hash": hashes, "values": values},
-                            schema={"frame": pl.Int64, "field": pl.String, "hash": pl.String, "values": pl.List(pl.Float64)})
+        """Long table (the sidecar): frame, field (categorical), hash (the 8 bytes as a big-endian
+        UInt64), values (kept values, null for larger fields), one row per field per frame. Built
+        from the stored blobs in a few vectorised steps, without a Python object per row.
+        """
+        import pyarrow as pa
+
+        names: dict[str, int] = {}
+        codes_of: dict[int, np.ndarray] = {}
+        for paths in self._layouts.values():
+            if paths and isinstance(paths[0], str) and id(paths) not in codes_of:
+                codes_of[id(paths)] = np.array([names.setdefault(p, len(names)) for p in paths], dtype=np.int32)
+        counts = np.array([len(p) for p in self._paths], dtype=np.int64)
+        empty_i32 = np.zeros(0, dtype=np.int32)
+        codes = np.concatenate([codes_of.get(id(p), empty_i32) for p in self._paths] or [empty_i32])
+        sizes = np.concatenate([np.asarray(z, dtype=np.int64) for z in self._sizes] or [np.zeros(0, np.int64)])
+        hashes = np.frombuffer(b"".join(self._hashes), dtype=">u8").astype(np.uint64)
+        flat = np.frombuffer(b"".join(self._values), dtype=np.float64)
+        offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
+        np.cumsum(np.maximum(sizes, 0), out=offsets[1:])
+        values = pa.LargeListArray.from_arrays(pa.array(offsets), pa.array(flat), mask=pa.array(sizes < 0))
+        fields = pa.DictionaryArray.from_arrays(pa.array(codes), pa.array(list(names), pa.string()))
+        return pl.DataFrame({
+            "frame": np.repeat(np.asarray(self.frames, dtype=np.int64), counts),
+            "field": pl.from_arrow(fields).cast(pl.String),
+            "hash": hashes,
+            "values": pl.from_arrow(values).cast(pl.List(pl.Float64)),
+        })
 
     @classmethod
     def from_table(cls, table: pl.DataFrame) -> FrameDigests:
         out = cls()
         if "values" not in table.columns:
             table = table.with_columns(pl.lit(None, dtype=pl.List(pl.Float64)).alias("values"))
+        as_bytes = ((lambda h: int(h).to_bytes(8, "big")) if table.schema["hash"].is_integer()
+                    else bytes.fromhex)  # UInt64 (now) or hex text (the first sidecars)
         for (index,), part in table.group_by("frame", maintain_order=True):
-            out.add(int(index), [(f, bytes.fromhex(h), None if v is None else np.asarray(v, np.float64))
+            out.add(int(index), [(f, as_bytes(h), None if v is None else np.asarray(v, np.float64))
                                  for f, h, v in zip(part["field"], part["hash"], part["values"])])
         return out
 
