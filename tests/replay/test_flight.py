@@ -47,6 +47,10 @@ def test_fit_recovers_a_known_flight(chip) -> None:
     assert abs(rep.launch_speed.value - 28.0) < 2.0 and abs(rep.launch_elevation.value - 28.0) < 2.0
     assert abs(rep.time_of_flight.value - traj.landing_time) < 0.05
     assert 0 < rep.carry.std < 5 and 0 < rep.landing_point[0].std < 5  # uncertainties are reported
+    # ... and honest: the true landing point and carry lie within 3 sigma
+    err = landing[:2] - traj.landing_point[:2]
+    assert np.hypot(*err) < 3 * np.hypot(rep.landing_point[0].std, rep.landing_point[1].std)
+    assert abs(rep.carry.value - traj.carry) < 3 * rep.carry.std
     assert "launch" in rep.describe()
 
 
