@@ -40,7 +40,11 @@ def golf_short(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
+GOLDEN = Path(__file__).resolve().parent / "golden"
+
+
 @pytest.fixture(scope="session")
 def tracker_logs(short_sim: Path, golf_short: Path) -> dict[str, Path]:
-    """A short synthetic log per registered tracker."""
-    return {"flow": short_sim, "golf": golf_short}
+    """A short synthetic log per registered tracker (the small golden scenes for colorpf and groups)."""
+    return {"flow": short_sim, "golf": golf_short,
+            "colorpf": GOLDEN / "colorpf-approach-320x240.mcap", "groups": GOLDEN / "groups-crossing-320x240.mcap"}
