@@ -455,7 +455,6 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
     # factor of an AR(1) series, (1 + ρ)/(1 − ρ), with ρ the lag-1 autocorrelation of the
     # line-of-sight residuals in frame order (at most 0.995: ≤ 400x in variance).
     nobs_ = len(obs.t)
-    r_los = np.concatenate([res.fun[:nobs_], res.fun[nobs_:2 * nobs_]])
     rho = 0.0
     for comp in (res.fun[:nobs_], res.fun[nobs_:2 * nobs_]):
         c = comp - comp.mean()
@@ -464,7 +463,7 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
             rho = max(rho, float(c[1:] @ c[:-1]) / den)
     rho = min(max(rho, 0.0), 0.995)
     inflation = (1.0 + rho) / (1.0 - rho)
-    s2 = max(2.0 * res.cost / max(1, m - n), float(np.mean(r_los**2)) if r_los.size else 0.0) * inflation
+    s2 = 2.0 * res.cost / max(1, m - n) * inflation  # the robust (soft-L1) cost: a few wrong blobs do not blow it up
     cov = np.zeros((len(NAMES), len(NAMES)))  # the fixed parameters have no variance
     cov[np.ix_(all_free, all_free)] = np.linalg.pinv(J.T @ J) * s2
     notes.append(f"1-σ: (JᵀJ)⁻¹ s² inflated x{inflation:.1f} for residuals correlated frame to frame (lag-1 ρ {rho:.2f})")
