@@ -28,7 +28,7 @@ def _terminate(signum, frame) -> None:
     raise Terminated()
 
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
-VERBS = ("record", "synth", "info", "recover", "annotate", "frame", "filter", "replay_cmd", "batch", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
+VERBS = ("record", "synth", "info", "recover", "annotate", "frame", "filter", "replay_cmd", "config_cmd", "batch", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
 
 
 def build_parser() -> argparse.ArgumentParser:
