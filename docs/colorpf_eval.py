@@ -1,14 +1,19 @@
-"""The colour PF's Tables 1-3 as ablations on the synthetic scenes, and otb_crossing against CSRT.
+"""The colour PF's Tables 1-3 as ablations on the synthetic scenes, and both against CSRT.
 
-    python docs/colorpf_eval.py            # writes docs/colorpf_results.json (numbers quoted in docs/colorpf.md)
+    python docs/colorpf_eval.py   # docs/colorpf_results.json + docs/colorpf_otb.png, docs/colorpf_synthetic.png
+    python docs/colorpf_eval.py --only otb   # re-run one part (synthetic | otb), the other kept from the JSON
 
 Metric: the paper's mean absolute error of x, y, w, h (px) over the visible frames where the track has
 a position, with coverage (share of those frames) beside it. Seeds 0-2, 96 walking frames, 720x480.
-otb_crossing: OTB success AUC and precision at 20 px; CSRT in its own venv (benchmarks/bench_colorpf.py).
+Beside it, OTB success AUC, precision at 20 px (a frame without a position counts as IoU 0 and as a
+miss) and mean centre error over the frames with a position. OpenCV's CSRT runs on the same frames
+from the same marked box, in its own venv (benchmarks/csrt_side.py; built on first use by
+benchmarks/bench_colorpf.py's ensure_venv). otb_crossing: the colour PF with tracker seeds 0-4.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
@@ -23,6 +28,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from benchmarks.bench_colorpf import DEFAULT_VENV, ensure_venv  # noqa: E402
+from trackreplay.replay.eval import IOU_THRESHOLDS, iou  # noqa: E402
+from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene  # noqa: E402
 from trackreplay.replay.cli import main as cli  # noqa: E402
 from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
@@ -46,56 +53,179 @@ TABLES = {
 }
 
 
-def errors(log: Path, config: dict) -> dict:
-    r = replay(ReplayRequest(log=log, tracker="colorpf", seed=0, config=config))
-    gt = read_groundtruth(LogReader(log)).filter((pl.col("id") == 1) & pl.col("visible"))
-    j = gt.join(r.trajectory, on="frame", how="left", suffix="_pf")
+OTB_SEEDS = (0, 1, 2, 3, 4)
+
+
+def scores(traj: pl.DataFrame, gt: pl.DataFrame) -> tuple[dict, dict]:
+    """OTB summary and the per-frame IoU (0 where no position) and centre error (None there)."""
+    s, frames = evaluate(traj, gt, gt_id=1)
+    frames = frames.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))
+    est = frames.select("est_x", "est_y", "est_w", "est_h").to_numpy().astype(np.float64)
+    ok = ~np.isnan(est).any(axis=1)
+    ious = np.zeros(len(est))
+    if ok.any():
+        ious[ok] = iou(est[ok], frames.select("x", "y", "w", "h").to_numpy()[ok])
+    ce = frames["centre_error"].to_list()
+    return ({"auc": s.success_auc, "precision20": s.precision_at_20px, "centre_error_mean": s.centre_error_mean,
+             "coverage": s.coverage},
+            {"frame": frames["frame"].to_list(), "iou": ious.tolist(), "centre_error": ce})
+
+
+def errors(traj: pl.DataFrame, gt: pl.DataFrame) -> dict:
+    """The paper's per-column MAE over the visible frames with a position, and coverage."""
+    gt = gt.filter((pl.col("id") == 1) & pl.col("visible"))
+    j = gt.join(traj, on="frame", how="left", suffix="_pf")
     placed = j.filter(pl.col("x_pf").is_not_null())
     out = {k: float((placed[f"{k}_pf"] - placed[k]).abs().mean()) if len(placed) else None for k in "xywh"}
     out["coverage"] = len(placed) / len(j)
     return out
 
 
+def csrt(py: Path, folder: Path, box: tuple[float, float, float, float], first_frame: int, tmp: Path) -> pl.DataFrame:
+    """CSRT over the images in ``folder`` (sorted by name, the first one the marked frame) from the
+    top-left box ``box``; a trajectory table like the replay's. Centres as ``annotate`` makes them
+    (left + w / 2), so CSRT's first box is exactly the colour PF's mark."""
+    out = tmp / "csrt.json"
+    subprocess.run([str(py), str(HERE.parent / "benchmarks" / "csrt_side.py"), str(folder),
+                    ",".join(str(v) for v in box), str(out)], check=True)
+    boxes = json.loads(out.read_text())["boxes"]
+    rows = [{"tracker": "csrt", "track_id": 1, "frame": first_frame + i, "x": b[0] + b[2] / 2 if b else None,
+             "y": b[1] + b[3] / 2 if b else None, "w": b[2] if b else None, "h": b[3] if b else None,
+             "vx": None, "vy": None, "status": "measured" if b else "lost"} for i, b in enumerate(boxes)]
+    return pl.DataFrame(rows, schema_overrides={c: pl.Float64 for c in ("x", "y", "w", "h", "vx", "vy")})
+
+
+def csrt_on_log(py: Path, log: Path, tmp: Path) -> pl.DataFrame:
+    """CSRT on a log's frames from its (first) mark on, started from the marked box."""
+    folder = tmp / f"{log.stem}-frames"
+    folder.mkdir()
+    frames = list(iter_frames(LogReader(log), FrameTopics()))
+    mark = min(frames[0].all_hints, key=lambda r: r.frame)
+    for f in frames:
+        if f.index >= mark.frame:
+            cv2.imwrite(str(folder / f"{f.index:06d}.png"), f.image)
+    box = (mark.x - mark.w / 2, mark.y - mark.h / 2, mark.w, mark.h)
+    return csrt(py, folder, box, mark.frame, tmp)
+
+
+def mean_of(rows: list[dict]) -> dict:
+    keys = rows[0].keys()
+    return {k: float(np.mean([r[k] for r in rows if r[k] is not None])) if any(r[k] is not None for r in rows) else None
+            for k in keys}
+
+
+def success_curve(ious: list[float]) -> list[float]:
+    a = np.asarray(ious)
+    return [float((a > t).mean()) for t in IOU_THRESHOLDS]
+
+
+def plots(results: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    per = results["per_frame"]
+    if "otb" in per:
+        fig, ax = plt.subplots(1, 2, figsize=(11, 3.8))
+        for name, style in (("colorpf", "C0"), ("csrt", "C3")):
+            d = per["otb"][name]
+            auc = float(np.mean(success_curve(d["iou"])))
+            ax[0].plot(IOU_THRESHOLDS, success_curve(d["iou"]), style, label=f"{d['label']} [AUC {auc:.2f}]")
+            ce = np.array([np.nan if v is None else v for v in d["centre_error"]], dtype=float)
+            ax[1].plot(d["frame"], ce, style, lw=1, label=d["label"])
+            lost = np.isnan(ce)
+            if lost.any():
+                ax[1].plot(np.array(d["frame"])[lost], np.zeros(lost.sum()), style, marker="|", ls="", ms=8,
+                           label=f"{d['label']}: no position")
+        ax[0].set(xlabel="IoU threshold", ylabel="success rate", title="otb_crossing: success plot", ylim=(0, 1.02))
+        ax[1].axhline(20, color="grey", lw=0.8, ls="--")
+        ax[1].set(xlabel="frame", ylabel="centre error (px)", title="otb_crossing: centre error per frame")
+        ax[0].legend(fontsize=8)
+        ax[1].legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(HERE / "colorpf_otb.png", dpi=90)
+        plt.close(fig)
+    scenes = [k for k in per if k != "otb"]
+    fig, ax = plt.subplots(2, len(scenes), figsize=(4.2 * len(scenes), 6.4), squeeze=False)
+    for j, scene in enumerate(scenes):
+        for name, style in (("colorpf", "C0"), ("csrt", "C3")):
+            d = per[scene][name]
+            ax[0, j].plot(IOU_THRESHOLDS, success_curve(d["iou"]), style,
+                          label=f"{d['label']} [AUC {np.mean(success_curve(d['iou'])):.2f}]")
+            ce = np.array([np.nan if v is None else v for v in d["centre_error"]], dtype=float)
+            ax[1, j].plot(d["frame"], ce, style, lw=1, label=d["label"])
+        ax[0, j].set(xlabel="IoU threshold", ylabel="success rate", title=f"{scene} (seed 0)", ylim=(0, 1.02))
+        ax[1, j].set(xlabel="frame", ylabel="centre error (px)")
+        ax[0, j].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(HERE / "colorpf_synthetic.png", dpi=80)
+    plt.close(fig)
+
+
 def main() -> None:
-    results: dict = {"tables": {}, "otb": {}}
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--only", choices=("synthetic", "otb"), help="re-run one part, keep the other from the JSON")
+    only = ap.parse_args().only
+    path = HERE / "colorpf_results.json"
+    results: dict = {"tables": {}, "vs_csrt": {}, "otb": {}, "per_frame": {}}
+    if only and path.exists():
+        results = json.loads(path.read_text())
+    py = ensure_venv(DEFAULT_VENV)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for title, (scene, variants) in TABLES.items():
-            rows = {}
+        for title, (scene, variants) in TABLES.items() if only != "otb" else ():
+            rows: dict[str, list] = {}
+            vs: dict[str, list] = {"colorpf (defaults)": [], "CSRT": []}
             for seed in (0, 1, 2):
                 log = tmp / f"{scene}-{seed}.mcap"
                 write_colorpf_scene(log, ColorPfSceneConfig(scene=scene, seed=seed))
+                gt = read_groundtruth(LogReader(log))
                 for name, cfg in variants.items():
-                    rows.setdefault(name, []).append(errors(log, cfg))
-            results["tables"][title] = {
-                name: {k: float(np.mean([r[k] for r in rs if r[k] is not None])) if any(r[k] is not None for r in rs) else None
-                       for k in ("x", "y", "w", "h", "coverage")} for name, rs in rows.items()}
+                    traj = replay(ReplayRequest(log=log, tracker="colorpf", seed=0, config=cfg)).trajectory
+                    rows.setdefault(name, []).append(errors(traj, gt))
+                    if not cfg:
+                        summary, frames = scores(traj, gt)
+                        vs["colorpf (defaults)"].append({**errors(traj, gt), **summary})
+                        if seed == 0:
+                            results["per_frame"].setdefault(scene, {})["colorpf"] = {"label": "colour PF", **frames}
+                traj = csrt_on_log(py, log, tmp)
+                summary, frames = scores(traj, gt)
+                rows.setdefault("CSRT (same frames, same marked box)", []).append(errors(traj, gt))
+                vs["CSRT"].append({**errors(traj, gt), **summary})
+                if seed == 0:
+                    results["per_frame"][scene]["csrt"] = {"label": "CSRT", **frames}
+            results["tables"][title] = {name: mean_of(rs) for name, rs in rows.items()}
+            results["vs_csrt"][scene] = {name: mean_of(rs) for name, rs in vs.items()}
             print(title, json.dumps(results["tables"][title], indent=1))
-        if REAL.is_dir():
+            print(json.dumps(results["vs_csrt"][scene], indent=1), flush=True)
+        if REAL.is_dir() and only != "synthetic":
             log, marked = tmp / "otb.mcap", tmp / "otbm.mcap"
             cli(["record", str(log), "--images", str(REAL / "img"), "--fps", "30", "--groundtruth",
                  str(REAL / "groundtruth_rect.txt"), "--quiet"])
             x, y, w, h = (float(v) for v in (REAL / "groundtruth_rect.txt").read_text().split()[0].split(","))
             cli(["annotate", str(log), "--frame", "0", "--box", f"{x - 1},{y - 1},{w},{h}", "--out", str(marked)])
             gt = read_groundtruth(LogReader(marked))
-            for name, cfg in {"colorpf (defaults)": {}, "H-S+V": {"likelihood": {"histogram": "hsv"}},
-                              "target-only reference": {"reference": {"mode": "target"}}, "size noise": NOISE}.items():
-                s, _ = evaluate(replay(ReplayRequest(log=marked, tracker="colorpf", seed=0, config=cfg)).trajectory, gt)
-                results["otb"][name] = {"auc": s.success_auc, "precision20": s.precision_at_20px, "coverage": s.coverage}
-            py = ensure_venv(DEFAULT_VENV)
-            out = tmp / "csrt.json"
-            subprocess.run([str(py), str(HERE.parent / "benchmarks" / "csrt_side.py"), str(REAL / "img"),
-                            f"{x - 1},{y - 1},{w},{h}", str(out)], check=True)
-            boxes = json.loads(out.read_text())["boxes"]
-            rows = [{"tracker": "csrt", "track_id": 1, "frame": i, "x": b[0] + b[2] / 2 - 0.5 if b else None,
-                     "y": b[1] + b[3] / 2 - 0.5 if b else None, "w": b[2] if b else None, "h": b[3] if b else None,
-                     "vx": None, "vy": None, "status": "measured" if b else "lost"} for i, b in enumerate(boxes)]
-            table = pl.DataFrame(rows, schema_overrides={c: pl.Float64 for c in ("x", "y", "w", "h", "vx", "vy")})
-            s, _ = evaluate(table, gt)
-            results["otb"]["CSRT (opencv-contrib 5.0)"] = {"auc": s.success_auc, "precision20": s.precision_at_20px,
-                                                          "coverage": s.coverage}
+            by_seed = []
+            for seed in OTB_SEEDS:
+                summary, frames = scores(replay(ReplayRequest(log=marked, tracker="colorpf", seed=seed)).trajectory, gt)
+                by_seed.append(summary)
+                if seed == 0:
+                    results["per_frame"]["otb"] = {"colorpf": {"label": "colour PF (seed 0)", **frames}}
+            results["otb"]["colorpf (defaults), seed 0"] = by_seed[0]
+            results["otb"][f"colorpf (defaults), mean of seeds {OTB_SEEDS[0]}-{OTB_SEEDS[-1]}"] = mean_of(by_seed)
+            results["otb"]["colorpf (defaults), AUC per seed"] = [s["auc"] for s in by_seed]
+            for name, cfg in {"H-S+V": {"likelihood": {"histogram": "hsv"}},
+                              "target-only reference": {"reference": {"mode": "target"}}, "size noise": NOISE,
+                              "fixed box": {"size": {"mode": "fixed"}}}.items():
+                results["otb"][f"{name}, seed 0"], _ = scores(
+                    replay(ReplayRequest(log=marked, tracker="colorpf", seed=0, config=cfg)).trajectory, gt)
+            summary, frames = scores(csrt(py, REAL / "img", (x - 1, y - 1, w, h), 0, tmp), gt)
+            results["otb"]["CSRT (opencv-contrib, own venv)"] = summary
+            results["per_frame"]["otb"]["csrt"] = {"label": "CSRT", **frames}
             print(json.dumps(results["otb"], indent=1))
-    (HERE / "colorpf_results.json").write_text(json.dumps(results, indent=2) + "\n")
+    path.write_text(json.dumps(results, indent=2) + "\n")
+    plots(results)
 
 
 if __name__ == "__main__":

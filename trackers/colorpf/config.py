@@ -140,6 +140,10 @@ class ColorPfConfig:
     # and after lost_after such frames in a row "lost" (no position) until the colour is found again.
     measured_fraction: float = 0.5
     lost_after: int = 10
+    # S_mark - S_back below this: the background matches the reference about as well as the marked
+    # box (a dark, unsaturated target on a dark road: otb_crossing, 0.72 vs 0.76), so it cannot set
+    # the scale; c = S / S_mark then, as without a background (and a notice says so).
+    min_separation: float = 0.05
     likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     size: SizeConfig = field(default_factory=SizeConfig)
@@ -150,3 +154,5 @@ class ColorPfConfig:
             raise ValueError("n_particles must be at least 1")
         if self.noise < 0 or self.min_noise_px < 0 or self.lost_after < 1 or not 0.0 <= self.measured_fraction <= 1.0:
             raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, 0 <= measured_fraction <= 1")
+        if self.min_separation < 0:
+            raise ValueError("min_separation must be >= 0")

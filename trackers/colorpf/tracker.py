@@ -13,7 +13,9 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
 4. Status: the confidence places the estimate box's intersection ``S`` between the background's
    score and the marked box's (see ``ColorPfConfig.measured_fraction``); "measured" from 0.5 on,
    "predicted" otherwise; "lost" (no position) after ``lost_after`` such frames in a row, until
-   the colour is found again.
+   the colour is found again. When the background scores within ``min_separation`` of the mark
+   (H-S cannot tell them apart), it cannot set the scale: ``c = S / S_mark`` then, said once.
+   With an "early" reference ``S_mark`` is the marked box's score against the new reference.
 
 The first mark in the log (lowest frame; on one frame, the first listed), whatever its label,
 starts the track; later marks are not used (a notice says so).
@@ -107,8 +109,10 @@ class ColorPfTracker(TrackerBase):
         self.background.offer(frame.index, frame.image)
         mask = None
         if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
+            marked = self._marked_image
             mask = self._rebuild_reference(self.background.early_model(), "early")
-            self._s_mark = None  # measured against the new reference from now on
+            if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
+                self._s_mark = self._mark_score(marked)
         return self._track(frame, mask)
 
     def _start(self, frame: Frame) -> list[TrackState]:
@@ -143,6 +147,13 @@ class ColorPfTracker(TrackerBase):
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
         self.started = True
         return self._track(frame, mask, weigh_only=True)
+
+    def _mark_score(self, image: np.ndarray) -> float:
+        """``S`` of the marked box (on the marked frame) against the current reference."""
+        assert self.mark is not None and self.reference is not None
+        m = self.mark
+        h = box_histogram(self.model, image, np.array([m.x, m.y, m.w, m.h], dtype=np.float64))
+        return float(np.minimum(h, self.reference.histogram).sum())
 
     def _no_background(self, why: str) -> str:
         return (f"no background for the reference histogram ({why}): the reference is the marked box's own "
@@ -193,6 +204,12 @@ class ColorPfTracker(TrackerBase):
             self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
         ref_h = self.reference.histogram
         s_back = float(np.minimum(self.reference.h_back, ref_h).sum())
+        if self._s_mark - s_back < cfg.min_separation:
+            # the background scores (nearly) as well as the mark: it cannot scale the confidence
+            self._say(f"the marked box scores S = {self._s_mark:.2f} against the reference and the background "
+                      f"{s_back:.2f}: H-S colour barely tells this target from the background, so the confidence "
+                      "is S relative to the mark's alone (as without a background) and says little")
+            s_back = 0.0
         confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
         if confidence >= cfg.measured_fraction:
             status, self.misses = "measured", 0

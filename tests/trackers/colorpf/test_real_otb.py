@@ -22,5 +22,7 @@ def test_otb_crossing_is_followed(tmp_path):
     assert main(["annotate", str(log), "--frame", "0", "--box", f"{x - 1},{y - 1},{w},{h}", "--out", str(marked)]) == 0
     result = replay(ReplayRequest(log=marked, tracker="colorpf", seed=0))
     summary, _ = evaluate(result.trajectory, read_groundtruth(LogReader(marked)))
-    assert summary.coverage > 0.75 and summary.precision_at_20px > 0.6 and summary.success_auc > 0.3, summary
+    # measured: coverage 1.0, precision 0.82, AUC 0.41 (seed 0; docs/colorpf.md); CSRT 0.73 on the same frames
+    assert summary.coverage > 0.95 and summary.precision_at_20px > 0.7 and summary.success_auc > 0.35, summary
     assert any("no ground plane" in n for n in result.notices)  # said, not silently assumed
+    assert any("barely tells this target from the background" in n for n in result.notices)

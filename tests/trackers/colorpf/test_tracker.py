@@ -129,3 +129,48 @@ def test_two_replays_and_two_processes_agree(scene_log, tmp_path):
     assert out == a.digest
     c = replay(ReplayRequest(log=log, tracker="colorpf", seed=4))
     assert c.digest != a.digest
+
+
+def _scene_with_background(n_before: int = 6, n_after: int = 6, speed: int = 1) -> tuple[list[Frame], InitRegion]:
+    """Grey frames, then a blue box moving right ``speed`` px a frame from frame ``n_before`` on (marked there)."""
+    rng = np.random.default_rng(2)
+    mark = InitRegion(n_before, 0, 35.5, 29.5, 16, 26, "target")  # target 12x20 and some floor
+    frames = []
+    for i in range(n_before + n_after):
+        img = np.clip(rng.normal(0, 4, (60, 80, 3)) + 70, 0, 255).astype(np.uint8)
+        if i >= n_before:
+            j = (i - n_before) * speed
+            img[20:40, 30 + j:42 + j] = (200, 60, 0)
+        frames.append(Frame(index=i, t_ns=i * 33_000_000, image=img, all_hints=(mark,),
+                            hints=(mark,) if i == n_before else ()))
+    return frames, mark
+
+
+def test_confidence_falls_back_to_the_mark_alone_when_the_background_scores_as_well():
+    frames, _ = _scene_with_background()
+    told = []
+    for separation in (0.05, 1.0):  # 1.0: no background can be that far below the mark
+        tracker = ColorPfTracker(ColorPfConfig(min_separation=separation), np.random.default_rng(0))
+        notices, states = [], []
+        for f in frames:
+            states += tracker.step(f)
+            notices.append(tracker.intermediates.notice)
+            if tracker.started:
+                assert tracker.intermediates.reference_kind == "mixed"
+        told.append([n for n in notices if "barely tells" in n])
+        if separation == 1.0:  # c = S / S_mark: the background no longer sets the scale
+            s, s_mark = tracker.intermediates.estimate_similarity, tracker._s_mark
+            assert states[-1].confidence == pytest.approx(min(s / s_mark, 1.0))
+    assert told[0] == [] and len(told[1]) == 1  # said once, and only when it applies
+
+
+def test_early_reference_is_scored_on_the_marked_box_not_on_the_estimate_of_the_day():
+    frames, mark = _scene_with_background(n_before=0, n_after=8, speed=6)  # gone from the box: the median is floor
+    cfg = ColorPfConfig(reference=ReferenceConfig(background="early", frames=4))
+    tracker = ColorPfTracker(cfg, np.random.default_rng(0))
+    for f in frames[:3]:
+        tracker.step(f)
+    assert tracker.reference.kind == "box"
+    tracker.step(frames[3])  # the median of frames 0-3 is ready: eq. (7) now
+    assert tracker.reference.kind == "mixed"
+    assert tracker._s_mark == pytest.approx(tracker._mark_score(frames[0].image))
