@@ -13,6 +13,7 @@ from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
 from trackreplay.recorder.atomic import replace_when_done
+from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.sources.base import read_text
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
@@ -114,6 +115,7 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
             writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
         for meta in source.iter_metadata():
             writer.add_metadata(meta.name, dict(meta.metadata))
+        writer.add_metadata(RECORD_NAME, provenance({"log": src}, marks=str(len(regions))))
         cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
         if cid is None:
             cid = writer.register_channel(T.ANNOTATIONS_INIT, "protobuf", register_schema(writer, m.InitAnnotations))

@@ -162,7 +162,10 @@ def record(
         bundles = ((f, None) for f in mono)
 
     try:
-        writer = LogWriter(out, flush_every=flush_every)
+        writer = LogWriter(out, flush_every=flush_every, sources={
+            "video": video, "images": images, "stereo_left": stereo[0] if stereo else None,
+            "stereo_right": stereo[1] if stereo else None, "timestamps": timestamps, "calibration": calibration,
+            "encoders": encoders, "lens_table": lens_table, "groundtruth": groundtruth, "ground_plane": ground_plane})
     except OSError as err:
         raise SourceError(f"cannot write output {out} ({err.strerror})") from None
     rec = _Recording(writer)

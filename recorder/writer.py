@@ -9,6 +9,7 @@ at any point, or stopped by a full disk, leaves every message up to the last flu
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
 from typing import Any, BinaryIO
@@ -17,6 +18,7 @@ from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.atomic import partial_path
+from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.schemas.errors import OutputError
 
 COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
@@ -37,7 +39,9 @@ class LogWriter:
         compression: str = "zstd",
         chunk_size: int = 4 * 1024 * 1024,
         profile: str = "",
+        sources: Mapping[str, Path | str | None] | None = None,
     ) -> None:
+        """``sources``: the input files by role, described in the log's provenance record."""
         if compression not in COMPRESSION:
             raise ValueError(f"compression must be one of {sorted(COMPRESSION)}, not {compression!r}")
         self.path = Path(path)
@@ -50,6 +54,7 @@ class LogWriter:
         self._writer = Writer(self._fh, chunk_size=chunk_size, compression=COMPRESSION[compression])
         with self._failing_as_output_error():
             self._writer.start(profile=profile, library="trackreplay")
+            self._writer.add_metadata(RECORD_NAME, provenance(sources))
             self._fh.flush()
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}

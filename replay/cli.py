@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import errno
 import importlib
+import shlex
 import signal
 import sys
 import traceback
 
 import trackreplay
+from trackreplay.recorder.provenance import command_line
 from trackreplay.schemas.errors import OutputError, TrackreplayError
 
 # Exit statuses (docs/exit_codes.md). TrackreplayError subclasses carry their own (2, 3, 5, ...).
@@ -49,6 +51,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     previous = signal.signal(signal.SIGTERM, _terminate) if _main_thread() else None
+    # Logs written by this verb record the command line in their provenance.
+    token = command_line.set(shlex.join(["trackreplay", *(sys.argv[1:] if argv is None else argv)]))
     try:
         return int(args.func(args) or 0)
     except TrackreplayError as err:
@@ -80,6 +84,7 @@ def main(argv: list[str] | None = None) -> int:
         _debug(args)
         return INTERNAL_ERROR
     finally:
+        command_line.reset(token)
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
 

@@ -27,8 +27,10 @@ import numpy as np
 import polars as pl
 from tqdm import tqdm
 
+from trackreplay import __version__
 from trackreplay.replay import registry
 from trackreplay.replay.config import ConfigSource, config_to_dict, load_config
+from trackreplay.replay.config_toml import config_toml
 from trackreplay.replay.digest import FrameDigests, ReplayDigest
 from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images, read_hints
 from trackreplay.replay.marks import check_labels
@@ -91,7 +93,9 @@ class ReplayResult:
             "log": str(log),
             "tracker": self.tracker,
             "seed": self.seed,
+            "version": __version__,
             "config": None if self.config is None else config_to_dict(self.config),
+            "config_toml": None if self.config is None else config_toml(self.config, self.tracker),
             "digest": self.digest,
             "frames": self.frames,
             "rows": self.trajectory.height,

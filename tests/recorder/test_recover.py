@@ -61,13 +61,16 @@ def chunk_starts(path):
 def test_intact_log_is_copied_completely(intact, tmp_path):
     report = recover(intact, tmp_path / "copy.mcap")
     assert report.complete and report.error is None
-    assert report.messages_saved == 60 and report.attachments_saved == 1 and report.metadata_saved == 1
+    assert report.messages_saved == 60 and report.attachments_saved == 1 and report.metadata_saved == 2  # + provenance
     assert messages_of(tmp_path / "copy.mcap") == messages_of(intact)
     with open(tmp_path / "copy.mcap", "rb") as fh:
         reader = make_reader(fh)
         assert [a.name for a in reader.iter_attachments()] == ["lens.csv"]
     with open(tmp_path / "copy.mcap", "rb") as fh:
-        assert [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()] == [("source", {"camera": "test"})]
+        metadata = [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()]
+    with open(intact, "rb") as fh:
+        assert metadata == [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()]
+    assert [name for name, _ in metadata] == ["trackreplay.provenance", "source"]
 
 
 def test_truncated_copies_keep_every_complete_chunk(intact, tmp_path):
