@@ -53,6 +53,8 @@ class ReplayRequest:
     config: ConfigSource = None  # the tracker's config: None (defaults), an instance, a dict or a TOML path
     seed: int = 0
     rrd: Path | None = None
+    connect: str | None = None  # stream to a running Rerun viewer at this gRPC URL (as well as, or instead of, rrd)
+    spawn: bool = False  # start a Rerun viewer and stream to it
     start_s: float | None = None  # seconds from the first message of the log
     end_s: float | None = None
     image_topic: str | None = None
@@ -166,10 +168,11 @@ def replay(req: ReplayRequest) -> ReplayResult:
     """Step the tracker over every frame of the log: trajectory, digest, notices and the optional .rrd."""
     steps = iter_steps(req)
     sink = None
-    if req.rrd is not None:
+    if req.rrd is not None or req.connect is not None or req.spawn:
         from trackreplay.replay.rerun_sink import RerunSink
 
-        sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker))
+        sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", steps.entry.view.blueprint(req.tracker),
+                         connect=req.connect, spawn=req.spawn)
     digest = ReplayDigest(per_frame=req.frame_digests)
     rows: list[tuple] = []
     extra: list[dict] | None = [] if hasattr(getattr(steps.tracker, "intermediates", None), "extra_rows") else None

@@ -226,14 +226,29 @@ class RerunSink:
     written otherwise).
     """
 
-    def __init__(self, path: str | Path, recording_id: str, blueprint: rrb.Blueprint) -> None:
-        self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.partial = self.path.with_name(self.path.name + ".partial")
+    def __init__(self, path: str | Path | None, recording_id: str, blueprint: rrb.Blueprint, *,
+                 connect: str | None = None, spawn: bool = False) -> None:
+        """Write to ``path`` (an .rrd), and/or stream live to the viewer at ``connect`` (a gRPC URL such
+        as ``rerun+http://127.0.0.1:9876/proxy``) or to one ``spawn`` starts (needs a display)."""
+        self.path = None if path is None else Path(path)
+        self.partial = None
         self.recording_id = recording_id
         self.blueprint = blueprint
         self.rec = _stream(recording_id)
-        self.rec.save(str(self.partial), default_blueprint=blueprint)
+        sinks: list = []
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.partial = self.path.with_name(self.path.name + ".partial")
+            sinks.append(rr.FileSink(str(self.partial)))
+        if spawn:
+            try:
+                rr.spawn(connect=False, hide_welcome_screen=True)
+            except Exception as err:  # no viewer binary or no display: the .rrd (if any) still gets written
+                raise OutputError(f"cannot spawn a Rerun viewer ({err}); use --rrd FILE or --connect URL") from None
+            connect = connect or "rerun+http://127.0.0.1:9876/proxy"
+        if connect is not None:
+            sinks.append(rr.GrpcSink(connect))
+        self.rec.set_sinks(*sinks, default_blueprint=blueprint)
         self.logger = FrameLogger(self.rec)
 
     def begin_frame(self, frame: Frame) -> None:
@@ -251,6 +266,8 @@ class RerunSink:
         try:
             self._close()
         except (RuntimeError, OSError) as err:  # the SDK's file writer reports a full disk as RuntimeError
+            if self.path is None:
+                raise OutputError(f"cannot stream to the Rerun viewer ({err})") from None
             self.partial.unlink(missing_ok=True)
             self.path.unlink(missing_ok=True)
             raise OutputError(f"cannot write {self.path} ({err}); no .rrd was kept") from None
@@ -259,7 +276,8 @@ class RerunSink:
         self.logger.flush_scalars()
         self.rec.flush()
         self.rec.disconnect()
-        self.partial.replace(self.path)
+        if self.partial is not None:
+            self.partial.replace(self.path)
 
 
 def canonical_chunks(path: str | Path) -> "rc.ChunkStore":

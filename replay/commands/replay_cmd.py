@@ -44,6 +44,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("log", type=Path)
     add_replay_arguments(p)
     p.add_argument("--rrd", type=Path, help="write every intermediate to this Rerun .rrd file")
+    p.add_argument("--connect", metavar="URL", nargs="?", const="rerun+http://127.0.0.1:9876/proxy",
+                   help="also stream to a running Rerun viewer (default URL rerun+http://127.0.0.1:9876/proxy)")
+    p.add_argument("--spawn", action="store_true", help="start a Rerun viewer and stream to it (needs a display)")
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the export (default linear)")
     p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
@@ -62,6 +65,7 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
     return ReplayRequest(
         log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
+        connect=getattr(args, "connect", None), spawn=getattr(args, "spawn", False),
         stereo_topics=tuple(args.stereo_topics) if args.stereo_topics else None,
         progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads, strict=args.strict,
     )
