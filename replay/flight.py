@@ -26,8 +26,9 @@ best is refined with every parameter free.
 
 The report gives launch speed and angles, apex, carry, landing point (world metres), time of
 flight, the bounce/roll parameters and rest point, each with a 1-σ uncertainty from the fit's
-covariance (``(JᵀJ)⁻¹ s²`` inflated by ``(1 + ρ)/(1 − ρ)`` for residuals correlated frame to frame
-— model error — ``ρ`` their lag-1 autocorrelation; propagated by finite differences); :func:`flight_rows` exports the
+covariance (``(JᵀJ)⁻¹ s²``, propagated by finite differences) or a delete-a-block jackknife over
+time (refits without each of ``K`` blocks of frames) for the reported quantities: the jackknife
+carries model error, which the covariance does not); :func:`flight_rows` exports the
 fitted 3-D trajectory at frame times as ``X, Y, Z`` rows of the trajectory table.
 
 Without PTZ encoders and a lens table there are no lines of sight: :class:`FlightUnavailable`.
@@ -73,10 +74,12 @@ class FlightConfig:
     sigma_px: float = 1.0  # line-of-sight noise, px of the frame
     sigma_size: float = 0.35  # apparent size, relative (log)
     use_size: bool = True
-    step_s: float = 1.0 / 120.0  # integration step
+    step_s: float = 1.0 / 60.0  # integration step (RK4; 1/120 s changes a 149 m landing by < 1 mm at 4x the cost)
     max_time_s: float = 30.0
     loss: str = "soft_l1"
     f_scale: float = 3.0  # residuals beyond ~3 σ count linearly
+    jackknife_blocks: int = 10  # delete-a-block jackknife for the 1-σ (0: the fit's covariance only)
+    jackknife_nfev: int = 100  # function evaluations per jackknife refit (warm-started at the fit)
 
 
 # Parameter vector: names, in order.
@@ -448,25 +451,9 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
         notes.append(f"least squares stopped early: {res.message}")
     m, n = res.fun.size, res.x.size
     J = res.jac
-    # Honest uncertainty: the residual variance s² scales (JᵀJ)⁻¹ as usual, but the residuals of a
-    # rendered shot are not independent — model error (the bounce, the launch frames the tracker
-    # missed) leaves slow, frame-to-frame correlated misfits, and (JᵀJ)⁻¹ s² was 20x too small on
-    # the seed-0 tee shot (σ 0.36 m, error 6.96 m). The covariance is inflated by the variance
-    # factor of an AR(1) series, (1 + ρ)/(1 − ρ), with ρ the lag-1 autocorrelation of the
-    # line-of-sight residuals in frame order (at most 0.995: ≤ 400x in variance).
-    nobs_ = len(obs.t)
-    rho = 0.0
-    for comp in (res.fun[:nobs_], res.fun[nobs_:2 * nobs_]):
-        c = comp - comp.mean()
-        den = float(c @ c)
-        if den > 0 and c.size > 2:
-            rho = max(rho, float(c[1:] @ c[:-1]) / den)
-    rho = min(max(rho, 0.0), 0.995)
-    inflation = (1.0 + rho) / (1.0 - rho)
-    s2 = 2.0 * res.cost / max(1, m - n) * inflation  # the robust (soft-L1) cost: a few wrong blobs do not blow it up
+    s2 = 2.0 * res.cost / max(1, m - n)  # the robust (soft-L1) cost: a few wrong blobs do not blow it up
     cov = np.zeros((len(NAMES), len(NAMES)))  # the fixed parameters have no variance
     cov[np.ix_(all_free, all_free)] = np.linalg.pinv(J.T @ J) * s2
-    notes.append(f"1-σ: (JᵀJ)⁻¹ s² inflated x{inflation:.1f} for residuals correlated frame to frame (lag-1 ρ {rho:.2f})")
     n = len(NAMES)
     # Propagate to the reported quantities.
     base = _derived(theta, cfg, t_end)
@@ -478,9 +465,44 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
         D[:, i] = (_derived(th, cfg, t_end) - base) / d
     dstd = np.sqrt(np.maximum(np.einsum("ap,pq,aq->a", D, cov, D), 0.0))
     pstd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    # Honest uncertainty. (JᵀJ)⁻¹ s² assumes independent residuals; a rendered shot's are not (model
+    # error — the bounce, launch frames the tracker missed — leaves slow misfits) and it was 20x too
+    # small on a tee shot (σ 0.36 m, error 6.96 m). Inflating it for the residuals' autocorrelation
+    # went the other way (σ 115 m for a 0.06 m error: every parameter inflated alike). The
+    # delete-a-block jackknife over time asks the data directly: refit without each of K contiguous
+    # blocks of frames (warm-started at the fit), σ² = (K−1)/K Σ (θ_i − θ̄)², the reported
+    # quantities from each refit (no linearisation). The reported 1-σ is the larger of the two.
+    nobs = len(obs.t)
+    K = cfg.jackknife_blocks
+    if K >= 2 and nobs >= 5 * K:
+        thetas, derived = [], []
+        for block in np.array_split(np.arange(nobs), K):
+            keep = np.ones(nobs, bool)
+            keep[block] = False
+            sub = Observations(obs.frame[keep], obs.t[keep], obs.los[keep], obs.size_px[keep], obs.fx[keep], obs.camera)
+            th_i, _ = _solve(theta, sub, cfg, t_end, basis[keep], all_free, cfg.jackknife_nfev)
+            thetas.append(th_i)
+            derived.append(_derived(th_i, cfg, t_end))
+        T, Dv = np.array(thetas), np.array(derived)
+        f = (K - 1) / K
+        dT = T - T.mean(axis=0)
+        cov_jk = f * dT.T @ dT
+        ok = np.isfinite(Dv).all(axis=0)  # a quantity some refit lacks (no rest in the log) keeps the covariance's
+        djk = np.full(Dv.shape[1], np.nan)
+        djk[ok] = np.sqrt(f * np.sum((Dv[:, ok] - Dv[:, ok].mean(axis=0)) ** 2, axis=0))
+        # Reported quantities (apex, carry, landing, ...): the jackknife's (nonlinear, model error
+        # included). The linearised covariance is unreliable there when launch speed and time trade
+        # off (σ 48 m/s on a tee shot whose launch the tracker missed, propagated to 18 m on a landing
+        # the ground frames pin within a few metres). Fit parameters: the larger of the two, since a
+        # warm-started refit does not move along a direction no data constrain.
+        dstd = np.where(np.isfinite(djk), djk, dstd)
+        pstd = np.fmax(pstd, np.sqrt(np.maximum(np.diag(cov_jk), 0.0)))
+        cov = cov + cov_jk  # for the exported positions: both parts
+        notes.append(f"1-σ: delete-a-block jackknife over {K} blocks of frames (parameters: the larger of it and the fit's covariance)")
+    else:
+        notes.append("1-σ: the fit's covariance only (too few frames for the jackknife): model error not included")
     shot = simulate(theta, cfg, t_end)
     resid = _residuals(theta, obs, cfg, t_end, basis)
-    nobs = len(obs.t)
     los_px = np.hypot(resid[:nobs], resid[nobs:2 * nobs]) * cfg.sigma_px
     size_r = resid[2 * nobs:] * cfg.sigma_size if cfg.use_size else np.zeros(0)
     if not math.isfinite(shot.landing_time):
