@@ -149,11 +149,12 @@ class GroupModel:
     likelihood) or, without intermediates, the tracker's own ``X, Y, Z`` with noise ``σ`` (m)."""
 
     name: str = "groups: the group EKF's 3-D constant velocity (seed 003 §3.2)"
-    # The EKF's own process noise (EkfConfig.accel_sigma = 0.004 m/frame²): the raw measurement (the
-    # mean of the members' points) wanders as members hide and show, and maximum likelihood over q then
-    # follows the wander (velocity RMSE 0.82 -> 1.15 m/s on groups-crossing); with the EKF's q the
-    # smoothed velocity is 0.82 -> 0.31 m/s. Only the scale of R is chosen by maximum likelihood.
-    q_grid: tuple[float, ...] = (0.004**2,)  # (m/frame²)²
+    # The EKF's own process noise (EkfConfig.accel_sigma², read when smoothing): the raw measurement
+    # (the mean of the members' points) wanders as members hide and show, and maximum likelihood over
+    # q then follows the wander (velocity RMSE 0.82 -> 1.15 m/s on groups-crossing); with the EKF's q
+    # (0.004 m/frame² then) the smoothed velocity is 0.82 -> 0.31 m/s. Only R's scale is chosen by
+    # maximum likelihood. An explicit grid here overrides it.
+    q_grid: tuple[float, ...] | None = None  # (m/frame²)²
     scale_grid: tuple[float, ...] = (0.3, 1.0, 3.0)  # on the raw R (unitless)
     sigma_grid: tuple[float, ...] = (0.01, 0.03, 0.1, 0.3)  # m, on the tracker's X, Y, Z
 
@@ -517,8 +518,13 @@ def _smooth_group(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[i
     def run(q, s, smooth):
         return _run_group(z, R0 * s * s, q, smooth)
 
-    best = (GROUP_MODEL.q_grid[0], grid[0], -math.inf)
-    for q in GROUP_MODEL.q_grid:
+    q_grid = GROUP_MODEL.q_grid
+    if q_grid is None:
+        from trackreplay.trackers.groups.config import EkfConfig
+
+        q_grid = (EkfConfig().accel_sigma ** 2,)
+    best = (q_grid[0], grid[0], -math.inf)
+    for q in q_grid:
         for s in grid:
             ll = run(q, s, False)[0]
             if ll > best[2]:
