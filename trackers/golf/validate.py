@@ -18,7 +18,9 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   blobs agree with *each other*: their areas within ``area_tolerance`` of one another and their
   roundness within the shape tolerance of a disc (``confirm_fit`` of :func:`track_fit`). The
   targets are not asked: after a loss they are stale (a receding ball under a zooming lens, a
-  streak's fragments), and the ball's size starts again from the confirmed blobs;
+  streak's fragments), and the ball's size starts again from the confirmed blobs. When another
+  accepted blob of a similar size is in view, nothing is confirmed (verdict ``ambiguous``): after
+  a loss the tracker cannot tell its ball from a spare one;
 - **gone**: when the predicted mean is more than a ball diameter outside the picture nothing in
   the picture is accepted directly (the ball left it); the track is ``predicted`` and then
   ``lost`` (no position) after ``max_predicted_frames`` misses, like any other miss. When the
@@ -37,7 +39,8 @@ import numpy as np
 from trackreplay.trackers.golf.blobs import GatedBlobs, roundness, shape_tolerance
 from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
-VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start")
+VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
+            "ambiguous")
 
 
 @dataclass(frozen=True, eq=False)
@@ -149,8 +152,23 @@ class Validator:
             shapes = np.array(self.shapes[-cfg.confirm_frames:], float).reshape(-1, 2)
             fit = track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, cfg.confirm_min_area_px)
         if k >= 0 and len(self.tentative) >= cfg.confirm_frames and fit >= cfg.confirm_fit:
+            if self._ambiguous(gated, k, scale):
+                return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
             return Validation("confirmed", fit, fit, 0.0, radius, k, self._rows(), in_gate)
         return Validation(verdict, 0.0, 0.0, 0.0, radius, k, self._rows(), in_gate)
+
+    def _ambiguous(self, gated: GatedBlobs, k: int, scale: float) -> bool:
+        """Another shape-accepted blob this frame looks as much like the tentative ball (area within
+        ``area_tolerance`` of the tentative blobs' median): after a loss the tracker cannot tell which
+        of two such balls is its own (a spare ball, a tee marker), so it confirms neither."""
+        others = np.flatnonzero(gated.accepted)
+        others = others[others != k]
+        if not others.size:
+            return False
+        slack = self.blobs.area_slack_px * scale * scale
+        typical = float(np.median(np.array(self.shapes, float).reshape(-1, 2)[:, 0]))
+        ratio = np.abs(np.log((gated.blobs.area[others] + slack) / (typical + slack)))
+        return bool((ratio <= math.log(self.blobs.area_tolerance)).any())
 
     def confirmed_velocity(self) -> np.ndarray:
         """Per-frame velocity of the confirmed tentative track (px/frame)."""

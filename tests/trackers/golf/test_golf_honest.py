@@ -135,3 +135,14 @@ def test_fixed_camera_ball_gone_a_white_object_mid_picture_is_not_the_ball(backd
     assert "measured" not in statuses(run(frames))[16:]
     anywhere = GolfTracker(GolfConfig(validate=ValidateConfig(entry_margin_px=1e6)), np.random.default_rng(0))
     assert "measured" in [anywhere.step(f)[0].status for f in frames][16:]  # without the rule it would be taken
+
+
+def test_two_lookalike_balls_after_a_loss_confirm_neither(backdrop, draw_ball):
+    # The ball is hidden for 12 frames; then two identical balls move side by side near its path:
+    # the tracker cannot tell its own from the spare one, so neither is measured (verdict "ambiguous").
+    path = [(300.0 + 6 * k, 200.0 + 2 * k) for k in range(40)]
+    positions = [None if k >= 12 else p for k, p in enumerate(path)]
+    extra = {k: [(path[k][0], path[k][1] - 12.0), (path[k][0], path[k][1] + 12.0)] for k in range(24, 40)}
+    results = run(sequence(backdrop, draw_ball, positions, [(0, path[0])], extra=extra))
+    assert "measured" not in statuses(results)[12:]
+    assert "ambiguous" in [inter.validation.verdict for _, inter in results[24:]]
