@@ -7,7 +7,7 @@ sequence of ``mot_parity_sequences.json`` to ``MOTAccumulator(auto_id=True).upda
 (null distance = NaN = no match) and ``metrics.create().compute(acc, metrics=[mota, motp, idf1,
 num_switches, num_false_positives, num_misses, num_matches, num_objects, num_predictions, idtp])``
 (2026-11-25, issue 8). The sequences: motmetrics' README example; three random 60-frame crowds with
-misses, false positives, id swaps and restarts; the golden groups replay against its group truth
+misses, false positives, id swaps and restarts; the golden groups replay (as of commit cf946b1) against its group truth
 (image boxes at IoU 0.3 and 3-D within 1 m). When a venv with motmetrics is at hand
 (``TRACKREPLAY_MOTMETRICS_PYTHON``, default /tmp/mmvenv/bin/python) the last test also runs it live.
 """

@@ -56,7 +56,11 @@ class KltConfig:
 class EkfConfig:
     """§3.2 constant-velocity EKF, state [x ẋ y ẏ z ż] (m, m/frame), observation [u v d] (px)."""
 
-    accel_sigma: float = 0.004  # m/frame²: white-noise acceleration (0.004 m/frame² = 9 m/s² at 48 fps)
+    # m/frame²: white-noise acceleration (0.0015 m/frame² = 3.5 m/s² at 48 fps). It sets the EKF's
+    # velocity sigma, which the merge's velocity gate reads: at 0.004 (9 m/s²) that sigma was
+    # 0.4-0.65 m/s per axis and groups-passing's groups, 1 m/s apart, merged at 48 fps; 0.002 still
+    # merged them; 0.0015 does not (scene seeds 0-2) and merges groups-merging 18 frames after the truth
+    accel_sigma: float = 0.0015
     sigma_u: float = 3.0  # px: the mean of a group's points moves as members hide or show
     sigma_v: float = 4.0
     sigma_d: float = 0.25  # px (SGBM's sub-pixel disparity averaged over the points)
