@@ -58,8 +58,9 @@ class EkfConfig:
 
     # m/frame²: white-noise acceleration (0.0015 m/frame² = 3.5 m/s² at 48 fps). It sets the EKF's
     # velocity sigma, which the merge's velocity gate reads: at 0.004 (9 m/s²) that sigma was
-    # 0.4-0.65 m/s per axis and groups-passing's groups, 1 m/s apart, merged at 48 fps; 0.002 still
-    # merged them; 0.0015 does not (scene seeds 0-2) and merges groups-merging 18 frames after the truth
+    # 0.4-0.65 m/s per axis and groups-passing's groups, 1 m/s apart, merged at 48 fps; 0.002 and
+    # 0.003 still merged them; 0.0015 does not (scene seeds 0-2, clips from 0 s and 1 s) and merges
+    # groups-merging 18 frames after the truth
     accel_sigma: float = 0.0015
     sigma_u: float = 3.0  # px: the mean of a group's points moves as members hide or show
     sigma_v: float = 4.0
@@ -92,8 +93,15 @@ class MergeConfig:
     """§3.5 eq. (13): merge trackers whose position AND velocity regions overlap."""
 
     gamma_position: float = 11.34  # squared Mahalanobis of the centres under Σ_i + Σ_j (extent)
-    gamma_velocity: float = 6.25  # (χ² 3 dof, 90 %) of the velocities under P_v,i + P_v,j (+ their points' spread / N)
+    gamma_velocity: float = 6.25  # (χ² 3 dof, 90 %) of the velocities under P_v,i + P_v,j (EKF velocity covariances)
     frames: int = 8  # the overlap must hold this many consecutive frames (ours: no merge on one noisy frame)
+    # Add each group's point-velocity spread / member count to its EKF velocity covariance in the
+    # velocity gate (off: the gate is the EKF velocity covariances alone, as eq. 13 reads). The EKF
+    # never sees the points' velocities (it is updated with their mean [u v d]) and those are noisy
+    # in depth (disparity noise over the time window): with the term, groups-passing's groups 1 m/s
+    # apart were merged at 48 fps (a clip from 1.0 s, at frame 90); without it they are not, and
+    # groups-merging merges on the same frame as with it.
+    velocity_spread_in_gate: bool = False
     # Ours: a merge in which one group holds at least this share of the members keeps that group's
     # id (it absorbed a splinter, e.g. feet that started a tracker of their own); otherwise the
     # merged group is new, as in the paper (Group0 + Group1 -> Group2).

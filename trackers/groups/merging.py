@@ -2,8 +2,8 @@
 
 Position regions: the centres' squared Mahalanobis distance under the sum of the two extents
 (``Σ_i + Σ_j``) is below ``gamma_position``. Velocity regions: the velocities' under the sum of
-the EKF velocity covariances plus each group's point-velocity spread over its member count (the
-uncertainty of a group's mean velocity) is below ``gamma_velocity``. Both must hold, so groups that
+the EKF velocity covariances (optionally plus each group's point-velocity spread over its member
+count, ``MergeConfig.velocity_spread_in_gate``) is below ``gamma_velocity``. Both must hold, so groups that
 pass close but move differently do not merge. The relation's connected sets are merged.
 """
 

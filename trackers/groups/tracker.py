@@ -202,7 +202,8 @@ class GroupTracker(TrackerBase):
         centres = np.array([g.position for g in self.groups])
         extents = np.array([g.extent + floor for g in self.groups])
         vel = np.array([g.velocity for g in self.groups])
-        vcov = np.array([g.ekf.P[np.ix_(VEL, VEL)] + g.velocity_spread / max(g.members, 1) + np.eye(3) * 1e-8
+        spread = 1.0 if mcfg.velocity_spread_in_gate else 0.0
+        vcov = np.array([g.ekf.P[np.ix_(VEL, VEL)] + spread * g.velocity_spread / max(g.members, 1) + np.eye(3) * 1e-8
                          for g in self.groups])
         both, _, _ = overlap_pairs(centres, extents, vel, vcov, mcfg.gamma_position, mcfg.gamma_velocity)
         ids = [g.gid for g in self.groups]

@@ -17,7 +17,9 @@ from trackreplay.replay.reader import LogReader
 @pytest.fixture(scope="module")
 def passing(tmp_path_factory):
     path = tmp_path_factory.mktemp("groups") / "passing.mcap"
-    write_group_scene(path, GroupSceneConfig(scene="groups-passing", fps=24.0, duration=3.4, encoding="jpeg"))
+    # 48 fps from 1.0 s: the clip on which both earlier merge settings (accel_sigma 0.004, and the
+    # points' velocity spread in the velocity gate) merged the two groups, at frames 69 and 90
+    write_group_scene(path, GroupSceneConfig(scene="groups-passing", fps=48.0, start_s=1.0, duration=2.0, encoding="jpeg"))
     return path
 
 
