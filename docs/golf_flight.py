@@ -134,8 +134,9 @@ def write(results: list[dict], commit: str, dirty: bool) -> None:
          "(encoders + lens table) and the blob's apparent size. The *causal EKF* is the golf tracker's own 3-D",
          "filter (seed 000 §2.3): its last predicted ground contact before the true landing frame, and the",
          "highest Z of its state before the landing. Errors against the scene's 3-D ground truth. ± is the",
-         "reported 1-σ: the larger of the fit's covariance and a delete-a-block jackknife over time (10 refits",
-         "without a tenth of the frames each), so that model error counts. Goal: landing point within 1 % of carry.", "",
+         "reported 1-σ: for apex, carry, landing (and the other derived quantities) a delete-a-block jackknife",
+         "over time (10 refits without a tenth of the frames each, warm-started), so that model error counts;",
+         "for the launch parameters the larger of it and the fit's covariance. Goal: landing point within 1 % of carry.", "",
          "| shot | carry m | landing error m (fit ± 1σ) | error / σ | % of carry | causal EKF landing error m | carry error m fit / EKF | apex error m fit / EKF | time-of-flight error s | fit RMS px | frames | replay s | fit s |",
          "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
