@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextvars
 import hashlib
+from importlib.metadata import PackageNotFoundError, version
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -33,11 +34,18 @@ def describe_source(path: Path) -> str:
     return f"{path.name} sha256:{h.hexdigest()} {path.stat().st_size} bytes"
 
 
+def _version() -> str:
+    # From the installed distribution, as trackreplay.__version__ does (the package root is not imported
+    # here: it reaches into replay, which recorder must not).
+    try:
+        return version("trackreplay")
+    except PackageNotFoundError:
+        return "0+unknown"
+
+
 def provenance(sources: Mapping[str, Path | str | None] | None = None, **extra: str) -> dict[str, str]:
     """The provenance record's key/value pairs (all strings, as MCAP metadata requires)."""
-    from trackreplay import __version__
-
-    record = {"tool": "trackreplay", "version": __version__}
+    record = {"tool": "trackreplay", "version": _version()}
     cli = command_line.get()
     if cli is not None:
         record["command_line"] = cli
