@@ -161,10 +161,14 @@ def write(results: list[dict], commit: str, dirty: bool) -> None:
           "- The jackknife σ can be large where a tenth of the frames carries the shot (the launch, the landing),",
           "  i.e. conservative; the covariance alone was 20x too small on a tee shot in an earlier run.",
           f"- Fit time (with the 10 jackknife refits) up to {max(r['seconds'] for r in results):.0f} s on a shared 2-core machine. Why: the",
-          "  Jacobian is by finite differences (13 simulations of the pure-Python RK4 per iteration) and on the",
-          "  default shot the full fit crawls along a long valley (launch speed / time / lift trade off): ~220",
-          "  iterations, ~3000 simulations; looser tolerances (1e-4) stop it early at 4.4 px RMS instead of 2.0.",
-          "  The RK4 step is 1/60 s (1/120 s changed a 149 m landing by < 1 mm at 4x the cost).",
+          "  Jacobian is by finite differences (13 simulations of the pure-Python RK4 per iteration) and the full",
+          "  fit runs along a long valley (launch speed / time / lift trade off). With least_squares'",
+          "  x_scale='jac' the default shot took 222 iterations (~3000 simulations, 74 s without the jackknife);",
+          "  with x_scale from typical parameter sizes (flight.X_SCALE) 66 to the same optimum (32 s). Looser",
+          "  tolerances (1e-4) stopped it early at 4.4 px RMS instead of 2.0. The RK4 step is 1/60 s (1/120 s",
+          "  changed a 149 m landing by < 1 mm at 4x the cost). The jackknife's 10 warm-started refits add ~1x.",
+          "- launch2: the x_scale change reached a lower cost (4.07 vs 5.32 px RMS) whose landing is further",
+          "  off (1.6 m vs 0.1 m before): the closer landing of the earlier run was a worse optimum.",
           "- The golf tracker was being changed at the same time (issue 10): rerun this script after it lands."]
     (HERE / "golf_flight.md").write_text("\n".join(L) + "\n")
 
