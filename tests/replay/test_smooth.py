@@ -178,3 +178,19 @@ def test_group_tracks_smoothed_in_3d_from_raw_points() -> None:
     assert (hole["Z_std"].to_numpy() > 0).all()
     V = out.select("VX", "VY", "VZ").to_numpy()
     assert np.allclose(np.median(V, axis=0), [0.05 * fps, 0.0, -0.02 * fps], atol=0.15)
+
+
+def test_golden_groups_log_smoothed_in_3d_from_its_points() -> None:
+    """The group tracker's raw measurements (mean [u v d] of each group's points) reach the smoother:
+    every measured group row observed in 3-D, with velocity (m/s) and position std (m)."""
+    from trackreplay.replay.engine import ReplayRequest, replay
+
+    res = replay(ReplayRequest(log=GOLDEN / "groups-crossing-320x240.mcap", tracker="groups", observations=True))
+    obs = res.observations
+    assert obs.height > 0 and obs["zZ"].is_not_null().all() and (obs["rZZ"] > obs["rXX"]).all()  # depth the noisiest
+    out, fits = smooth_trajectory(res.trajectory, observations=obs)
+    assert fits and all(f.tracker == "groups" for f in fits)
+    rts = out.filter(pl.col("fill") == "rts")
+    assert rts.height >= obs.height - sum(f.outliers for f in fits)
+    assert rts.select("VX", "VY", "VZ", "X_std", "Y_std", "Z_std").null_count().sum_horizontal().item() == 0
+    assert (rts["Z_std"] > 0).all() and (rts["Z_std"] < 1.0).all()
