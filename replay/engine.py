@@ -107,6 +107,8 @@ class ReplayResult:
             },
             "unpaired_images": len(self.report.unpaired),
             "frames_outside_encoder_coverage": len(self.report.outside_encoder_coverage),
+            "frames_zoom_outside_lens": len(self.report.zoom_outside_lens),
+            "frames_out_of_order": len(self.report.out_of_order),
             "frames_lost": [{"topic": x.topic, "index": x.index, "t_ns": x.t_ns, "reason": x.reason}
                             for x in self.report.lost],
             "rrd": str(self.rrd) if self.rrd else None,

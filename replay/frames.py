@@ -105,6 +105,8 @@ class BundleReport:
     unpaired: list[tuple[str, int]] = field(default_factory=list)
     outside_encoder_coverage: list[int] = field(default_factory=list)
     lost: list[LostFrame] = field(default_factory=list)  # frames skipped: damaged chunk or undecodable image
+    zoom_outside_lens: list[int] = field(default_factory=list)  # frames whose zoom the lens table does not cover
+    out_of_order: list[int] = field(default_factory=list)  # frames written before the previous frame (time went backwards)
 
 
 @dataclass(frozen=True)
@@ -255,6 +257,7 @@ def iter_frames(
         lens = LensTable.from_pb(lens_pb) if lens_pb is not None else None
     except ValueError as err:
         raise LogError(f"{reader.path}: topic {topics.lens}: {err}") from None
+    zoom_range = (min(e.zoom for e in lens.entries), max(e.zoom for e in lens.entries)) if lens is not None else (0.0, 0.0)
     hints = read_hints(reader, topics.hints, topics.image)
     hints_by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
@@ -293,6 +296,8 @@ def iter_frames(
         pose = ptz.at(left.log_time) if ptz is not None else None
         if ptz is not None and pose is None:
             report.outside_encoder_coverage.append(left.index)
+        if pose is not None and lens is not None and not zoom_range[0] <= pose.zoom <= zoom_range[1]:
+            report.zoom_outside_lens.append(left.index)  # the camera model clamps to the nearest entry
         report.frames += 1
         return Frame(
             index=left.index,
@@ -330,6 +335,8 @@ def iter_frames(
     if topics.right is None:
         previous: LogMessage | None = None
         for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
+            if previous is not None and item.lost is None and 0 <= item.sequence < previous.sequence:
+                report.out_of_order.append(item.index)  # written before the frame that precedes it in time
             if previous is not None and item.lost is None and previous.log_time == item.log_time:
                 raise LogError(f"{reader.path}: messages {previous.index} and {item.index} on topic {item.topic} have "
                                f"the same log_time {item.log_time}: two frames cannot share a time")

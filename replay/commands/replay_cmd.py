@@ -99,6 +99,13 @@ def run(args: argparse.Namespace) -> int:
     print(f"{result.tracker}: {result.frames} frames, digest {result.digest}")
     if result.report.outside_encoder_coverage:
         print(f"warning: {len(result.report.outside_encoder_coverage)} frames outside encoder coverage", file=sys.stderr)
+    if result.report.zoom_outside_lens:
+        print(f"warning: {args.log}: {len(result.report.zoom_outside_lens)} frame(s) have a zoom reading outside the lens "
+              f"table's range (first: frame {result.report.zoom_outside_lens[0]}); the nearest entry's intrinsics were used",
+              file=sys.stderr)
+    if result.report.out_of_order:
+        print(f"warning: {args.log}: the images' write order and log_time order disagree at {len(result.report.out_of_order)} "
+              f"place(s) (first: before frame {result.report.out_of_order[0]}); they are replayed in log_time order", file=sys.stderr)
     if args.expect_digest and args.expect_digest.lower() != result.digest:
         raise DigestMismatch(f"digest mismatch for {args.log}: expected {args.expect_digest.lower()}, got {result.digest}")
     if result.report.lost:

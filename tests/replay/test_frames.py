@@ -184,3 +184,21 @@ def test_values_inside_a_log_are_checked_with_topic_and_index(tmp_path: Path) ->
     reader = _log_with(tmp_path, "dup.mcap", lambda log: frames(log, (0, 10, 10, 20)))
     with pytest.raises(LogError, match=r"messages 1 and 2 on topic /camera/image have the same log_time 10"):
         list(iter_frames(reader, FrameTopics.detect(reader)))
+
+
+def test_zoom_beyond_the_lens_table_and_images_out_of_time_order_are_reported(tmp_path: Path) -> None:
+    from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
+
+    def write(log):
+        log.write(T.PTZ_LENS_TABLE, LensTable(10, 8, (LensEntry(0, 0, 100, 100, 5, 4), LensEntry(2000, 0, 900, 900, 5, 4))).to_pb(0), 0)
+        for t, zoom in ((0, 100.0), (10, 9999.0), (20, 9999.0), (30, 500.0)):
+            log.write(T.PTZ_ENCODERS, PtzReading(t, 0, 0, zoom, 0).to_pb(), t)
+        for t in (0, 20, 10, 30):  # the third image is written after a later one
+            log.write(T.CAMERA_IMAGE, image_message(_img(t), "png", t), t)
+
+    reader = _log_with(tmp_path, "zoom.mcap", write)
+    report = BundleReport()
+    frames = list(iter_frames(reader, FrameTopics.detect(reader), report=report))
+    assert [f.t_ns for f in frames] == [0, 10, 20, 30]
+    assert report.zoom_outside_lens == [1, 2]
+    assert report.out_of_order == [2]  # frame 2 (t=20) was written before frame 1 (t=10)
