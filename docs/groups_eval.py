@@ -4,7 +4,8 @@
 
 Per scene (``trackreplay synth groups-…``, rendered at ``--fps``, VGA, JPEG 95, the paper's rig):
 CLEAR MOT and IDF1 of the group tracks against the per-group truth (/groundtruth/groups) on image
-boxes (IoU >= 0.5 and >= 0.3) and on 3-D positions (within 1 m, left camera frame), 3-D position
+boxes (IoU >= 0.5 and >= 0.3) and on 3-D positions (within 1 m, left camera frame), HOTA / DetA /
+AssA / LocA (mean over alpha 0.05..0.95; similarity IoU, and max(0, 1 - d/1 m) in 3-D), 3-D position
 RMSE per true group (per frame a Hungarian match within 1 m; with the share of the group's frames
 matched), the tracker's merge events against the true merge frame (groups-merging) and whether any
 two groups merged in groups-passing. Ground truth is the mean of the group's torso centres and the
@@ -37,7 +38,7 @@ from trackreplay.recorder.synth.groups.scene import (  # noqa: E402
 from trackreplay.replay.engine import ReplayRequest  # noqa: E402
 from trackreplay.replay.group_table import replay_groups  # noqa: E402
 from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.mot import mot_metrics  # noqa: E402
+from trackreplay.replay.mot import hota_metrics, mot_metrics  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
 
 MERGE_EVENTS = ("merged into", "absorbed by")
@@ -75,6 +76,10 @@ def position_errors(traj: pl.DataFrame, gt: pl.DataFrame, gate_m: float = 1.0) -
                   "matched": round(len(err.get(gid, [])) / n, 3)} for gid, n in sorted(frames.items())}
 
 
+def _hota(s) -> dict:
+    return {k: v for k, v in s.as_dict().items() if k != "hota_alpha"}
+
+
 def evaluate_scene(scene: str, fps: float, duration: float, seed: int, tmp: Path, config: dict | None = None) -> dict:
     cfg = GroupSceneConfig(scene=scene, seed=seed, fps=fps, duration=duration, encoding="jpeg")
     log = tmp / f"{scene}-{seed}.mcap"
@@ -89,6 +94,8 @@ def evaluate_scene(scene: str, fps: float, duration: float, seed: int, tmp: Path
         "image_iou50": mot_metrics(traj, gt, space="image", min_iou=0.5).as_dict(),
         "image_iou30": mot_metrics(traj, gt, space="image", min_iou=0.3).as_dict(),
         "ground_3d_1m": mot_metrics(traj, gt, space="3d", max_distance_m=1.0).as_dict(),
+        "hota_image": _hota(hota_metrics(traj, gt, space="image")),
+        "hota_3d_1m": _hota(hota_metrics(traj, gt, space="3d", max_distance_m=1.0)),
         "rmse_per_group": position_errors(traj, gt),
         "track_ids": sorted(set(traj["track_id"].to_list())),
         "events": [f"{f}: {e}" for f, e in events],
@@ -161,6 +168,8 @@ def main() -> int:
                       f"image@0.5 MOTA {i50['mota']:.3f} MOTP {i50['motp']:.3f} IDF1 {i50['idf1']:.3f} IDSW {i50['id_switches']} | "
                       f"image@0.3 MOTA {i30['mota']:.3f} IDF1 {i30['idf1']:.3f} IDSW {i30['id_switches']} | "
                       f"3-D MOTA {g3['mota']:.3f} MOTP {g3['motp']:.3f} m IDF1 {g3['idf1']:.3f} IDSW {g3['id_switches']} | "
+                      f"HOTA image {res['hota_image']['hota']:.3f} (DetA {res['hota_image']['deta']:.3f} AssA {res['hota_image']['assa']:.3f}) "
+                      f"3-D {res['hota_3d_1m']['hota']:.3f} (DetA {res['hota_3d_1m']['deta']:.3f} AssA {res['hota_3d_1m']['assa']:.3f}) | "
                       f"RMSE {rmse}{extra}")
     args.out.write_text(json.dumps({"fps": args.fps, "duration_s": args.duration, "config": args.config,
                                     "results": results}, indent=1) + "\n")

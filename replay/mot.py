@@ -9,7 +9,15 @@ matched by the Hungarian method (scipy), a ground-truth object matched to a diff
 than its last match is an ID switch. IDF1 is the global one-to-one id assignment maximising
 identity true positives (motmetrics' ``id_global_assignment``). ``tests/replay/test_mot_parity.py``
 runs motmetrics 1.4.0 (numpy 1.26, its own venv) on the same sequences and matches to 1e-6.
-HOTA is not implemented.
+
+HOTA (Luiten et al. 2020, IJCV): for each α in 0.05, 0.10 … 0.95, DetA_α = TP/(TP+FN+FP),
+AssA_α = mean over TP pairs of the pair's track-level Jaccard |TPA|/(|TPA|+|FNA|+|FPA|),
+HOTA_α = sqrt(DetA_α·AssA_α), LocA_α = mean similarity of the TP pairs; each reported figure is the
+mean over the 19 α. It needs a similarity in [0, 1] rather than a thresholded distance: IoU for image
+boxes, ``max(0, 1 − d/max_distance)`` for 3-D positions. Per frame the pairs are chosen by one
+Hungarian assignment maximising similarity × the global alignment score of the two ids (the soft
+track-level Jaccard over the whole sequence), as TrackEval does, then kept at each α where the
+similarity is ≥ α. ``tests/replay/test_hota_parity.py`` matches TrackEval 1.3.0 to 1e-6.
 """
 
 from __future__ import annotations
@@ -133,10 +141,112 @@ def _idtp(pair_counts: dict[tuple[int, int], int], gts: list[int], hyps: list[in
     return int(w[r, c].sum())
 
 
+@dataclass(frozen=True)
+class HotaSummary:
+    hota: float  # each field is the mean over α = 0.05 … 0.95
+    deta: float
+    assa: float
+    loca: float
+    detre: float
+    detpr: float
+    assre: float
+    asspr: float
+    hota_alpha: tuple[float, ...]  # HOTA_α per α (ALPHAS)
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+ALPHAS = np.arange(0.05, 0.99, 0.05)  # 0.05 … 0.95, the same floats as TrackEval
+_EPS = np.finfo(float).eps
+
+
+def iou_similarity(gt_boxes: np.ndarray, hyp_boxes: np.ndarray) -> np.ndarray:
+    """IoU of ``x0 y0 w h`` boxes (n, m), unthresholded."""
+    d = iou_distance(gt_boxes, hyp_boxes, max_distance=np.inf)
+    return 1.0 - d if d.size else d
+
+
+def distance_similarity(gt: np.ndarray, hyp: np.ndarray, max_distance: float) -> np.ndarray:
+    """``max(0, 1 − d / max_distance)`` of Euclidean distances (n, m)."""
+    d = euclidean_distance(gt, hyp, np.inf)
+    return np.clip(1.0 - d / max_distance, 0.0, None) if d.size else d
+
+
+def hota(frames: Iterable[Frame]) -> HotaSummary:
+    """HOTA, DetA, AssA, LocA (and DetRe/DetPr/AssRe/AssPr) over frames of (gt ids, hyp ids,
+    similarity (n, m) in [0, 1]; NaN counts as 0)."""
+    seq = []
+    for oids, hids, sim in frames:
+        oids, hids = np.asarray(oids, np.int64).ravel(), np.asarray(hids, np.int64).ravel()
+        sim = np.nan_to_num(np.asarray(sim, np.float64).reshape(len(oids), len(hids)), nan=0.0)
+        seq.append((oids, hids, sim))
+    gts = sorted({int(o) for oids, _, _ in seq for o in oids})
+    hyps = sorted({int(h) for _, hids, _ in seq for h in hids})
+    gi, hi = {o: k for k, o in enumerate(gts)}, {h: k for k, h in enumerate(hyps)}
+    n_alpha = len(ALPHAS)
+    tp, fn, fp, loc = np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha)
+    n_gt = sum(len(o) for o, _, _ in seq)
+    n_hyp = sum(len(h) for _, h, _ in seq)
+    if n_gt == 0 or n_hyp == 0:  # nothing to match: DetA 0, LocA 1 by convention (as TrackEval)
+        zero = np.zeros(n_alpha)
+        return _hota_summary(zero, zero + n_gt, zero + n_hyp, np.ones(n_alpha), zero, zero, zero)
+    idx = [(np.array([gi[int(o)] for o in oids], np.int64), np.array([hi[int(h)] for h in hids], np.int64), sim)
+           for oids, hids, sim in seq]
+    # global alignment: soft Jaccard per id pair, each frame's similarity shared out like an IoU
+    potential = np.zeros((len(gts), len(hyps)))
+    gt_count, hyp_count = np.zeros((len(gts), 1)), np.zeros((1, len(hyps)))
+    for g, h, sim in idx:
+        if sim.size:
+            denom = sim.sum(axis=0, keepdims=True) + sim.sum(axis=1, keepdims=True) - sim
+            share = np.where(denom > _EPS, sim / np.where(denom > _EPS, denom, 1.0), 0.0)
+            np.add.at(potential, (g[:, None], h[None, :]), share)
+        np.add.at(gt_count, (g, 0), 1)
+        np.add.at(hyp_count, (0, h), 1)
+    alignment = potential / (gt_count + hyp_count - potential)
+    pair_tp = np.zeros((n_alpha, len(gts), len(hyps)))
+    for g, h, sim in idx:
+        if len(g) == 0 or len(h) == 0:
+            fn += len(g)
+            fp += len(h)
+            continue
+        r, c = linear_sum_assignment(-(alignment[np.ix_(g, h)] * sim))
+        s = sim[r, c]
+        for a, alpha in enumerate(ALPHAS):
+            keep = s >= alpha - _EPS
+            k = int(keep.sum())
+            tp[a] += k
+            fn[a] += len(g) - k
+            fp[a] += len(h) - k
+            loc[a] += s[keep].sum()
+            np.add.at(pair_tp[a], (g[r[keep]], h[c[keep]]), 1)
+    ass_a, ass_re, ass_pr = np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha)
+    for a in range(n_alpha):
+        m = pair_tp[a]
+        denom = max(1.0, tp[a])
+        ass_a[a] = (m * m / np.maximum(1.0, gt_count + hyp_count - m)).sum() / denom
+        ass_re[a] = (m * m / np.maximum(1.0, gt_count)).sum() / denom
+        ass_pr[a] = (m * m / np.maximum(1.0, hyp_count)).sum() / denom
+    loca = np.maximum(1e-10, loc) / np.maximum(1e-10, tp)
+    return _hota_summary(tp, fn, fp, loca, ass_a, ass_re, ass_pr)
+
+
+def _hota_summary(tp, fn, fp, loca, ass_a, ass_re, ass_pr) -> HotaSummary:
+    det_a = tp / np.maximum(1.0, tp + fn + fp)
+    det_re = tp / np.maximum(1.0, tp + fn)
+    det_pr = tp / np.maximum(1.0, tp + fp)
+    h = np.sqrt(det_a * ass_a)
+    return HotaSummary(float(h.mean()), float(det_a.mean()), float(ass_a.mean()), float(loca.mean()),
+                       float(det_re.mean()), float(det_pr.mean()), float(ass_re.mean()), float(ass_pr.mean()),
+                       tuple(float(v) for v in h))
+
+
 def frames_from_tables(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", min_iou: float = 0.5,
-                       max_distance_m: float = 1.0) -> list[Frame]:
+                       max_distance_m: float = 1.0, similarity: bool = False) -> list[Frame]:
     """Per ground-truth frame: visible truth vs the tracker's rows with a position (``lost`` rows and
-    frames before the truth starts are left out). ``space`` is "image" (boxes) or "3d" (X Y Z)."""
+    frames before the truth starts are left out). ``space`` is "image" (boxes) or "3d" (X Y Z).
+    With ``similarity`` the matrices are HOTA similarities (IoU; ``max(0, 1 − d/max_distance_m)``)
+    instead of thresholded distances."""
     traj = traj.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost"))
     gt = gt.filter(pl.col("visible").fill_null(True))
     out = []
@@ -146,7 +256,9 @@ def frames_from_tables(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "im
         if space == "image":
             gb = g.select((pl.col("x") - pl.col("w") / 2), (pl.col("y") - pl.col("h") / 2), "w", "h").to_numpy()
             tb = t.select((pl.col("x") - pl.col("w") / 2), (pl.col("y") - pl.col("h") / 2), "w", "h").to_numpy()
-            d = iou_distance(gb, tb, 1.0 - min_iou)
+            d = iou_similarity(gb, tb) if similarity else iou_distance(gb, tb, 1.0 - min_iou)
+        elif similarity:
+            d = distance_similarity(g.select("X", "Y", "Z").to_numpy(), t.select("X", "Y", "Z").to_numpy(), max_distance_m)
         else:
             d = euclidean_distance(g.select("X", "Y", "Z").to_numpy(), t.select("X", "Y", "Z").to_numpy(), max_distance_m)
         out.append((g["id"].to_numpy(), t["track_id"].to_numpy(), d))
@@ -156,6 +268,14 @@ def frames_from_tables(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "im
 def mot_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", min_iou: float = 0.5,
                 max_distance_m: float = 1.0) -> MotSummary:
     return clear_mot(frames_from_tables(traj, gt, space=space, min_iou=min_iou, max_distance_m=max_distance_m))
+
+
+def hota_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", max_distance_m: float = 1.0) -> HotaSummary:
+    return hota(frames_from_tables(traj, gt, space=space, max_distance_m=max_distance_m, similarity=True))
+
+
+def format_hota(s: HotaSummary, label: str) -> str:
+    return f"{label}: HOTA {s.hota:.3f}  DetA {s.deta:.3f}  AssA {s.assa:.3f}  LocA {s.loca:.3f}"
 
 
 def format_mot(s: MotSummary, label: str) -> str:

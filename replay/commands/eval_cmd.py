@@ -22,10 +22,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--per-frame", type=Path, help="also write the per-frame errors (.csv or .parquet)")
     p.add_argument("--mot", action="store_true",
                    help="multi-object metrics over every track: MOTA, MOTP, IDF1, ID switches on image boxes (IoU >= 0.5) "
-                        "and on 3-D positions (--max-distance-m)")
+                        "and on 3-D positions (--max-distance-m); HOTA, DetA, AssA, LocA over alpha 0.05..0.95 "
+                        "with IoU and with max(0, 1 - d/max-distance-m) as the similarity")
     p.add_argument("--gt-topic", default=None, help="ground-truth topic (default /groundtruth/objects; "
                    "the groups scenes also write /groundtruth/groups)")
-    p.add_argument("--max-distance-m", type=float, default=1.0, help="3-D match distance for --mot (default 1 m)")
+    p.add_argument("--max-distance-m", type=float, default=1.0, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default 1 m)")
     p.set_defaults(func=run)
     return p
 
@@ -34,14 +35,20 @@ def run(args: argparse.Namespace) -> int:
     traj = read_trajectory(args.trajectory)
     gt = read_groundtruth(LogReader(args.log), *([args.gt_topic] if args.gt_topic else []))
     if args.mot:
-        from trackreplay.replay.mot import format_mot, mot_metrics
+        from trackreplay.replay.mot import format_hota, format_mot, hota_metrics, mot_metrics
 
         image = mot_metrics(traj, gt, space="image")
         space = mot_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m)
+        image_hota = hota_metrics(traj, gt, space="image")
+        space_hota = hota_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m)
         print(format_mot(image, "image boxes (IoU >= 0.5)"))
         print(format_mot(space, f"3-D positions (<= {args.max_distance_m:g} m)"))
+        print(format_hota(image_hota, "image boxes (IoU similarity)"))
+        print(format_hota(space_hota, f"3-D positions (1 - d/{args.max_distance_m:g} m)"))
         if args.json:
-            args.json.write_text(json.dumps({"image": image.as_dict(), "3d": space.as_dict()}, indent=2) + "\n")
+            args.json.write_text(json.dumps({"image": image.as_dict(), "3d": space.as_dict(),
+                                             "hota": {"image": image_hota.as_dict(), "3d": space_hota.as_dict()}},
+                                            indent=2) + "\n")
         return 0
     summary, frames = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
     print(format_summary(summary))
