@@ -144,14 +144,26 @@ def scan(data: mmap.mmap | bytes) -> Iterator[Item]:
             yield Damage(pos, nxt, str(bad))
             pos = nxt
             continue
-        pos += size
+        footer_at, pos = pos, pos + size
         if isinstance(record, Footer) and bytes(data[pos:]) != MCAP_MAGIC:
             yield Damage(pos, len(data), "the closing magic after the footer is missing or damaged")
             return
+        if isinstance(record, Footer) and record.summary_crc and not _summary_intact(data, record, footer_at):
+            # The summary (indexes, statistics) carries the only checksum after the data section:
+            # readers that seek by it would be misled, so a mismatch is damage even if every chunk is fine.
+            start = record.summary_start if len(MCAP_MAGIC) <= record.summary_start < footer_at else footer_at
+            yield Damage(start, pos, "the summary section fails its CRC")
         if record is not None:
             yield record
         if isinstance(record, Footer):
             return
+
+
+def _summary_intact(data: mmap.mmap | bytes, footer: Footer, footer_at: int) -> bool:
+    """Does the CRC in the footer match the summary section and the footer's own offset fields?"""
+    if not len(MCAP_MAGIC) <= footer.summary_start <= footer_at:
+        return False
+    return zlib.crc32(data[footer.summary_start:footer_at + 9 + 16]) == footer.summary_crc
 
 
 def summary_definitions(data: mmap.mmap | bytes) -> tuple[dict[int, Schema], dict[int, Channel]]:

@@ -182,3 +182,18 @@ def test_cli_exit_codes(intact, tmp_path, capsys):
 
     assert main(["recover", str(junk), str(tmp_path / "c.mcap")]) == 2
     assert "trackreplay: error:" in capsys.readouterr().err
+
+
+def test_damage_in_the_summary_is_reported_and_every_message_kept(intact, tmp_path):
+    """No chunk is touched, but the summary's CRC does not match: the log is damaged, nothing is lost."""
+    from trackreplay.recorder.mcap_scan import scan, Damage
+
+    data = bytearray(intact.read_bytes())
+    pos = len(data) - 8 - 2  # the footer's summary CRC (the last field before the closing magic)
+    data[pos] ^= 0x01
+    (tmp_path / "bad.mcap").write_bytes(bytes(data))
+    damage = [d for d in scan(bytes(data)) if isinstance(d, Damage)]
+    assert [d.reason for d in damage] == ["the summary section fails its CRC"]
+    report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
+    assert not report.complete and report.exit_code == 1 and report.messages_saved == 60
+    assert messages_of(tmp_path / "out.mcap") == messages_of(intact)
