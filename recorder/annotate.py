@@ -8,11 +8,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mcap.reader import make_reader
-from mcap.writer import Writer
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
 from trackreplay.recorder.atomic import replace_when_done
+from trackreplay.recorder.mcap_copy import McapCopy
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.sources.base import read_text
 from trackreplay.schemas import messages as m
@@ -96,25 +96,14 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     # the file gets the usual permissions (umask), not a temporary file's 0600.
     with replace_when_done(out) as dst, open(src, "rb") as fh:
         source = make_reader(fh)
-        header = source.get_header()
-        writer = Writer(dst)
-        writer.start(profile=header.profile, library=header.library)
-        schema_ids: dict[int, int] = {}
-        channel_ids: dict[int, int] = {}
+        copy = McapCopy(source, dst)
+        writer = copy.writer
         by_topic: dict[str, int] = {}
         for schema, channel, msg in source.iter_messages(log_time_order=False):
-            if channel.id not in channel_ids:
-                if schema is not None and schema.id not in schema_ids:
-                    schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-                channel_ids[channel.id] = writer.register_channel(
-                    channel.topic, channel.message_encoding, schema_ids[schema.id] if schema else 0, dict(channel.metadata)
-                )
-                by_topic.setdefault(channel.topic, channel_ids[channel.id])
-            writer.add_message(channel_ids[channel.id], msg.log_time, msg.data, msg.publish_time, msg.sequence)
-        for att in source.iter_attachments():
-            writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
-        for meta in source.iter_metadata():
-            writer.add_metadata(meta.name, dict(meta.metadata))
+            cid = copy.channel_id(schema, channel)
+            by_topic.setdefault(channel.topic, cid)
+            writer.add_message(cid, msg.log_time, msg.data, msg.publish_time, msg.sequence)
+        copy.copy_attachments_and_metadata(source)
         writer.add_metadata(RECORD_NAME, provenance({"log": src}, marks=str(len(regions))))
         cid = by_topic.get(T.ANNOTATIONS_INIT)  # append to an existing annotation channel
         if cid is None:

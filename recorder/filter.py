@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from mcap.reader import make_reader
-from mcap.writer import Writer
 
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.log_summary import read_summary, topic_counts
+from trackreplay.recorder.mcap_copy import McapCopy
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -70,11 +70,8 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
 
     with replace_when_done(out) as dst, open(src, "rb") as fh:
         reader = make_reader(fh)
-        header = reader.get_header()
-        writer = Writer(dst)
-        writer.start(profile=header.profile, library=header.library)
-        schema_ids: dict[int, int] = {}
-        channel_ids: dict[int, int] = {}
+        copy = McapCopy(reader, dst)
+        writer = copy.writer
         for schema, channel, msg in reader.iter_messages(log_time_order=True):
             if channel.topic not in keep:
                 continue
@@ -94,17 +91,9 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
                 report.marks_dropped += dropped
                 if data is None:
                     continue
-            if channel.id not in channel_ids:
-                if schema is not None and schema.id not in schema_ids:
-                    schema_ids[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-                channel_ids[channel.id] = writer.register_channel(
-                    channel.topic, channel.message_encoding, schema_ids[schema.id] if schema else 0, dict(channel.metadata))
-            writer.add_message(channel_ids[channel.id], t, data, msg.publish_time, msg.sequence)
+            writer.add_message(copy.channel_id(schema, channel), t, data, msg.publish_time, msg.sequence)
             report.kept[channel.topic] = report.kept.get(channel.topic, 0) + 1
-        for att in reader.iter_attachments():
-            writer.add_attachment(att.create_time, att.log_time, att.name, att.media_type, att.data)
-        for meta in reader.iter_metadata():
-            writer.add_metadata(meta.name, dict(meta.metadata))
+        copy.copy_attachments_and_metadata(reader)
         writer.finish()
     return report
 
