@@ -65,8 +65,8 @@ def blueprint(name: str) -> rrb.Blueprint:
 def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[TrackState]) -> None:
     root = f"trackers/{name}"
     parts.tracks(rec, states)
-    if inter is not None and inter.notice:
-        parts.draw(rec, f"{root}/events", rr.TextLog, text=[inter.notice], level=[rr.TextLogLevel.WARN])
+    if inter is not None:
+        parts.notice(rec, f"{root}/events", inter.notice)
     if inter is None or inter.mode == "idle":
         for stage in DRAWN:
             parts.clear(rec, f"{root}/{stage}", recursive=stage == "reinit")

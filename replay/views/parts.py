@@ -89,6 +89,12 @@ def draw(logger: Logger, path: str, archetype: type, **fields) -> None:
         logger.log(path, archetype(**fields))
 
 
+def notice(logger: Logger, path: str, text: str | None) -> None:
+    """A tracker's notice as a WARN line of the text log at ``path``; nothing when ``text`` is empty."""
+    if text:
+        draw(logger, path, rr.TextLog, text=[text], level=[rr.TextLogLevel.WARN])
+
+
 def _points(xy: np.ndarray, dim: int) -> np.ndarray:
     return np.asarray(xy, dtype=np.float32).reshape(-1, dim)
 
