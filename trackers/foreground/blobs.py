@@ -28,6 +28,7 @@ class Blobs:
     area: np.ndarray  # (K,) float64 pixels
     circularity: np.ndarray  # (K,) float64 4 pi A / P^2; NaN where not measured
     bbox: np.ndarray  # (K, 4) int64 x0, y0, w, h in frame pixels
+    covariance: np.ndarray  # (K, 3) float64 sxx, syy, sxy (px²); NaN where not measured
 
     def __len__(self) -> int:
         return len(self.area)
@@ -42,9 +43,26 @@ class Blobs:
         """(K,) bool: the shape was measured (finite circularity)."""
         return np.isfinite(self.circularity)
 
+    @property
+    def axes(self) -> np.ndarray:
+        """(K, 2) variances along the major and minor axes (eigenvalues of the covariance; NaN where not measured)."""
+        cov = self.covariance
+        mean = 0.5 * (cov[:, 0] + cov[:, 1])
+        half = np.hypot(0.5 * (cov[:, 0] - cov[:, 1]), cov[:, 2])
+        return np.stack([mean + half, mean - half], axis=1)
+
     @classmethod
     def empty(cls) -> Blobs:
-        return cls(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros((0, 4), np.int64))
+        return cls(np.zeros((0, 2)), np.zeros(0), np.zeros(0), np.zeros((0, 4), np.int64), np.zeros((0, 3)))
+
+
+def pixel_covariance(labels: np.ndarray, label: int, box: np.ndarray) -> tuple[float, float, float]:
+    """``(sxx, syy, sxy)`` of the pixels of ``label`` inside ``box`` (x0, y0, w, h of the crop), each
+    pixel a unit square (hence the 1/12 on the diagonal: a single pixel is not a point)."""
+    x0, y0, w, h = (int(v) for v in box)
+    ys, xs = np.nonzero(labels[y0:y0 + h, x0:x0 + w] == label)
+    dx, dy = xs - xs.mean(), ys - ys.mean()
+    return float(dx @ dx / xs.size + 1 / 12), float(dy @ dy / ys.size + 1 / 12), float(dx @ dy / xs.size)
 
 
 def chain_length(points: np.ndarray) -> float:
@@ -93,7 +111,10 @@ def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_are
             if label >= 0:
                 perimeter[label] = chain_length(contour[:, 0, :]) + np.pi
         circularity[big] = 4.0 * np.pi * area[big] / perimeter[big] ** 2
-    return Blobs(centre, area, circularity, bbox)
+    covariance = np.full((n - 1, 3), np.nan)
+    for k in big:  # the measured blobs only (a few), each within its own box
+        covariance[k] = pixel_covariance(labels, k + 1, stats[k, :4])
+    return Blobs(centre, area, circularity, bbox, covariance)
 
 
 def nearest(points: np.ndarray, candidates: np.ndarray, to: np.ndarray) -> int:

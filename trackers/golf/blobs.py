@@ -12,6 +12,15 @@ digitised disc of the same area scores (:func:`disc_circularity`). The raw measu
 small digital shapes (a single pixel scores 1.27, a 5-pixel plus 0.9, a 30-pixel disc 0.85), so a
 target that followed raw circularity climbed above 1 on tiny blobs and then rejected real discs;
 roundness is about 1 for a disc of every size and below 1 for streaks and fragments.
+
+Roundness alone lets through anything mildly oval (it must, for motion streaks), such as a cup's
+white liner or a cap seen obliquely. So the shape is also checked against the *motion* (ours): a
+ball of the blob's own width moving ``v`` px/frame smears, at most, into a streak of length
+``|v|`` along ``v`` (exposure at most one frame). :func:`streak_excess` compares the blob's pixel
+covariance with the covariance such a streak can have, ``(λ_minor + s²) I + (L²/12) u uᵀ`` with
+``L`` the speed plus ``streak_sigmas`` of its uncertainty; a blob longer than that, or elongated
+across the motion, is rejected ("elongated"): a slow ball is round, a fast one is long only along
+its path.
 """
 
 from __future__ import annotations
@@ -54,8 +63,39 @@ def roundness(blobs: Blobs) -> np.ndarray:
     return blobs.circularity / disc_circularity(blobs.area)
 
 
-REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess")
-OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS = range(len(REASONS))
+REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess", "elongated")
+OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS, ELONGATED = range(len(REASONS))
+
+
+@dataclass(frozen=True)
+class ApparentMotion:
+    """The ball's expected motion in the image this frame: velocity (px/frame) and the 1-σ
+    uncertainty of each component (px/frame)."""
+
+    velocity: np.ndarray
+    sigma: float
+
+
+def streak_excess(blobs: Blobs, motion: ApparentMotion, cfg: BlobConfig, scale: float) -> np.ndarray:
+    """(K,) how far each blob's extent exceeds what a ball of its width moving with ``motion`` can
+    smear into: the square root of the largest generalised eigenvalue of ``C`` against the allowed
+    covariance ``A`` (1 = exactly as long as allowed; NaN where the shape was not measured)."""
+    cov = blobs.covariance
+    minor = blobs.axes[:, 1]
+    speed = float(np.hypot(*motion.velocity))
+    u = np.asarray(motion.velocity, float) / speed if speed > 0 else np.zeros(2)
+    unsure = cfg.streak_sigmas * motion.sigma
+    along = speed + unsure
+    slack = (cfg.streak_slack_px * scale) ** 2
+    iso = minor + slack + unsure * unsure / 12.0  # an unknown component may point anywhere
+    extra = (along * along - unsure * unsure) / 12.0
+    a11, a22, a12 = iso + extra * u[0] * u[0], iso + extra * u[1] * u[1], extra * u[0] * u[1]
+    c11, c22, c12 = cov[:, 0], cov[:, 1], cov[:, 2]
+    det_a = a11 * a22 - a12 * a12
+    b = a11 * c22 + a22 * c11 - 2.0 * a12 * c12  # det(C - rA) = det_a r² - b r + det_c
+    det_c = c11 * c22 - c12 * c12
+    root = np.sqrt(np.maximum(b * b - 4.0 * det_a * det_c, 0.0))
+    return np.sqrt((b + root) / (2.0 * det_a))
 
 
 @dataclass(frozen=True)
@@ -131,13 +171,15 @@ def shape_tolerance(area: np.ndarray, cfg: BlobConfig, scale: float) -> np.ndarr
     return cfg.circularity_tolerance * np.maximum(1.0, np.sqrt(reliable / np.maximum(np.asarray(area, float), 1.0)))
 
 
-def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, widen: float = 1.0) -> np.ndarray:
+def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, widen: float = 1.0,
+         motion: ApparentMotion | None = None) -> np.ndarray:
     """The reason code of each blob (``OK`` = accepted).
 
     ``tiny`` below ``min_area_px``; ``excess`` when not measured (beyond ``max_blobs``). Area passes
     when ``(target+s)/tol' <= area+s <= (target+s)*tol'`` with ``log tol' = widen * log tol`` and
     ``s = area_slack_px`` (which keeps a 1-2 px ball from failing against a 3 px target);
-    roundness passes when ``roundness >= target - circularity_tolerance`` (shape does not change with zoom).
+    roundness passes when ``roundness >= target - circularity_tolerance`` (shape does not change with zoom);
+    with a ``motion``, ``elongated`` when :func:`streak_excess` exceeds ``1 + streak_tolerance``.
     """
     reason = np.full(len(blobs), OK, np.int64)
     if not len(blobs):
@@ -156,15 +198,18 @@ def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, w
     live &= ~(small | large)
     round_enough = roundness(blobs) >= targets.circularity - shape_tolerance(blobs.area, cfg, scale)
     reason[live & ~round_enough] = CIRCULARITY
+    if motion is not None:
+        live &= round_enough
+        reason[live & (streak_excess(blobs, motion, cfg, scale) > 1.0 + cfg.streak_tolerance)] = ELONGATED
     return reason
 
 
 def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, targets: BlobTargets, misses: int,
-                cfg: BlobConfig, scale: float, *, lost: bool = False) -> GatedBlobs:
-    """Blobs of the silhouette, gated (widened by ``misses``, ``widen_lost`` once the track is lost),
-    and the accepted one nearest ``predicted``."""
+                cfg: BlobConfig, scale: float, *, lost: bool = False, motion: ApparentMotion | None = None) -> GatedBlobs:
+    """Blobs of the silhouette, gated (widened by ``misses``, ``widen_lost`` once the track is lost;
+    shape against ``motion`` when it is known), and the accepted one nearest ``predicted``."""
     widen = cfg.widen_lost if lost else min(1.0 + cfg.widen_per_miss * misses, cfg.widen_max)
     blobs = find_blobs(mask, offset, predicted, cfg, scale)
-    reason = gate(blobs, targets, cfg, scale, widen=widen)
+    reason = gate(blobs, targets, cfg, scale, widen=widen, motion=motion)
     selected = nearest(blobs.centroid, reason == OK, predicted)
     return GatedBlobs(blobs, reason, selected, np.array([targets.area, targets.circularity]), float(widen))

@@ -132,6 +132,12 @@ class BlobConfig:
     # whose blobs agree with one another (validate.track_fit).
     widen_lost: float = 6.0
     max_blobs: int = 48  # blobs measured per frame (the nearest to the prediction); others "excess"
+    # Shape against motion (blobs.streak_excess): a blob may be as long as the ball's streak at the
+    # predicted speed plus streak_sigmas of its uncertainty, with streak_slack_px of edge blur, and
+    # streak_tolerance more (a lit ball's silhouette may miss its shaded side: 20x14 px on a green).
+    streak_sigmas: float = 3.0
+    streak_slack_px: float = 1.0
+    streak_tolerance: float = 0.6
 
     def __post_init__(self) -> None:
         if self.area_tolerance <= 1:

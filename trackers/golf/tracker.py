@@ -30,7 +30,7 @@ from trackreplay.trackers.base import Marked, TrackerBase, TrackState
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
-from trackreplay.trackers.golf.blobs import BlobTargets, GatedBlobs, roundness, select_ball, start_targets
+from trackreplay.trackers.golf.blobs import ApparentMotion, BlobTargets, GatedBlobs, roundness, select_ball, start_targets
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
@@ -107,7 +107,9 @@ class GolfTracker(TrackerBase):
         sil, ycc = lut_silhouette(frame.image, search.box, self.luts, self.lut_name)  # §2.1 I_c
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames
-        gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost)  # §2.1
+        motion = None if lost else self._apparent_motion(search.centre, camera, compensated)
+        gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
+                            motion=motion)  # §2.1
         found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
                                                   diameter=diameter, size=(width, height), scale=scale, lost=lost)
         if not lost and (found is None or found.verdict != "measured"):
@@ -115,14 +117,15 @@ class GolfTracker(TrackerBase):
             # the ball may pass the other LUT; take it only if that finds the ball in the gate.
             for name in (n for n in self.luts.names if n != sil.lut_name):
                 other = LutSilhouette(name, sil.lut_scores, silhouette(ycc, self.luts.lut(name)), sil.offset)
-                alt = select_ball(other.mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale)
+                alt = select_ball(other.mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale,
+                                  motion=motion)
                 seen_alt, _, _ = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
                                                              diameter=diameter, size=(width, height), scale=scale, lost=lost)
                 if seen_alt is not None and seen_alt.verdict == "measured":
                     sil, gated, self.lut_name = other, alt, name
                     break
             else:
-                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost)
+                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion)
                 if found is not None:
                     sil, gated = found
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
@@ -171,8 +174,16 @@ class GolfTracker(TrackerBase):
         return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))]
 
     # --- stages ------------------------------------------------------------------------------------
+    def _apparent_motion(self, position: np.ndarray, camera: PtzCamera | None, compensated: bool) -> ApparentMotion:
+        """The samples' mean velocity as the image sees it (with the camera's own motion when the
+        samples are compensated) and its spread: how long the ball's streak may be this frame."""
+        velocity = self.pf.weights @ self.pf.particles[:, 2:4]
+        if compensated:
+            velocity = np.array(with_camera_motion(tuple(velocity), tuple(position), pose_homography(self._prev[0], camera)))
+        return ApparentMotion(velocity, float(np.max(self.pf.spread(slice(2, 4)))))
+
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
-                           scale: float, lost: bool) -> tuple[LutSilhouette, GatedBlobs] | None:
+                           scale: float, lost: bool, motion: ApparentMotion | None) -> tuple[LutSilhouette, GatedBlobs] | None:
         """Neither LUT saw the ball near the prediction: the local-contrast silhouette, taken only
         when it finds a blob the validation gate measures (same gate, same confidence)."""
         cfg = self.config
@@ -180,7 +191,8 @@ class GolfTracker(TrackerBase):
             return None
         mask = contrast_silhouette(ycc, diameter, cfg.contrast, scale)
         other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
-        gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost)
+        gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
+                            motion=motion)
         seen, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
                                                  diameter=diameter, size=size, scale=scale, lost=lost)
         return (other, gated) if seen is not None and seen.verdict == "measured" else None

@@ -59,3 +59,27 @@ def test_empty_masks_and_nearest():
     points = np.array([[0.0, 0.0], [10.0, 0.0], [5.0, 5.0]])
     assert nearest(points, np.array([True, True, False]), np.array([6.0, 4.0])) == 1
     assert nearest(points, np.zeros(3, bool), np.zeros(2)) == -1
+
+
+def test_pixel_covariance_of_a_bar_a_disc_and_a_tilted_line():
+    m = np.zeros((60, 80), np.uint8)
+    m[10:13, 5:25] = 1  # 20 x 3 bar: variances (20² and 3², each (n² - 1)/12 + 1/12 = n²/12)
+    cv2.circle(m, (60, 40), 8, 1, -1)
+    blobs = measure_blobs(m)
+    bar, disc = (0, 1) if blobs.centroid[0, 1] < 20 else (1, 0)
+    assert blobs.covariance[bar] == pytest.approx([400 / 12, 9 / 12, 0.0])
+    assert blobs.axes[bar] == pytest.approx([400 / 12, 9 / 12])
+    sxx, syy, sxy = blobs.covariance[disc]
+    assert sxx == pytest.approx(syy) and abs(sxy) < 1e-9 and sxx == pytest.approx(blobs.area[disc] / (4 * np.pi), rel=0.03)
+    d = np.zeros((40, 40), np.uint8)
+    d[np.arange(5, 35), np.arange(5, 35)] = 1  # a diagonal line: all its extent along (1, 1)
+    c = measure_blobs(d).covariance[0]
+    assert c[2] == pytest.approx(c[0] - 1 / 12) and measure_blobs(d).axes[0, 1] == pytest.approx(1 / 12)
+
+
+def test_unmeasured_blobs_have_no_covariance():
+    m = np.zeros((20, 40), np.uint8)
+    m[2:4, 2:4] = 1
+    m[10:15, 30:35] = 1
+    blobs = measure_blobs(m, min_area=10)
+    assert np.isnan(blobs.covariance[0]).all() and np.isfinite(blobs.covariance[1]).all()

@@ -99,3 +99,37 @@ def test_targets_follow_a_zoom_geometrically():
     assert half.area == pytest.approx(200.0)  # geometric mean, not arithmetic
     assert BlobTargets(100.0, 0.9).zoomed(4.0).area == 400.0
     assert BlobTargets(np.pi, 0.9).diameter == pytest.approx(2.0)
+
+
+def _one_blob(draw):
+    m = np.zeros((120, 160), np.uint8)
+    draw(m)
+    return find_blobs(m, (0, 0), np.array([80.0, 60.0]), BlobConfig(), 1.0)
+
+
+def test_a_round_ball_is_never_too_long_and_a_streak_only_along_its_motion():
+    from trackreplay.trackers.golf.blobs import ApparentMotion, streak_excess
+
+    cfg = BlobConfig()
+    disc = _one_blob(lambda m: cv2.circle(m, (80, 60), 6, 1, -1))
+    streak = _one_blob(lambda m: cv2.line(m, (60, 60), (100, 60), 1, 7))  # a 7 px ball smeared 40 px along x
+    still, sure = ApparentMotion(np.zeros(2), 0.5), 1.0
+    passes = 1.0 + cfg.streak_tolerance  # the gate's limit
+    assert streak_excess(disc, still, cfg, 1.0)[0] <= 1.0
+    assert streak_excess(streak, ApparentMotion(np.array([40.0, 0.0]), sure), cfg, 1.0)[0] <= 1.1 < passes
+    assert streak_excess(streak, ApparentMotion(np.array([0.0, 40.0]), sure), cfg, 1.0)[0] > 2.5  # across the motion
+    assert streak_excess(streak, still, cfg, 1.0)[0] > 2.5  # a still ball is not 40 px long
+    # an uncertain speed allows a streak in any direction, as long as the uncertainty
+    assert streak_excess(streak, ApparentMotion(np.zeros(2), 15.0), cfg, 1.0)[0] <= 1.1
+
+
+def test_an_oval_white_patch_is_elongated_for_a_slow_ball_but_accepted_when_the_motion_is_unknown():
+    from trackreplay.trackers.golf.blobs import ApparentMotion
+
+    m = np.zeros((120, 160), np.uint8)
+    cv2.ellipse(m, (80, 60), (24, 9), 0, 0, 360, 1, -1)  # a cup liner seen obliquely: roundness still passes
+    targets = BlobTargets(area=680.0, circularity=1.0)
+    slow = ApparentMotion(np.array([1.0, -1.5]), 1.0)
+    assert REASONS[int(gated(m, targets, (80, 60)).reason[0])] == "ok"
+    g = select_ball(m, (0, 0), np.array([80.0, 60.0]), targets, 0, CFG, 1.0, motion=slow)
+    assert REASONS[int(g.reason[0])] == "elongated" and g.selected == -1
