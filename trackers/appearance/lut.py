@@ -9,13 +9,16 @@ foreground colour counts as foreground too), and a colour is foreground where
 ``foreground_weight × smoothed foreground count > background_scale × smoothed background count``
 and the smoothed foreground count exceeds ``min_count`` (:func:`two_class_table`). Counts, not
 densities: the prior that foreground samples are few is kept, so a colour the background shares
-with the target stays background unless the target dominates it. The coarse decision is then
-expanded to the full table once (:func:`expand_table`). The channel order is the caller's (the
-golf tracker uses Y, Cb, Cr).
+with the target stays background unless the target dominates it. The coarse decision *is* the
+table: a lookup indexes it with each channel shifted down by ``log2(bin)``, which answers exactly
+what the expanded 256³ table (:func:`expand_table`, :attr:`ColourLut.table`) would, without
+building 16 MB on every relearn, and from a table small enough to stay in cache. The channel
+order is the caller's (the golf tracker uses Y, Cb, Cr).
 """
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -78,15 +81,36 @@ def two_class_table(foreground: np.ndarray, background: np.ndarray, *, smooth: f
     return (foreground_weight * fg > bg) & (fg > min_count)
 
 
+def coarse_index(pixels: np.ndarray, bin_: int) -> np.ndarray:
+    """Flat index of ``(..., 3)`` uint8 pixels into a C-ordered ``(256/bin_)³`` table (``bin_`` a power of 2)."""
+    shift = int(bin_).bit_length() - 1
+    bits = 8 - shift
+    c0 = pixels[..., 0].astype(np.int32) >> shift
+    return (c0 << (2 * bits)) | ((pixels[..., 1].astype(np.int32) >> shift) << bits) | (pixels[..., 2].astype(np.int32) >> shift)
+
+
 @dataclass(frozen=True, eq=False)
 class ColourLut:
-    """One 256³ boolean table over three uint8 channels."""
+    """A boolean table over three uint8 channels: ``coarse`` holds one decision per ``bin³`` cell
+    (``bin`` = 1: the full 256³ table)."""
 
-    table: np.ndarray
+    coarse: np.ndarray
+    bin: int = 1
+
+    def __post_init__(self) -> None:
+        q = 256 // self.bin
+        if self.bin < 1 or 256 % self.bin or self.coarse.shape != (q, q, q):
+            raise ValueError(f"a LUT with bin {self.bin} needs a ({q}, {q}, {q}) table, not {self.coarse.shape}")
 
     def lookup(self, pixels: np.ndarray) -> np.ndarray:
-        """Boolean mask (the pixels' leading shape): one fancy index into the table."""
-        return self.table.reshape(-1)[flat_index(pixels)]
+        """Boolean mask (the pixels' leading shape): one fancy index into the coarse table."""
+        flat = self.coarse.reshape(-1)
+        return flat[flat_index(pixels)] if self.bin == 1 else flat[coarse_index(pixels, self.bin)]
+
+    @functools.cached_property
+    def table(self) -> np.ndarray:
+        """The full 256³ table (built on first use: for inspection; lookups never need it)."""
+        return expand_table(self.coarse, self.bin)
 
 
 class ColourCounts:
@@ -109,4 +133,4 @@ class ColourCounts:
         """The 256³ table of the counts so far (see :func:`two_class_table`)."""
         coarse = two_class_table(self.foreground, self.background, smooth=smooth, foreground_weight=foreground_weight,
                                  min_count=min_count, background_scale=background_scale)
-        return ColourLut(expand_table(coarse, self.bin))
+        return ColourLut(np.ascontiguousarray(coarse), self.bin)

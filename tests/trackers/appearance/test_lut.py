@@ -47,3 +47,15 @@ def test_two_classes_from_samples_with_the_count_prior():
     assert lut.table.shape == (256, 256, 256)
     with pytest.raises(ValueError):
         ColourCounts(3)
+
+
+def test_the_coarse_lookup_answers_exactly_as_the_expanded_table():
+    rng = np.random.default_rng(1)
+    coarse = rng.random((64, 64, 64)) < 0.3
+    lut = ColourLut(coarse, 4)
+    pixels = rng.integers(0, 256, size=(50, 40, 3), dtype=np.uint8)
+    full = expand_table(coarse, 4)
+    assert np.array_equal(lut.lookup(pixels), full[pixels[..., 0], pixels[..., 1], pixels[..., 2]])
+    assert np.array_equal(lut.table, full)
+    with pytest.raises(ValueError):
+        ColourLut(coarse, 8)  # a 64³ table is not a bin-8 table
