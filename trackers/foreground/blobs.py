@@ -60,9 +60,8 @@ def pixel_covariance(labels: np.ndarray, label: int, box: np.ndarray) -> tuple[f
     """``(sxx, syy, sxy)`` of the pixels of ``label`` inside ``box`` (x0, y0, w, h of the crop), each
     pixel a unit square (hence the 1/12 on the diagonal: a single pixel is not a point)."""
     x0, y0, w, h = (int(v) for v in box)
-    ys, xs = np.nonzero(labels[y0:y0 + h, x0:x0 + w] == label)
-    dx, dy = xs - xs.mean(), ys - ys.mean()
-    return float(dx @ dx / xs.size + 1 / 12), float(dy @ dy / ys.size + 1 / 12), float(dx @ dy / xs.size)
+    m = cv2.moments((labels[y0:y0 + h, x0:x0 + w] == label).view(np.uint8), binaryImage=True)
+    return m["mu20"] / m["m00"] + 1 / 12, m["mu02"] / m["m00"] + 1 / 12, m["mu11"] / m["m00"]
 
 
 def chain_length(points: np.ndarray) -> float:
@@ -75,11 +74,12 @@ def chain_length(points: np.ndarray) -> float:
 
 
 def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_area: float = 0.0,
-                  max_measured: int | None = None, near: np.ndarray | None = None) -> Blobs:
+                  max_measured: int | None = None, near: np.ndarray | None = None, moments: bool = True) -> Blobs:
     """Every 8-connected blob of the uint8 ``mask`` (a crop whose top-left is ``offset`` in the frame).
 
-    Circularity is measured for blobs with ``area >= min_area``; when more than ``max_measured``
-    qualify, only those nearest to ``near`` (frame pixels) are measured (ties by label order).
+    Circularity (and, with ``moments``, the covariance) is measured for blobs with ``area >= min_area``;
+    when more than ``max_measured`` qualify, only those nearest to ``near`` (frame pixels) are
+    measured (ties by label order).
     """
     if mask.size == 0:
         return Blobs.empty()
@@ -112,7 +112,7 @@ def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_are
                 perimeter[label] = chain_length(contour[:, 0, :]) + np.pi
         circularity[big] = 4.0 * np.pi * area[big] / perimeter[big] ** 2
     covariance = np.full((n - 1, 3), np.nan)
-    for k in big:  # the measured blobs only (a few), each within its own box
+    for k in big if moments else ():  # the measured blobs only (a few), each within its own box
         covariance[k] = pixel_covariance(labels, k + 1, stats[k, :4])
     return Blobs(centre, area, circularity, bbox, covariance)
 
