@@ -68,13 +68,22 @@ def beaudet_kernels(size: int = 5, order: int = 3) -> tuple[np.ndarray, np.ndarr
     return out[0], out[1], out[2]
 
 
+@lru_cache(maxsize=None)
+def _kernels32(size: int, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The kernels as float32 (what ``cv2.filter2D`` is given), converted once."""
+    out = tuple(k.astype(np.float32) for k in beaudet_kernels(size, order))
+    for kernel in out:
+        kernel.setflags(write=False)
+    return out
+
+
 def _apply(image: np.ndarray, kernel: np.ndarray) -> np.ndarray:
-    return cv2.filter2D(image, cv2.CV_32F, kernel.astype(np.float32), borderType=cv2.BORDER_REPLICATE)
+    return cv2.filter2D(image, cv2.CV_32F, kernel.astype(np.float32, copy=False), borderType=cv2.BORDER_REPLICATE)
 
 
 def spatial_gradient(image: np.ndarray, size: int = 5, order: int = 3) -> tuple[np.ndarray, np.ndarray]:
     """``(E_x, E_y)`` of one float32 image with the Beaudet operator (eq. 4)."""
-    _, kx, ky = beaudet_kernels(size, order)
+    _, kx, ky = _kernels32(size, order)
     image = np.asarray(image, dtype=np.float32)
     return _apply(image, kx), _apply(image, ky)
 
@@ -84,8 +93,9 @@ def derivatives(e0: np.ndarray, e1: np.ndarray, size: int = 5, order: int = 3) -
 
     ``E_x, E_y`` on the frames' mean; ``E_t = S * (e1 - e0)`` with ``S`` the fit's smoothing kernel.
     """
-    smooth, kx, ky = beaudet_kernels(size, order)
+    smooth, kx, ky = _kernels32(size, order)
     e0 = np.asarray(e0, dtype=np.float32)
     e1 = np.asarray(e1, dtype=np.float32)
-    mean = (e0 + e1) * np.float32(0.5)
+    mean = e0 + e1
+    mean *= np.float32(0.5)
     return _apply(mean, kx), _apply(mean, ky), _apply(e1 - e0, smooth)

@@ -8,6 +8,8 @@ its velocity. Where the window passes the image edge the edge pixels repeat.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -31,6 +33,9 @@ def next_centre(position: np.ndarray, shape: tuple[int, int]) -> tuple[int, int]
     """Integer FOV centre at the filtered position (the paper controls in whole pixels),
     kept on the image so the window always overlaps it."""
     h, w = shape[:2]
+    x, y = float(position[0]), float(position[1])
+    if math.isfinite(x) and math.isfinite(y):  # plain floats: what numpy's floor and clip give, faster
+        return min(max(math.floor(x + 0.5), 0), w - 1), min(max(math.floor(y + 0.5), 0), h - 1)
     x = int(np.clip(np.floor(position[0] + 0.5), 0, w - 1))
     y = int(np.clip(np.floor(position[1] + 0.5), 0, h - 1))
     return x, y
@@ -38,7 +43,8 @@ def next_centre(position: np.ndarray, shape: tuple[int, int]) -> tuple[int, int]
 
 def inside(position: np.ndarray, shape: tuple[int, int]) -> bool:
     h, w = shape[:2]
-    return bool(np.all(np.isfinite(position)) and -0.5 <= position[0] < w - 0.5 and -0.5 <= position[1] < h - 0.5)
+    x, y = float(position[0]), float(position[1])
+    return math.isfinite(x) and math.isfinite(y) and -0.5 <= x < w - 0.5 and -0.5 <= y < h - 0.5
 
 
 def shift_field(a: np.ndarray, dx: int, dy: int, fill: float = 0.0) -> np.ndarray:

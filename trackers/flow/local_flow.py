@@ -35,7 +35,9 @@ class FlowField:
 
     def filled(self) -> tuple[np.ndarray, np.ndarray]:
         """``(u, v)`` with rejected pixels set to 0 (a warm start or a warp needs finite values)."""
-        return np.where(self.valid, self.u, 0.0).astype(np.float32), np.where(self.valid, self.v, 0.0).astype(np.float32)
+        zero = np.float32(0.0)
+        return (np.where(self.valid, self.u, zero).astype(np.float32, copy=False),
+                np.where(self.valid, self.v, zero).astype(np.float32, copy=False))
 
     @staticmethod
     def zeros(shape: tuple[int, int]) -> FlowField:
@@ -49,19 +51,45 @@ def _box(a: np.ndarray, n: int) -> np.ndarray:
 
 
 def normal_equations(ex: np.ndarray, ey: np.ndarray, et: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
-    """Per-pixel ``(a, b, c, p, q)`` with ``GᵀG/m = [[a, b], [b, c]]`` and ``Gᵀb/m = [p, q]``."""
-    return (_box(ex * ex, n), _box(ex * ey, n), _box(ey * ey, n), _box(ex * et, n), _box(ey * et, n))
+    """Per-pixel ``(a, b, c, p, q)`` with ``GᵀG/m = [[a, b], [b, c]]`` and ``Gᵀb/m = [p, q]``.
+
+    The five products are box-filtered as the channels of one image: OpenCV filters each channel
+    with the same sums as a one-channel image, in one call instead of five.
+    """
+    if not all(isinstance(x, np.ndarray) and x.dtype == np.float32 and x.ndim == 2 for x in (ex, ey, et)):
+        return (_box(ex * ex, n), _box(ex * ey, n), _box(ey * ey, n), _box(ex * et, n), _box(ey * et, n))
+    products = np.empty(ex.shape + (5,), np.float32)  # pixel-interleaved: OpenCV's 5-channel layout
+    np.multiply(ex, ex, out=products[..., 0])
+    np.multiply(ex, ey, out=products[..., 1])
+    np.multiply(ey, ey, out=products[..., 2])
+    np.multiply(ex, et, out=products[..., 3])
+    np.multiply(ey, et, out=products[..., 4])
+    sums = cv2.boxFilter(products, cv2.CV_32F, (n, n), normalize=True, borderType=cv2.BORDER_REPLICATE)
+    sums = sums.transpose(2, 0, 1).astype(np.float64)  # channel-major: each of a … q contiguous
+    return sums[0], sums[1], sums[2], sums[3], sums[4]
 
 
 def condition_number(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
     """cond₂(G) = sqrt(λmax/λmin) of ``GᵀG`` (eq. 8 with the 2-norm); ``inf`` when singular."""
-    half_trace = 0.5 * (a + c)
-    root = np.sqrt(0.25 * (a - c) ** 2 + b * b)
+    return _condition(a, b, c, 0.5 * (a + c))
+
+
+def _condition(a: np.ndarray, b: np.ndarray, c: np.ndarray, half_trace: np.ndarray) -> np.ndarray:
+    """:func:`condition_number` given ``0.5 (a + c)``: λ = half_trace ± sqrt(((a − c)/2)² + b²);
+    the ratio is taken only where λmin > 0 (elsewhere, and where it is not finite, ``inf``)."""
+    d = np.asarray(a - c)
+    root = np.square(d, out=d)
+    root *= 0.25
+    root += b * b
+    root = np.sqrt(root, out=root)
     lmax = half_trace + root
-    lmin = half_trace - root
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cond = np.sqrt(lmax / lmin)
-    return np.where((lmin > 0) & np.isfinite(cond), cond, np.inf)
+    lmin = np.subtract(half_trace, root, out=root)
+    positive = lmin > 0
+    cond = np.full(np.shape(lmin), np.inf)
+    np.divide(lmax, lmin, out=cond, where=positive)
+    np.sqrt(cond, out=cond)
+    cond[np.isnan(cond)] = np.inf  # a NaN ratio is not finite: inf, as for λmin <= 0
+    return cond
 
 
 def local_flow(ex: np.ndarray, ey: np.ndarray, et: np.ndarray, n: int, cond_max: float, min_energy: float) -> FlowField:
@@ -73,9 +101,24 @@ def local_flow(ex: np.ndarray, ey: np.ndarray, et: np.ndarray, n: int, cond_max:
     if n not in (3, 5, 7):
         raise ValueError(f"neighbourhood must be 3, 5 or 7, not {n}")
     a, b, c, p, q = normal_equations(ex, ey, et, n)
-    cond = condition_number(a, b, c)
-    valid = (cond <= cond_max) & ((a + c) >= min_energy)
-    det = np.where(valid, a * c - b * b, 1.0)
-    u = np.where(valid, -(c * p - b * q) / det, np.nan).astype(np.float32)
-    v = np.where(valid, -(a * q - b * p) / det, np.nan).astype(np.float32)
+    trace = a + c
+    cond = _condition(a, b, c, 0.5 * trace)
+    valid = cond <= cond_max
+    valid &= trace >= min_energy
+    invalid = ~valid
+    # ŵ = −(GᵀG)⁻¹Gᵀb (eq. 7) in closed form; dividing by −det is negating the quotient, exactly
+    neg_det = b * b
+    neg_det -= a * c
+    np.copyto(neg_det, -1.0, where=invalid)
+    nan = np.float32(np.nan)
+    u = c * p
+    u -= b * q
+    u /= neg_det
+    u = u.astype(np.float32)
+    np.copyto(u, nan, where=invalid)
+    v = a * q
+    v -= b * p
+    v /= neg_det
+    v = v.astype(np.float32)
+    np.copyto(v, nan, where=invalid)
     return FlowField(u, v, valid, cond.astype(np.float32))

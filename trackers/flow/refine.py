@@ -18,6 +18,7 @@ proceed; the blur widens the range where the first-order Taylor model (eq. 2) ho
 from __future__ import annotations
 
 import dataclasses
+import functools
 
 import cv2
 import numpy as np
@@ -33,18 +34,37 @@ def blur(image: np.ndarray, sigma: float) -> np.ndarray:
     return cv2.GaussianBlur(image, (0, 0), sigmaX=sigma, sigmaY=sigma, borderType=cv2.BORDER_REPLICATE)
 
 
+@functools.lru_cache(maxsize=16)
+def _grid(h: int, w: int) -> tuple[np.ndarray, np.ndarray]:
+    """Pixel columns (1, w) and rows (h, 1) as float32, made once per window size."""
+    xs = np.arange(w, dtype=np.float32)[None, :]
+    ys = np.arange(h, dtype=np.float32)[:, None]
+    xs.setflags(write=False)
+    ys.setflags(write=False)
+    return xs, ys
+
+
+def _remap(image: np.ndarray, gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+    return cv2.remap(image, gx, gy, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
 def warp(image: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``image(x + u, y + v)``, bilinear; beyond the window the edge pixels repeat."""
     h, w = image.shape
-    gx = np.arange(w, dtype=np.float32)[None, :] + u
-    gy = np.arange(h, dtype=np.float32)[:, None] + v
-    return cv2.remap(image, gx.astype(np.float32), gy.astype(np.float32), cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    xs, ys = _grid(h, w)
+    gx = xs + u
+    gy = ys + v
+    return _remap(image, gx.astype(np.float32, copy=False), gy.astype(np.float32, copy=False))
 
 
 def aligned(s0: np.ndarray, s1: np.ndarray, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Both frames moved half-way along the flow: ``E(x − w/2, n)``, ``E(x + w/2, n+1)``."""
     hu, hv = np.float32(0.5) * u, np.float32(0.5) * v
-    return warp(s0, -hu, -hv), warp(s1, hu, hv)
+    if hu.dtype != np.float32 or hv.dtype != np.float32 or s0.shape != hu.shape:
+        return warp(s0, -hu, -hv), warp(s1, hu, hv)
+    xs, ys = _grid(*s0.shape)
+    # x + (−h) is x − h exactly (IEEE), so this is warp(s0, −hu, −hv) without the negations
+    return _remap(s0, xs - hu, ys - hv), _remap(s1, xs + hu, ys + hv)
 
 
 def _rms(a: np.ndarray) -> float:
@@ -52,12 +72,14 @@ def _rms(a: np.ndarray) -> float:
 
 
 def refine_once(
-    e0: np.ndarray, e1: np.ndarray, u0: np.ndarray, v0: np.ndarray, sigma: float, config: FlowConfig
+    e0: np.ndarray, e1: np.ndarray, u0: np.ndarray, v0: np.ndarray, sigma: float, config: FlowConfig,
+    *, before: bool = True,
 ) -> tuple[FlowField, float]:
     """One step of eq. 9 from the finite start ``(u0, v0)`` at blur ``sigma``.
 
     Returns the new field (NaN where eq. 8 rejects the solve; its ``residual`` is the RMS
-    misalignment after the step) and the misalignment before it, which eq. 10 compares.
+    misalignment after the step) and the misalignment before it, which eq. 10 compares
+    (NaN when ``before`` is False: the on-line step does not compare).
     """
     s0, s1 = blur(e0, sigma), blur(e1, sigma)
     moved = bool(np.any(u0) or np.any(v0))
@@ -66,12 +88,13 @@ def refine_once(
     if moved:
         et = et - ex * u0 - ey * v0
     solved = local_flow(ex, ey, et, config.neighbourhood, config.cond_max, config.min_energy)
-    u = np.where(solved.valid, solved.u, u0).astype(np.float32)
-    v = np.where(solved.valid, solved.v, v0).astype(np.float32)
+    # where eq. 8 accepts, the new flow; elsewhere the start (the alignment needs finite values)
+    u = np.where(solved.valid, solved.u, u0).astype(np.float32, copy=False)
+    v = np.where(solved.valid, solved.v, v0).astype(np.float32, copy=False)
     b0, b1 = aligned(s0, s1, u, v)
-    nan = np.float32(np.nan)
-    flow = FlowField(np.where(solved.valid, u, nan), np.where(solved.valid, v, nan), solved.valid, solved.cond, _rms(b1 - b0), 1)
-    return flow, _rms(a1 - a0)
+    # the field itself: solved.u/v already hold NaN where rejected
+    flow = FlowField(solved.u, solved.v, solved.valid, solved.cond, _rms(b1 - b0), 1)
+    return flow, _rms(a1 - a0) if before else float("nan")
 
 
 def _iterate(e0: np.ndarray, e1: np.ndarray, u: np.ndarray, v: np.ndarray, config: FlowConfig) -> FlowField:
@@ -132,5 +155,5 @@ def online_step(e0: np.ndarray, e1: np.ndarray, prev_flow: FlowField | None, con
         v = np.zeros_like(u)
     else:
         u, v = prev_flow.filled()
-    flow, _ = refine_once(e0, e1, u, v, config.sigma_at(step), config)
+    flow, _ = refine_once(e0, e1, u, v, config.sigma_at(step), config, before=False)
     return flow

@@ -92,24 +92,26 @@ class FlowTracker(TrackerBase):
             self._extent = (float(est.extent[0]), float(est.extent[1]))
         else:
             self._still += 1
-        filtered, velocity = self._kf.position, self._kf.velocity
+        kalman_x = self._kf.state
+        filtered, velocity = kalman_x[:, 0].copy(), kalman_x[:, 1].copy()
         self._centre = next_centre(filtered, grey.shape)
         self._warm = self._warm_start(flow, est.moving, est.velocity if est.count else velocity, centre, self._centre)
         self._prev = grey
         self._steps += 1
         self.intermediates = FlowIntermediates(
             fov_box=np.array([x0, y0, cfg.fov, cfg.fov], dtype=np.float64),
-            flow_u=flow.u.astype(np.float32),
-            flow_v=flow.v.astype(np.float32),
-            valid=flow.valid.copy(),
-            cond=flow.cond.astype(np.float32),
-            moving=est.moving.copy(),
-            hist_edges=est.hist_edges.astype(np.float64),
+            # this step's own arrays (nothing else writes to them): no copies
+            flow_u=flow.u.astype(np.float32, copy=False),
+            flow_v=flow.v.astype(np.float32, copy=False),
+            valid=flow.valid,
+            cond=flow.cond.astype(np.float32, copy=False),
+            moving=est.moving,
+            hist_edges=est.hist_edges.astype(np.float64),  # the tracker's edges: a copy
             hist_u=est.hist_u,
             hist_v=est.hist_v,
             raw_velocity=est.velocity.astype(np.float64),
             filtered_velocity=velocity,
-            kalman_x=self._kf.state,
+            kalman_x=kalman_x,
             kalman_P=self._kf.covariance,
             centroid=observed,
             residual=float(flow.residual),
@@ -132,11 +134,11 @@ class FlowTracker(TrackerBase):
         """
         dx = int(np.floor(motion[0] + 0.5)) - (new[0] - old[0])
         dy = int(np.floor(motion[1] + 0.5)) - (new[1] - old[1])
-        u, v = flow.filled()
         zero = np.float32(0.0)
+        # moving pixels are valid, so the field itself (NaN only where not valid) serves
         return FlowField(
-            shift_field(np.where(moving, u, zero), dx, dy),
-            shift_field(np.where(moving, v, zero), dx, dy),
+            shift_field(np.where(moving, flow.u, zero), dx, dy),
+            shift_field(np.where(moving, flow.v, zero), dx, dy),
             shift_field(moving, dx, dy, False),
             shift_field(flow.cond, dx, dy, np.inf),
         )
