@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -62,14 +63,14 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
 
     # Flow arrows in full-image coordinates, subsampled, where the flow was accepted.
     u, v = inter.flow_u, inter.flow_v
-    ys, xs = np.mgrid[0 : u.shape[0] : ARROW_STRIDE, 0 : u.shape[1] : ARROW_STRIDE]
-    us, vs = u[ys, xs], v[ys, xs]
+    ys, xs = _arrow_grid(u.shape)
+    us, vs = u[::ARROW_STRIDE, ::ARROW_STRIDE], v[::ARROW_STRIDE, ::ARROW_STRIDE]  # = u[ys, xs], v[ys, xs]
     keep = np.isfinite(us) & np.isfinite(vs)
     if keep.any():
         origins = np.stack([xs[keep] + x0, ys[keep] + y0], axis=1).astype(np.float32)
         vectors = ARROW_SCALE * np.stack([us[keep], vs[keep]], axis=1).astype(np.float32)
-        moving = inter.moving[ys, xs][keep]
-        colours = np.where(moving[:, None], [[255, 60, 60]], [[80, 200, 255]]).astype(np.uint8)
+        moving = inter.moving[::ARROW_STRIDE, ::ARROW_STRIDE][keep]
+        colours = _ARROW_COLOURS[moving.view(np.uint8)]
         parts.draw(rec, f"{root}/flow_field", rr.Arrows2D, origins=origins, vectors=vectors, colors=colours)
     else:
         parts.clear(rec, f"{root}/flow_field")
@@ -82,9 +83,26 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
 
     parts.histogram_steps(rec, f"{root}/histogram", inter.hist_edges, (inter.hist_u, inter.hist_v), labels=["u", "v"],
                           colors=[(255, 120, 60), (60, 160, 255)], x_scale=HIST_X_SCALE)
-    for axis, k in (("x", 0), ("y", 1)):
-        parts.scalar(rec, f"{root}/velocity/raw_{axis}", inter.raw_velocity[k])
-        parts.scalar(rec, f"{root}/velocity/filtered_{axis}", inter.filtered_velocity[k])
-        parts.kalman_series(rec, f"{root}/kalman", inter.kalman_x[k], inter.kalman_P[k],
-                            [f"{axis}/{part}" for part in ("position", "velocity", "acceleration")])
+    for (raw, filtered, names), k in zip(_series_names(root), (0, 1)):
+        parts.scalar(rec, raw, inter.raw_velocity[k])
+        parts.scalar(rec, filtered, inter.filtered_velocity[k])
+        parts.kalman_series(rec, f"{root}/kalman", inter.kalman_x[k], inter.kalman_P[k], names)
     parts.scalar(rec, f"{root}/moving_pixels", float(inter.moving_pixels))
+
+
+_ARROW_COLOURS = np.array([[80, 200, 255], [255, 60, 60]], dtype=np.uint8)  # still, moving
+
+
+@functools.lru_cache(maxsize=8)
+def _arrow_grid(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """Rows and columns of the arrows' pixels (every ARROW_STRIDE-th), made once per window size."""
+    ys, xs = np.mgrid[0 : shape[0] : ARROW_STRIDE, 0 : shape[1] : ARROW_STRIDE]
+    ys.setflags(write=False)
+    xs.setflags(write=False)
+    return ys, xs
+
+
+@functools.lru_cache(maxsize=8)
+def _series_names(root: str) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    return tuple((f"{root}/velocity/raw_{axis}", f"{root}/velocity/filtered_{axis}",
+                  tuple(f"{axis}/{part}" for part in ("position", "velocity", "acceleration"))) for axis in ("x", "y"))

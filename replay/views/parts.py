@@ -11,6 +11,8 @@ that has nothing to show this frame is cleared rather than left standing from an
 
 from __future__ import annotations
 
+import functools
+import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -61,7 +63,7 @@ def annotation_context(logger: Logger, path: str, classes: Sequence[tuple[int, s
 def scalar(logger: Logger, path: str, value: float) -> None:
     """One time-series point; a non-finite value (nothing this frame) is skipped, not drawn."""
     value = float(value)
-    if not np.isfinite(value):
+    if not math.isfinite(value):
         return
     if isinstance(logger, FrameLogger):
         logger.scalar(path, value)
@@ -71,8 +73,14 @@ def scalar(logger: Logger, path: str, value: float) -> None:
 
 def to_uint8(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
     """Map ``[lo, hi]`` linearly to 0..255 (NaN -> 0), e.g. a raster of scores shown as grey."""
-    scaled = (np.nan_to_num(np.asarray(values, dtype=np.float64), nan=lo) - lo) / (hi - lo)
-    return np.round(np.clip(scaled, 0.0, 1.0) * 255.0).astype(np.uint8)
+    values = np.asarray(values, dtype=np.float64)
+    # NaN -> lo; ±inf need no finite stand-in (nan_to_num's): they clip to the same end
+    scaled = np.where(np.isnan(values), lo, values)
+    scaled -= lo
+    scaled /= hi - lo
+    np.clip(scaled, 0.0, 1.0, out=scaled)
+    scaled *= 255.0
+    return np.round(scaled, out=scaled).astype(np.uint8)
 
 
 def draw(logger: Logger, path: str, archetype: type, **fields) -> None:
@@ -82,11 +90,14 @@ def draw(logger: Logger, path: str, archetype: type, **fields) -> None:
     instance; None fields are left out. Names are those of ``archetype.columns`` (``half_sizes``,
     ``positions``, ``strips``), which its constructor takes too.
     """
-    fields = {k: ([v] if np.isscalar(v) else v) for k, v in fields.items() if v is not None}
+    fields = {k: (v if type(v) in _BATCH_TYPES else [v] if np.isscalar(v) else v) for k, v in fields.items() if v is not None}
     if isinstance(logger, FrameLogger):
         logger.defer(path, archetype, **fields)
     else:
         logger.log(path, archetype(**fields))
+
+
+_BATCH_TYPES = (list, tuple, np.ndarray)  # never scalars: skip np.isscalar's checks
 
 
 def notice(logger: Logger, path: str, text: str | None) -> None:
@@ -230,9 +241,17 @@ def _axes(cov: np.ndarray, n_sigma: float) -> np.ndarray:
 
 def ellipse_polyline(mean: np.ndarray, cov: np.ndarray, *, n_sigma: float = 2.0, segments: int = 48) -> np.ndarray:
     """Closed ``(segments + 1, 2)`` polyline of the ``n_sigma`` contour of a 2-D Gaussian."""
+    unit = _unit_circle(segments)
+    return (np.asarray(mean, dtype=np.float64)[:2, None] + _axes(np.asarray(cov, dtype=np.float64), n_sigma) @ unit).T
+
+
+@functools.lru_cache(maxsize=8)
+def _unit_circle(segments: int) -> np.ndarray:
+    """(2, segments + 1) cos and sin of ``segments`` equal steps round the circle, made once."""
     angles = np.linspace(0.0, 2.0 * np.pi, segments + 1)
     unit = np.stack([np.cos(angles), np.sin(angles)], axis=0)
-    return (np.asarray(mean, dtype=np.float64)[:2, None] + _axes(np.asarray(cov, dtype=np.float64), n_sigma) @ unit).T
+    unit.setflags(write=False)
+    return unit
 
 
 def ellipsoid_polylines(mean: np.ndarray, cov: np.ndarray, *, n_sigma: float = 2.0,
@@ -302,9 +321,15 @@ def kalman_series(logger: Logger, path: str, x: np.ndarray, P: np.ndarray, names
     if len(names) != len(x) or P.shape != (len(x), len(x)):
         raise ValueError(f"kalman_series: {len(names)} names for a state of {len(x)} and P of shape {P.shape}")
     sigma = np.sqrt(np.maximum(np.diag(P), 0.0))
-    for name, value, s in zip(names, x, sigma):
-        scalar(logger, f"{path}/state/{name}", value)
-        scalar(logger, f"{path}/sigma/{name}", s)
+    paths = _series_paths(path, tuple(names))
+    for (state_path, sigma_path), value, s in zip(paths, x.tolist(), sigma.tolist()):
+        scalar(logger, state_path, value)
+        scalar(logger, sigma_path, s)
+
+
+@functools.lru_cache(maxsize=256)
+def _series_paths(path: str, names: tuple[str, ...]) -> tuple[tuple[str, str], ...]:
+    return tuple((f"{path}/state/{name}", f"{path}/sigma/{name}") for name in names)
 
 
 # --- histograms -------------------------------------------------------------------------------

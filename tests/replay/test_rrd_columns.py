@@ -69,3 +69,16 @@ def test_diff_of_rrd_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> Non
     first = capsys.readouterr().out.splitlines()[0]
     assert first.startswith("frame 0: /trackers/golf/particles Points2D:") and "max |Δ|" in first
     assert main(["diff", str(a), str(golf)]) == 2
+
+
+def test_an_image_path_sent_early_holds_the_same_rows(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """An image path past ``IMAGE_FLUSH_BYTES`` goes out in its own, smaller chunks: the same content."""
+    from trackreplay.replay import rerun_sink
+
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    whole, early = tmp_path / "whole.rrd", tmp_path / "early.rrd"
+    replay(ReplayRequest(log=log, tracker="flow", rrd=whole))
+    monkeypatch.setattr(rerun_sink, "IMAGE_FLUSH_BYTES", 20_000)  # a chunk every frame or two
+    replay(ReplayRequest(log=log, tracker="flow", rrd=early))
+    result = diff_rrd(whole, early)
+    assert result.identical, result.report()
