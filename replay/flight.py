@@ -12,17 +12,34 @@ set of directions pins the flight down. :func:`fit_flight` finds, by nonlinear l
   gravity ``g`` fixed at 9.81 m/s²: ``a = −g ẑ − k C_d |v| v + k C_L |v| (ŵ × v)``,
   ``k = ρ A / 2m`` for a regulation ball (``BallParams``); before ``t0`` the ball rests at ``p0``;
 - **bounce and roll**: at each ground contact (centre at ``Z = D/2``) the vertical speed reverses
-  with restitution ``e`` and the horizontal speed keeps a fraction ``μ_h``; hops with drag only;
-  when a hop would rise less than 1 cm the ball rolls along its last direction, decelerating at
-  ``a_roll`` until it rests.
+  with restitution ``e``; a Coulomb friction impulse (``μ`` times the normal one, at most what stops
+  the contact point slipping: a solid sphere) slows the horizontal speed and turns the backspin
+  (surface speed ``b = rω`` at the first impact, a fitted parameter) towards topspin; hops with
+  drag and the Magnus lift of that spin; when a hop would rise less than 1 cm the ball rolls
+  without slipping along its last direction, decelerating at ``a_roll`` until it rests. One
+  horizontal retention for every impact (the earlier model) cannot be right: the first impact
+  stops the slip and costs the ball about half its horizontal speed, the later ones almost
+  nothing; its misfit of the hops and roll moved a 149 m landing by 4.7 % of carry.
+
+The ground is known (``Z = 0``), so once the ball rolls its line of sight alone places it (the
+ray meets the ground; the camera's zoom makes that precise to decimetres at 180 m), and the
+landing point is continuous with the hops and the roll that follow it: fitting the whole shot
+jointly lets the frames after the landing pin the landing, where the lines of sight of the
+flight, seen from behind the tee, leave the range weak. The residuals stay angles (no explicit
+ground intersection): a rolling ball's modelled Z is the ball's radius, so the angle already says
+how far along the ground it is, with the right weight for a ray that grazes the ground.
 
 Residuals: per measured frame, the angle between the measured and the modelled line of sight in
 pixels of that frame (``fx · angle / σ_px``), and the log ratio of the measured apparent size
 to the modelled one (``f D / r``) over ``σ_size`` — the size gives the range where the lines of
 sight alone leave it weak (a camera behind the tee looks along the flight). A soft-L1 loss keeps a
 wrong blob from pulling the fit. Launch point and time come from the frames before the ball moves
-(its line of sight meets the ground there); the launch velocity starts from a few guesses and the
-best is refined with every parameter free.
+(its line of sight meets the ground there); the launch is held within one frame after the last
+frame that measured the ball on the tee (the tracker loses the ball at the launch, and may find
+it again only 1-2 s later: left free, launch time, speed and lift trade off along that gap — on
+the default tee shot the fit launched 0.6 s late at 52 m/s instead of 46). The launch velocity
+starts from a few guesses and the best is refined with every parameter free. Only ``measured``
+rows are observations (``predicted`` and ``lost`` rows are the tracker's own guesses).
 
 The report gives launch speed and angles, apex, carry, landing point (world metres), time of
 flight, the bounce/roll parameters and rest point, each with a 1-σ uncertainty from the fit's
@@ -38,6 +55,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from functools import lru_cache
 
 import numpy as np
 import polars as pl
@@ -80,11 +98,14 @@ class FlightConfig:
     f_scale: float = 3.0  # residuals beyond ~3 σ count linearly
     jackknife_blocks: int = 10  # delete-a-block jackknife for the 1-σ (0: the fit's covariance only)
     jackknife_nfev: int = 100  # function evaluations per jackknife refit (warm-started at the fit)
+    hop_lift: bool = True  # Magnus lift from the spin left after an impact, in the hops
+    spin_decay_s: float = 25.0  # e-folding time of the spin in the hops (0: none)
+    confidence_weight: bool = False  # weight each frame's residuals by the tracker's confidence
 
 
 # Parameter vector: names, in order.
 NAMES = ("t0", "X0", "Y0", "Z0", "speed", "elevation", "azimuth", "cd", "cl", "cl_slope", "spin_tilt",
-         "restitution", "retention", "roll_decel")
+         "restitution", "friction", "landing_spin", "roll_decel")
 
 
 @dataclass(frozen=True)
@@ -116,7 +137,8 @@ class FlightReport:
     landing_time: Value
     time_of_flight: Value
     restitution: Value
-    retention: Value
+    friction: Value  # Coulomb coefficient at an impact
+    landing_spin: Value  # backspin surface speed r·ω at the first impact, m/s
     roll_decel: Value  # m/s²
     rest_point: tuple[Value, Value, Value]
     rest_time: Value
@@ -139,7 +161,7 @@ class FlightReport:
             f"apex         {self.apex_height:.2f} m at {self.apex_time:.2f} s",
             f"landing      {p3(self.landing_point)} at {self.landing_time:.3f} s",
             f"carry        {self.carry:.2f} m, time of flight {self.time_of_flight:.3f} s",
-            f"bounce/roll  restitution {self.restitution:.2f}, horizontal retention {self.retention:.2f}, "
+            f"bounce/roll  restitution {self.restitution:.2f}, friction {self.friction:.2f}, landing backspin r·ω {self.landing_spin:.1f} m/s, "
             f"roll deceleration {self.roll_decel:.2f} m/s²",
             f"rest         {p3(self.rest_point)} at {self.rest_time:.2f} s",
             f"fit          {self.frames_used} frames, line-of-sight RMS {self.rms_px:.2f} px, size RMS {self.size_rms:.2f} (log)",
@@ -195,62 +217,119 @@ def _accel(vx: float, vy: float, vz: float, kd: float, kl: tuple[float, float, f
 
 
 def _fly(p, v, t, h, kd, kl, w, contact_z, t_end, phase, out):
-    """RK4 until the centre comes down to ``contact_z`` (returns the contact state) or ``t_end``."""
+    """RK4 until the centre comes down to ``contact_z`` (returns the contact state) or ``t_end``.
+
+    The acceleration is :func:`_accel` written out four times (this loop is the fit's whole cost:
+    a function call per evaluation made it ~2x slower)."""
+    sqrt = math.sqrt
     px, py, pz = p
     vx, vy, vz = v
+    l0, l1, v0 = kl
+    wx, wy, wz = w
+    h2, h6 = 0.5 * h, h / 6.0
     out.append((t, px, py, pz, vx, vy, vz, phase))
     while t < t_end:
-        a1 = _accel(vx, vy, vz, kd, kl, w)
-        b = (vx + 0.5 * h * a1[0], vy + 0.5 * h * a1[1], vz + 0.5 * h * a1[2])
-        a2 = _accel(*b, kd, kl, w)
-        c = (vx + 0.5 * h * a2[0], vy + 0.5 * h * a2[1], vz + 0.5 * h * a2[2])
-        a3 = _accel(*c, kd, kl, w)
-        d = (vx + h * a3[0], vy + h * a3[1], vz + h * a3[2])
-        a4 = _accel(*d, kd, kl, w)
-        nx = px + h / 6 * (vx + 2 * b[0] + 2 * c[0] + d[0])
-        ny = py + h / 6 * (vy + 2 * b[1] + 2 * c[1] + d[1])
-        nz = pz + h / 6 * (vz + 2 * b[2] + 2 * c[2] + d[2])
-        nvx = vx + h / 6 * (a1[0] + 2 * a2[0] + 2 * a3[0] + a4[0])
-        nvy = vy + h / 6 * (a1[1] + 2 * a2[1] + 2 * a3[1] + a4[1])
-        nvz = vz + h / 6 * (a1[2] + 2 * a2[2] + 2 * a3[2] + a4[2])
+        s = sqrt(vx * vx + vy * vy + vz * vz)
+        L = (l0 + l1 * (v0 / (s if s > 1e-6 else 1e-6) - 1.0)) * s
+        ds = kd * s
+        ax1 = L * (wy * vz - wz * vy) - ds * vx
+        ay1 = L * (wz * vx - wx * vz) - ds * vy
+        az1 = L * (wx * vy - wy * vx) - ds * vz - G
+        bx, by, bz = vx + h2 * ax1, vy + h2 * ay1, vz + h2 * az1
+        s = sqrt(bx * bx + by * by + bz * bz)
+        L = (l0 + l1 * (v0 / (s if s > 1e-6 else 1e-6) - 1.0)) * s
+        ds = kd * s
+        ax2 = L * (wy * bz - wz * by) - ds * bx
+        ay2 = L * (wz * bx - wx * bz) - ds * by
+        az2 = L * (wx * by - wy * bx) - ds * bz - G
+        cx, cy, cz = vx + h2 * ax2, vy + h2 * ay2, vz + h2 * az2
+        s = sqrt(cx * cx + cy * cy + cz * cz)
+        L = (l0 + l1 * (v0 / (s if s > 1e-6 else 1e-6) - 1.0)) * s
+        ds = kd * s
+        ax3 = L * (wy * cz - wz * cy) - ds * cx
+        ay3 = L * (wz * cx - wx * cz) - ds * cy
+        az3 = L * (wx * cy - wy * cx) - ds * cz - G
+        dx, dy, dz = vx + h * ax3, vy + h * ay3, vz + h * az3
+        s = sqrt(dx * dx + dy * dy + dz * dz)
+        L = (l0 + l1 * (v0 / (s if s > 1e-6 else 1e-6) - 1.0)) * s
+        ds = kd * s
+        ax4 = L * (wy * dz - wz * dy) - ds * dx
+        ay4 = L * (wz * dx - wx * dz) - ds * dy
+        az4 = L * (wx * dy - wy * dx) - ds * dz - G
+        nx = px + h6 * (vx + 2 * bx + 2 * cx + dx)
+        ny = py + h6 * (vy + 2 * by + 2 * cy + dy)
+        nz = pz + h6 * (vz + 2 * bz + 2 * cz + dz)
+        nvx = vx + h6 * (ax1 + 2 * ax2 + 2 * ax3 + ax4)
+        nvy = vy + h6 * (ay1 + 2 * ay2 + 2 * ay3 + ay4)
+        nvz = vz + h6 * (az1 + 2 * az2 + 2 * az3 + az4)
         if nz <= contact_z and nvz < 0:
             f = (pz - contact_z) / (pz - nz) if pz != nz else 1.0  # linear in the last step
             t += f * h
-            cx, cy = px + f * (nx - px), py + f * (ny - py)
-            cv = (vx + f * (nvx - vx), vy + f * (nvy - vy), vz + f * (nvz - vz))
-            out.append((t, cx, cy, contact_z, *cv, phase))
-            return (cx, cy, contact_z), cv, t, True
+            qx, qy = px + f * (nx - px), py + f * (ny - py)
+            qv = (vx + f * (nvx - vx), vy + f * (nvy - vy), vz + f * (nvz - vz))
+            out.append((t, qx, qy, contact_z, *qv, phase))
+            return (qx, qy, contact_z), qv, t, True
         t += h
         px, py, pz, vx, vy, vz = nx, ny, nz, nvx, nvy, nvz
         out.append((t, px, py, pz, vx, vy, vz, phase))
     return (px, py, pz), (vx, vy, vz), t, False
 
 
-def simulate(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> Shot:
-    """The shot of parameter vector ``theta`` (see ``NAMES``) up to log time ``t_end``."""
-    t0, X0, Y0, Z0, speed, el, az, cd, cl, cl1, tilt, e, mu, a_roll = (float(v) for v in theta)
-    k = cfg.ball.k
-    contact = cfg.ball.diameter / 2
+@lru_cache(maxsize=512)
+def _flight(Z0: float, speed: float, el: float, az: float, cd: float, cl: float, cl1: float, tilt: float,
+            k: float, contact: float, h: float, max_time: float) -> tuple[np.ndarray, bool]:
+    """The flight from launch time 0 at (0, 0, Z0) to the first contact (or ``max_time``): rows
+    ``t, X, Y, Z, vX, vY, vZ, phase`` (read-only). Launch time and point only shift it, so the
+    finite-difference Jacobian's columns for them — and for the bounce and roll parameters — reuse
+    the one flight (7 of the 15 simulations of each Jacobian integrate no flight)."""
     el_r, az_r, tilt_r = math.radians(el), math.radians(az), math.radians(tilt)
     v0 = (speed * math.cos(el_r) * math.cos(az_r), speed * math.cos(el_r) * math.sin(az_r), speed * math.sin(el_r))
     right = (math.sin(az_r), -math.cos(az_r), 0.0)
     w = (math.cos(tilt_r) * right[0], math.cos(tilt_r) * right[1], math.sin(tilt_r))  # unit spin axis
     out: list[tuple] = []
-    h = cfg.step_s
-    p, v, t, hit = _fly((X0, Y0, Z0), v0, t0, h, k * cd, (k * cl, k * cl1, speed), w, contact, t_end, 1, out)
+    _, _, _, hit = _fly((0.0, 0.0, Z0), v0, 0.0, h, k * cd, (k * cl, k * cl1, speed), w, contact, max_time, 1, out)
     air = np.array(out)
+    air.flags.writeable = False
+    return air, hit
+
+
+def simulate(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> Shot:
+    """The shot of parameter vector ``theta`` (see ``NAMES``) up to log time ``t_end``."""
+    t0, X0, Y0, Z0, speed, el, az, cd, cl, cl1, tilt, e, mu, b, a_roll = (float(v) for v in theta)
+    k = cfg.ball.k
+    contact = cfg.ball.diameter / 2
+    az_r = math.radians(az)
+    h = cfg.step_s
+    air, hit = _flight(Z0, speed, el, az, cd, cl, cl1, tilt, k, contact, h, max(cfg.max_time_s, t_end - t0 + h))
+    air = air + np.array([t0, X0, Y0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    if hit and air[-1, 0] > t_end:  # the log ends before the ball comes down
+        hit = False
+        air = air[:max(1, int(np.searchsorted(air[:, 0], t_end, side="left")) + 1)]
+    t = float(air[-1, 0])
+    p, v = tuple(air[-1, 1:4]), tuple(air[-1, 4:7])
+    out: list[tuple] = []
     apex_i = int(np.argmax(air[:, 3]))
     apex_time, apex_point = float(air[apex_i, 0]), air[apex_i, 1:4].copy()
     landing_time, landing_point = (t, np.array(p)) if hit else (math.nan, np.full(3, np.nan))
     rest_time, rest_point = math.nan, np.full(3, np.nan)
     hops = 0
     while hit and t < t_end:
+        # Impact (Coulomb friction capped at rolling without slipping, a solid sphere): the normal
+        # speed reverses with restitution e; the friction impulse jt (per unit mass, along the
+        # motion) is mu times the normal impulse, at most the 2/7 of the contact point's slip
+        # (horizontal speed + backspin surface speed b) that stops it; it takes jt from the
+        # horizontal speed and 5/2 jt from b (b < 0: topspin).
+        vh0 = math.hypot(v[0], v[1])
+        ux, uy = (v[0] / vh0, v[1] / vh0) if vh0 > 1e-9 else (math.cos(az_r), math.sin(az_r))
+        slip = vh0 + b
+        jt = math.copysign(min(mu * (1.0 + e) * abs(v[2]), (2.0 / 7.0) * abs(slip)), slip)
+        vh1, b = vh0 - jt, b - 2.5 * jt
         vz = -e * v[2]
-        vh = (mu * v[0], mu * v[1])
         if vz * vz / (2 * G) < MIN_HOP_M or hops > 20:
-            # Roll along the last horizontal direction, decelerating at a_roll.
-            s0 = math.hypot(*vh)
-            ux, uy = (vh[0] / s0, vh[1] / s0) if s0 > 1e-9 else (1.0, 0.0)
+            # Roll along the last horizontal direction without slipping, decelerating at a_roll.
+            s0 = vh1 - (2.0 / 7.0) * (vh1 + b)
+            if s0 < 0:
+                ux, uy, s0 = -ux, -uy, -s0
             t_rest = t + (s0 / a_roll if a_roll > 1e-9 else 1e3)
             for tt in np.linspace(t, min(t_rest, t_end + h), max(2, int(math.ceil((min(t_rest, t_end + h) - t) / (4 * h))) + 1))[1:]:
                 dt = tt - t
@@ -264,8 +343,20 @@ def simulate(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> Shot:
                 out.append((t_rest + 1e3, *rest_point, 0.0, 0.0, 0.0, 4))
             break
         hops += 1
-        p, v, t, hit = _fly(p, (vh[0], vh[1], vz), t, h, k * cd, (0.0, 0.0, 1.0), w, contact, t_end, 2, out)
-    arr = np.array(out)
+        # A hop: drag, and Magnus lift from the spin b about the horizontal axis across the motion
+        # (C_L = S / (1 + 2S), S = |b| / |v|, at the hop's start speed; topspin pushes down).
+        sp0 = math.sqrt(vh1 * vh1 + vz * vz)
+        S = abs(b) / max(sp0, 1e-6)
+        cl_hop = k * S / (1.0 + 2.0 * S) if cfg.hop_lift else 0.0
+        sgn = 1.0 if b >= 0 else -1.0
+        w_hop = (sgn * uy, -sgn * ux, 0.0)
+        t_hop = t
+        p, v, t, hit = _fly(p, (vh1 * ux, vh1 * uy, vz), t, h, k * cd, (cl_hop, 0.0, 1.0), w_hop, contact, t_end, 2, out)
+        # The spin decays in the air (e-folding time ~25 s): over a 1.4 s hop 5 % of the topspin
+        # the first impact left, so the next impact finds the ball slipping a little again.
+        if cfg.spin_decay_s > 0:
+            b *= math.exp(-(t - t_hop) / cfg.spin_decay_s)
+    arr = np.concatenate([air, np.array(out, dtype=np.float64).reshape(-1, 8)])
     order = np.argsort(arr[:, 0], kind="stable")
     arr = arr[order]
     keep = np.concatenate([[True], np.diff(arr[:, 0]) > 1e-12])
@@ -285,6 +376,11 @@ class Observations:
     size_px: np.ndarray  # (n,) NaN where unknown
     fx: np.ndarray  # (n,)
     camera: np.ndarray  # (3,)
+    confidence: np.ndarray | None = None  # (n,) the tracker's confidence, NaN where unknown
+
+    def subset(self, keep: np.ndarray) -> Observations:
+        conf = None if self.confidence is None else self.confidence[keep]
+        return Observations(self.frame[keep], self.t[keep], self.los[keep], self.size_px[keep], self.fx[keep], self.camera, conf)
 
 
 def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id: int | None = None,
@@ -307,7 +403,8 @@ def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id:
     size = np.sqrt(np.where(np.isfinite(w) & (w > 0), w, np.nan) * np.where(np.isfinite(h) & (h > 0), h, np.nan))
     fx = np.array([math.sqrt(cameras[int(f)].intrinsics.fx * cameras[int(f)].intrinsics.fy) for f in frames])
     position = next(iter(cameras.values())).position
-    return Observations(frames, rows["t_ns"].to_numpy().astype(float) * 1e-9, los, size, fx, np.asarray(position, float))
+    conf = rows["confidence"].cast(pl.Float64).fill_null(np.nan).to_numpy() if "confidence" in rows.columns else np.full(len(frames), np.nan)
+    return Observations(frames, rows["t_ns"].to_numpy().astype(float) * 1e-9, los, size, fx, np.asarray(position, float), conf)
 
 
 def _residuals(theta: np.ndarray, obs: Observations, cfg: FlightConfig, t_end: float, basis: np.ndarray) -> np.ndarray:
@@ -325,6 +422,9 @@ def _residuals(theta: np.ndarray, obs: Observations, cfg: FlightConfig, t_end: f
         model_size = obs.fx * cfg.ball.diameter / rng
         r = np.log(obs.size_px / model_size) / cfg.sigma_size
         res.append(np.where(np.isfinite(r), r, 0.0))
+    if cfg.confidence_weight and obs.confidence is not None:
+        w = np.sqrt(np.clip(np.where(np.isfinite(obs.confidence), obs.confidence, 1.0), 0.1, 1.0))
+        res = [r * w for r in res]
     return np.concatenate(res)
 
 
@@ -344,8 +444,12 @@ def _ground_point(camera: np.ndarray, los: np.ndarray, z: float) -> np.ndarray |
     return camera + s * los
 
 
-def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarray, list[str]]:
-    """Launch point and time from the frames before the ball moves; a rough rest direction for the azimuth."""
+def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarray, list[str], float]:
+    """Launch point and time from the frames before the ball moves; a rough rest direction for the azimuth.
+
+    Also the latest launch time: one frame after the last frame that measured the ball still on the
+    tee (the tracker loses the ball at the launch and may find it again only far down the flight;
+    the frame after its last tee frame, measured or not, is one where the ball had left)."""
     notes: list[str] = []
     contact = cfg.ball.diameter / 2
     first = obs.los[0]
@@ -361,36 +465,40 @@ def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarr
         notes.append("the first frames do not look down at the ground: launch point guessed 10 m in front of the camera")
         p0 = obs.camera + 10.0 * mean
         p0[2] = contact
-    t0 = 0.5 * (obs.t[max(0, k - 1)] + obs.t[k]) if k > 0 else obs.t[0] - 0.5 / fps
+    if k > 0:
+        t_last = float(obs.t[k - 1])
+        t0, t_hi = min(t_last + 0.5 / fps, 0.5 * (t_last + obs.t[k])), min(t_last + 1.0 / fps, float(obs.t[k]))
+    else:
+        t0, t_hi = obs.t[0] - 0.5 / fps, math.inf
     # Azimuth: towards where the ball ends (its last line of sight on the ground), else along the view.
     end = _ground_point(obs.camera, obs.los[-1], contact)
     target = end if end is not None and np.linalg.norm(end[:2] - p0[:2]) > 5.0 else obs.camera + 100 * obs.los[-1]
     az = math.degrees(math.atan2(target[1] - p0[1], target[0] - p0[0]))
-    theta = np.array([t0, *p0, 50.0, 20.0, az, 0.25, 0.2, 0.0, 0.0, 0.4, 0.6, 2.0])
-    return theta, notes
+    theta = np.array([t0, *p0, 50.0, 20.0, az, 0.25, 0.2, 0.0, 0.0, 0.4, 0.4, 10.0, 2.0])
+    return theta, notes, t_hi
 
 
 # Z0 is held at the ball's resting height (a ball on the tee or the turf): a camera behind the tee
 # looks along the line from itself to the ball, so the lines of sight alone cannot place it.
 FIXED = np.array([n == "Z0" for n in NAMES])
-LOWER = np.array([-np.inf, -np.inf, -np.inf, 0.0, 5.0, 1.0, -np.inf, 0.0, 0.0, -1.0, -60.0, 0.0, 0.0, 0.05])
-UPPER = np.array([np.inf, np.inf, np.inf, 5.0, 120.0, 75.0, np.inf, 1.5, 1.0, 1.0, 60.0, 0.95, 1.0, 20.0])
+LOWER = np.array([-np.inf, -np.inf, -np.inf, 0.0, 5.0, 1.0, -np.inf, 0.0, 0.0, -1.0, -60.0, 0.0, 0.0, -20.0, 0.05])
+UPPER = np.array([np.inf, np.inf, np.inf, 5.0, 120.0, 75.0, np.inf, 1.5, 1.0, 1.0, 60.0, 0.95, 1.5, 60.0, 20.0])
 # Typical size of each parameter's uncertainty (least_squares' x_scale). With x_scale="jac" the
 # default tee shot took 222 iterations along the launch speed / time / lift valley (~3000 RK4
 # simulations, 74 s on a loaded 2-core machine); with these, 66 iterations to the same optimum (32 s).
 # On the launch2 shot they reach a lower cost (4.07 vs 5.32 px RMS) whose landing is 1.6 m off
 # instead of 0.1 m: the earlier, closer landing was a worse optimum.
-X_SCALE = np.array([0.05, 0.3, 0.3, 0.01, 2.0, 1.0, 0.5, 0.03, 0.03, 0.1, 3.0, 0.05, 0.05, 0.3])
+X_SCALE = np.array([0.05, 0.3, 0.3, 0.01, 2.0, 1.0, 0.5, 0.03, 0.03, 0.1, 3.0, 0.05, 0.05, 1.0, 0.3])
 
 
-def _solve(theta, obs, cfg, t_end, basis, free: np.ndarray, max_nfev: int):
+def _solve(theta, obs, cfg, t_end, basis, free: np.ndarray, max_nfev: int, upper: np.ndarray = UPPER):
     def fun(x):
         full = theta.copy()
         full[free] = x
         return _residuals(full, obs, cfg, t_end, basis)
 
-    x0 = np.clip(theta[free], LOWER[free] + 1e-9, UPPER[free] - 1e-9)
-    res = least_squares(fun, x0, bounds=(LOWER[free], UPPER[free]), loss=cfg.loss, f_scale=cfg.f_scale,
+    x0 = np.clip(theta[free], LOWER[free] + 1e-9, upper[free] - 1e-9)
+    res = least_squares(fun, x0, bounds=(LOWER[free], upper[free]), loss=cfg.loss, f_scale=cfg.f_scale,
                         x_scale=X_SCALE[free], max_nfev=max_nfev, diff_step=1e-6)
     out = theta.copy()
     out[free] = res.x
@@ -437,7 +545,11 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
     """Fit the shot to the observations (see the module docstring). Deterministic."""
     t_end = float(obs.t[-1]) + 0.5
     basis = _basis(obs.los)
-    theta, notes = _initial(obs, cfg, fps)
+    theta, notes, t_hi = _initial(obs, cfg, fps)
+    upper = UPPER.copy()
+    upper[0] = t_hi
+    if math.isfinite(t_hi):
+        notes.append(f"launch held before {t_hi:.3f} s, one frame after the last frame with the ball on the tee")
     all_free = ~FIXED
     # Stage 1: launch velocity from a few guesses, physics at typical values.
     vel = np.zeros(len(NAMES), bool)
@@ -447,12 +559,12 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
         for el in (12.0, 25.0):
             th = theta.copy()
             th[4], th[5] = speed, el
-            th, res = _solve(th, obs, cfg, t_end, basis, vel, 40)
+            th, res = _solve(th, obs, cfg, t_end, basis, vel, 40, upper)
             if best is None or res.cost < best[1]:
                 best = (th, res.cost)
     theta = best[0]
     # Stage 2: everything free.
-    theta, res = _solve(theta, obs, cfg, t_end, basis, all_free, 400)
+    theta, res = _solve(theta, obs, cfg, t_end, basis, all_free, 400, upper)
     if not res.success:
         notes.append(f"least squares stopped early: {res.message}")
     m, n = res.fun.size, res.x.size
@@ -485,8 +597,8 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
         for block in np.array_split(np.arange(nobs), K):
             keep = np.ones(nobs, bool)
             keep[block] = False
-            sub = Observations(obs.frame[keep], obs.t[keep], obs.los[keep], obs.size_px[keep], obs.fx[keep], obs.camera)
-            th_i, _ = _solve(theta, sub, cfg, t_end, basis[keep], all_free, cfg.jackknife_nfev)
+            sub = obs.subset(keep)
+            th_i, _ = _solve(theta, sub, cfg, t_end, basis[keep], all_free, cfg.jackknife_nfev, upper)
             thetas.append(th_i)
             derived.append(_derived(th_i, cfg, t_end))
         T, Dv = np.array(thetas), np.array(derived)
@@ -527,7 +639,7 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
         launch_time=v(0), launch_point=(v(1), v(2), v(3)), launch_speed=v(4), launch_elevation=v(5), launch_azimuth=v(6),
         drag_cd=v(7), lift_cl=v(8), lift_cl_slope=v(9), spin_tilt=v(10), apex_height=dv(0), apex_time=dv(1), carry=dv(2),
         landing_point=(dv(3), dv(4), dv(5)), landing_time=dv(6), time_of_flight=dv(7), restitution=v(11),
-        retention=v(12), roll_decel=v(13), rest_point=(dv(8), dv(9), dv(10)), rest_time=dv(11),
+        friction=v(12), landing_spin=v(13), roll_decel=v(14), rest_point=(dv(8), dv(9), dv(10)), rest_time=dv(11),
         frames_used=nobs, rms_px=float(np.sqrt(np.mean(los_px[inliers] ** 2))) if inliers.any() else math.nan,
         size_rms=float(np.sqrt(np.mean(size_r[np.isfinite(obs.size_px)] ** 2))) if size_r.size else math.nan,
         notes=tuple(notes),
