@@ -564,7 +564,13 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
                 best = (th, res.cost)
     theta = best[0]
     # Stage 2: everything free.
-    theta, res = _solve(theta, obs, cfg, t_end, basis, all_free, 400, upper)
+    # In rounds of 100 evaluations: a kink (the friction's cap, a hop too low to count) can shrink
+    # least_squares' trust region until it crawls, and a restart resets it (the default tee shot
+    # crawled to the 400-evaluation limit in one run; restarted after 100 it converged in 9 more).
+    for _ in range(4):
+        theta, res = _solve(theta, obs, cfg, t_end, basis, all_free, 100, upper)
+        if res.status != 0:
+            break
     if not res.success:
         notes.append(f"least squares stopped early: {res.message}")
     m, n = res.fun.size, res.x.size
