@@ -89,6 +89,8 @@ class ReplayResult:
     # a second table; its rows here, each with tracker, frame and t_ns (None for other trackers).
     extra_rows: tuple[dict, ...] | None = None
     observations: pl.DataFrame | None = None  # raw measurements when ReplayRequest.observations (smooth.OBS_SCHEMA)
+    # The frame X Y Z are in when the tracker says ("world": Z up, from the log's rig pose; "camera")
+    position_frame: str | None = None
 
     def summary(self, log: Path) -> dict[str, Any]:
         return {
@@ -113,6 +115,7 @@ class ReplayResult:
                             for x in self.report.lost],
             "rrd": str(self.rrd) if self.rrd else None,
             "notices": list(self.notices),
+            "position_frame": self.position_frame,
         }
 
 
@@ -213,4 +216,5 @@ def replay(req: ReplayRequest) -> ReplayResult:
     table = trajectory_table(rows)
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
                         req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra),
-                        observations=None if observed is None else observations_table(observed))
+                        observations=None if observed is None else observations_table(observed),
+                        position_frame=getattr(steps.tracker, "position_frame", None))

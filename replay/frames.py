@@ -13,6 +13,7 @@ from trackreplay.schemas.records import InitRegion, LensTable, PtzReading
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.geometry.rig_pose import RigPose
 from trackreplay.trackers.geometry.stereo import StereoRig
 
 from trackreplay.replay.decode import decode_image, projection
@@ -31,6 +32,7 @@ class FrameTopics:
     ground_plane: str = T.CAMERA_GROUND_PLANE
     left_calibration: str = T.STEREO_LEFT_CALIBRATION
     right_calibration: str = T.STEREO_RIGHT_CALIBRATION
+    stereo_pose: str = T.STEREO_POSE
 
     @classmethod
     def detect(cls, reader: LogReader, image: str | None = None,
@@ -209,7 +211,23 @@ def read_stereo_rig(reader: LogReader, topics: FrameTopics) -> StereoRig | None:
     if len(lp) != 12 or len(rp) != 12 or lp[0] <= 0 or rp[0] <= 0 or -rp[3] / rp[0] <= 0:
         raise LogError(f"{reader.path}: topics {topics.left_calibration}/{topics.right_calibration} do not describe "
                        f"a rectified pair (need 3x4 P with fx > 0 and the right camera to the right)")
-    return StereoRig(f=float(lp[0]), baseline=float(-rp[3] / rp[0]), cx=float(lp[2]), cy=float(lp[6]))
+    return StereoRig(f=float(lp[0]), baseline=float(-rp[3] / rp[0]), cx=float(lp[2]), cy=float(lp[6]),
+                     pose=read_rig_pose(reader, topics.stereo_pose))
+
+
+def read_rig_pose(reader: LogReader, topic: str = T.STEREO_POSE) -> RigPose | None:
+    """The left camera's pose in the world (Z up) from the first ``foxglove.FrameTransform`` on
+    ``topic`` (``/stereo/pose``), None when the log has none."""
+    if topic not in reader.topics():
+        return None
+    pb = reader.first(topic)
+    if pb is None:
+        return None
+    try:
+        q, t = pb.rotation, pb.translation
+        return RigPose.from_quaternion([q.x, q.y, q.z, q.w], [t.x, t.y, t.z])
+    except (AttributeError, ValueError, ZeroDivisionError, FloatingPointError) as err:
+        raise LogError(f"{reader.path}: topic {topic} is not a usable rig pose (foxglove.FrameTransform): {err}") from None
 
 
 def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:

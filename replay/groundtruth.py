@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import numpy as np
 import polars as pl
 
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.records import GroundTruthFrame
+from trackreplay.replay.frames import read_rig_pose
 from trackreplay.replay.reader import LogReader
 
 GT_SCHEMA = {
@@ -16,11 +18,21 @@ GT_SCHEMA = {
 }
 
 
-def read_groundtruth(reader: LogReader, topic: str = T.GROUNDTRUTH) -> pl.DataFrame:
+def read_groundtruth(reader: LogReader, topic: str = T.GROUNDTRUTH, rig_world: bool = True) -> pl.DataFrame:
+    """Ground truth rows; ``X Y Z`` as stored (stereo scenes: the left camera's frame), or, when the
+    log carries the stereo rig's pose (``/stereo/pose``) and ``rig_world``, in that world frame
+    (Z up) — the frame the group tracker then reports in, so the two compare as they are."""
     reader.require(topic)
     rows = []
     for item in reader.messages([topic]):
         gt = GroundTruthFrame.from_pb(item.decode())
         for o in gt.objects:
             rows.append((gt.frame, gt.t_ns, o.id, o.x, o.y, o.w, o.h, o.X, o.Y, o.Z, o.vx, o.vy, o.visible, o.group))
-    return pl.DataFrame(rows, schema=GT_SCHEMA, orient="row").sort(["id", "frame"])
+    table = pl.DataFrame(rows, schema=GT_SCHEMA, orient="row").sort(["id", "frame"])
+    pose = read_rig_pose(reader) if rig_world else None
+    if pose is None or table.height == 0:
+        return table
+    cam = table.select("X", "Y", "Z").to_numpy().astype(np.float64)
+    world = pose.to_world(np.nan_to_num(cam))
+    world[~np.isfinite(cam).all(axis=1)] = np.nan
+    return table.with_columns(*(pl.Series(c, world[:, k]).fill_nan(None) for k, c in enumerate("XYZ")))

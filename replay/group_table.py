@@ -1,6 +1,7 @@
 """The groups tracker's second table (docs/groups.md): one row per live group per frame with its
 member count, 3-D velocity (m/s), 3-D extent covariance Σ (m²), EKF position sigmas (m) and, on the
-frame of a merge, the groups it came from; keyed by (``tracker``, ``track_id``, ``frame``) like the
+frame of a merge, the groups it came from; ``position_frame`` "world" (Z up, the log's rig pose) or
+"camera" (left camera) says which frame the vectors, covariances and the trajectory's X Y Z are in; keyed by (``tracker``, ``track_id``, ``frame``) like the
 ★ trajectory table it sits beside (``traj.parquet`` → ``traj.groups.parquet``)."""
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from trackreplay.replay.trajectory import state_row, trajectory_table
 
 GROUP_SCHEMA = {
     "tracker": pl.String, "track_id": pl.Int64, "frame": pl.Int64, "t_ns": pl.Int64, "members": pl.Int64,
-    "VX": pl.Float64, "VY": pl.Float64, "VZ": pl.Float64,
+    "position_frame": pl.String, "VX": pl.Float64, "VY": pl.Float64, "VZ": pl.Float64,
     "cov_xx": pl.Float64, "cov_xy": pl.Float64, "cov_xz": pl.Float64, "cov_yy": pl.Float64, "cov_yz": pl.Float64,
     "cov_zz": pl.Float64, "sigma_X": pl.Float64, "sigma_Y": pl.Float64, "sigma_Z": pl.Float64, "merged_from": pl.String,
 }

@@ -7,6 +7,7 @@ STEREO_LEFT_IMAGE = "/stereo/left/image"
 STEREO_RIGHT_IMAGE = "/stereo/right/image"
 STEREO_LEFT_CALIBRATION = "/stereo/left/calibration"
 STEREO_RIGHT_CALIBRATION = "/stereo/right/calibration"
+STEREO_POSE = "/stereo/pose"  # foxglove.FrameTransform: the left camera in a world frame (Z up)
 PTZ_ENCODERS = "/ptz/encoders"
 PTZ_LENS_TABLE = "/ptz/lens_table"
 GROUNDTRUTH = "/groundtruth/objects"

@@ -28,3 +28,14 @@ def test_golden_replay(tracker: str) -> None:
     assert result.digest == case["digest"], (
         f"{tracker} replay of {case['log']} changed; if intended, run python tests/golden/regenerate.py and say why"
     )
+
+
+def test_golden_groups_log_tracks_two_groups_in_the_world_frame() -> None:
+    """The groups golden exercises more than one group (the association between groups, and the
+    merge gate on a pair), and its rows are in the world frame the log's rig pose gives."""
+    golden = pl.read_parquet(GOLDEN / "groups.trajectory.parquet")
+    measured = golden.filter(pl.col("status") == "measured").group_by("track_id").len()
+    assert measured.filter(pl.col("len") >= 10).height >= 2, measured
+    both = golden.filter(pl.col("status") == "measured").group_by("frame").len().filter(pl.col("len") >= 2)
+    assert both.height >= 10
+    assert golden.filter(pl.col("status") == "measured")["Z"].median() == pytest.approx(1.19, abs=0.4)  # torso height, Z up

@@ -42,8 +42,9 @@ def _groups(path: Path) -> None:
     from trackreplay.recorder.synth.groups.scene import GroupSceneConfig, write_group_scene
 
     # 32 stereo pairs, 320x240 (the paper's f on a quarter of its VGA picture), JPEG 75, 24 fps, from
-    # 0.6 s into the crossing: group 1 starts at frame 13 and is tracked to the end (the farther
-    # group shows only 6 observation points here, below grouping.min_points = 12, so it never starts)
+    # 0.6 s into the crossing, with the rig's pose (/stereo/pose: rows in the world frame, Z up). With
+    # the per-frame parameters rescaled to 24 fps (time window 3 frames) both groups are tracked:
+    # group 1 from frame 11, group 2 (the farther) from frame 18, to the end
     write_group_scene(path, GroupSceneConfig(scene="groups-crossing", fps=24.0, lead_in=8, duration=24 / 24.0,
                                              start_s=0.6, encoding="jpeg", jpeg_quality=75, width=320, height=240))
 

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackreplay.trackers.geometry.rig_pose import RigPose
+
 
 @dataclass(frozen=True)
 class StereoRig:
@@ -17,6 +19,7 @@ class StereoRig:
     baseline: float  # m
     cx: float
     cy: float
+    pose: RigPose | None = None  # the left camera in a world frame (Z up), from the log's /stereo/pose
 
     def to_points(self, uvd: np.ndarray) -> np.ndarray:
         """(N, 3) ``u v d`` (d > 0) → (N, 3) ``X Y Z`` metres."""

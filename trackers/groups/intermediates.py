@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackreplay.trackers.geometry.rig_pose import RigPose
 from trackreplay.trackers.groups.features import ObservationPoints
 
 
@@ -44,6 +45,7 @@ class GroupsIntermediates:
     events: tuple[str, ...]
     dt_s: float  # seconds since the previous frame (m/frame → m/s)
     notice: str = ""
+    world: RigPose | None = None  # the rig's pose: the second table's vectors and extents in the world frame
 
     @classmethod
     def idle(cls, mode: str, shape: tuple[int, int], notice: str = "", window: int = 2) -> GroupsIntermediates:
@@ -54,18 +56,26 @@ class GroupsIntermediates:
 
     def extra_rows(self) -> list[dict]:
         """The second table's rows (docs/groups.md): per live group its member count, 3-D velocity
-        (m/s), position extent Σ (m²) and EKF position sigma (m); ``merged_from`` on a merge."""
+        (m/s), position extent Σ (m²) and EKF position sigma (m); ``merged_from`` on a merge. In the
+        world frame (Z up) when the log carries the rig's pose, else the left camera's
+        (``position_frame`` says which)."""
         g, rows = self.groups, []
         scale = 1.0 / self.dt_s if np.isfinite(self.dt_s) and self.dt_s > 0 else float("nan")
+        pos, vel = [0, 2, 4], [1, 3, 5]
+        V = g.x[:, vel] * scale
+        extent, Ppos = g.extent, g.P[:, pos][:, :, pos]
+        if self.world is not None:
+            V, extent, Ppos = self.world.rotate(V), self.world.rotate_cov(extent), self.world.rotate_cov(Ppos)
+        frame = "camera" if self.world is None else "world"
         for k, gid in enumerate(g.ids.tolist()):
-            S = g.extent[k]
-            P = g.P[k]
+            S = extent[k]
+            P = Ppos[k]
             rows.append({
-                "track_id": int(gid), "members": int(g.members[k]),
-                "VX": float(g.x[k, 1] * scale), "VY": float(g.x[k, 3] * scale), "VZ": float(g.x[k, 5] * scale),
+                "track_id": int(gid), "members": int(g.members[k]), "position_frame": frame,
+                "VX": float(V[k, 0]), "VY": float(V[k, 1]), "VZ": float(V[k, 2]),
                 "cov_xx": float(S[0, 0]), "cov_xy": float(S[0, 1]), "cov_xz": float(S[0, 2]),
                 "cov_yy": float(S[1, 1]), "cov_yz": float(S[1, 2]), "cov_zz": float(S[2, 2]),
-                "sigma_X": float(np.sqrt(P[0, 0])), "sigma_Y": float(np.sqrt(P[2, 2])), "sigma_Z": float(np.sqrt(P[4, 4])),
+                "sigma_X": float(np.sqrt(P[0, 0])), "sigma_Y": float(np.sqrt(P[1, 1])), "sigma_Z": float(np.sqrt(P[2, 2])),
                 "merged_from": g.merged_from[k] or None,
             })
         return rows

@@ -16,8 +16,10 @@ Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
 7. §3.5 merging of groups whose position and velocity regions overlap (:mod:`.merging`; eqs. 14–15
    by :func:`trackreplay.trackers.filters.gaussians.merge_gaussians`); the merged group gets a new id.
 
-Outputs per live group (camera frame of the left camera, x right, y down, z forward, metres): X Y Z
-the EKF position, the image box of the foreground pixels whose 3-D points fall in the group's gate
+Outputs per live group: X Y Z the EKF position (metres) in the world frame (Z up) when the log
+carries the rig's pose (``/stereo/pose``, ``position_frame == "world"``), else in the left camera's
+frame (x right, y down, z forward; ``"camera"``) — the EKF itself runs in the camera frame, as in
+the paper; the image box of the foreground pixels whose 3-D points fall in the group's gate
 (else the projected extent), vx vy the projected EKF velocity (px/frame); "measured" when updated
 this frame, "predicted" otherwise; one "lost" row (no position) on the frame a group is deleted or
 merged into another. ``intermediates.extra_rows()`` gives the member count, 3-D velocity and
@@ -83,7 +85,14 @@ class GroupTracker(TrackerBase):
     name = "groups"
 
     def __init__(self, config: GroupsConfig, rng: np.random.Generator) -> None:
-        self.config = config
+        self.user_config = config
+        self.config = config  # rescaled to the log's frame rate when the background is learnt (config.at_rate)
+        self.fps = float("nan")
+        # "world" when the log carries the rig's pose (/stereo/pose: X Y Z, the second table's
+        # velocities and extents in the world frame, Z up), else "camera" (the left camera's frame)
+        self.position_frame = "camera"
+        self.pose = None
+        self.learn_t: list[int] = []
         self.rng = rng  # handed in by the engine; nothing here is random
         self.bg = (MedianBackground(config.background.frames), MedianBackground(config.background.frames))
         self.models: tuple[np.ndarray, np.ndarray] | None = None
@@ -104,15 +113,19 @@ class GroupTracker(TrackerBase):
         if frame.right is None or rig is None:
             self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, cfg.klt.window)
             return []
+        self.position_frame = "world" if rig.pose is not None else "camera"
+        self.pose = rig.pose
         dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
         self.prev_t = frame.t_ns
         if self.models is None:  # §2: learn the background of both views
             self.bg[0].add(frame.image)
             self.bg[1].add(frame.right)
+            self.learn_t.append(frame.t_ns)
             if self.bg[0].full:
                 self.models = (self.bg[0].model(), self.bg[1].model())
                 self.bg[0].clear()
                 self.bg[1].clear()
+                self._set_rate()
             self.intermediates = GroupsIntermediates.idle("learning", shape, "", cfg.klt.window)
             return []
 
@@ -138,10 +151,18 @@ class GroupTracker(TrackerBase):
         snapshot = self._snapshot()
         self.intermediates = GroupsIntermediates(
             "tracking", fg_left, fg_right, stereo.disparity, stereo.crops, self.klt.uv.copy(), points, point_ids,
-            snapshot, ended, tuple(events), dt_s)
+            snapshot, ended, tuple(events), dt_s, world=rig.pose)
         states = [self._state(g, rig) for g in self.groups]
         states += [TrackState(int(gid), status="lost") for gid in ended.tolist()]
         return sorted(states, key=lambda s: s.track_id)
+
+    def _set_rate(self) -> None:
+        """The log's frame rate from the background frames' times; the per-frame parameters rescaled to it."""
+        steps = np.diff(np.asarray(self.learn_t, np.int64))
+        steps = steps[steps > 0]
+        self.fps = float(1e9 / np.median(steps)) if len(steps) else float("nan")
+        self.config = self.user_config.at_rate(self.fps)
+        self.klt = KltFeatures(self.config.klt, self.config.stereo.disparity_window)
 
     def _associate_and_update(self, points: ObservationPoints, rig: StereoRig) -> np.ndarray:
         acfg = self.config.association
@@ -205,7 +226,11 @@ class GroupTracker(TrackerBase):
         spread = 1.0 if mcfg.velocity_spread_in_gate else 0.0
         vcov = np.array([g.ekf.P[np.ix_(VEL, VEL)] + spread * g.velocity_spread / max(g.members, 1) + np.eye(3) * 1e-8
                          for g in self.groups])
-        both, _, _ = overlap_pairs(centres, extents, vel, vcov, mcfg.gamma_position, mcfg.gamma_velocity)
+        gamma_v = mcfg.gamma_velocity
+        if mcfg.ground_velocity and self.pose is not None:  # the ground plane's 2 dof of the velocity
+            vel, vcov = self.pose.rotate(vel)[:, :2], self.pose.rotate_cov(vcov)[:, :2, :2]
+            gamma_v = mcfg.gamma_velocity_ground
+        both, _, _ = overlap_pairs(centres, extents, vel, vcov, mcfg.gamma_position, gamma_v)
         ids = [g.gid for g in self.groups]
         counts: dict[tuple[int, int], int] = {}
         ready = np.zeros_like(both)
@@ -290,7 +315,7 @@ class GroupTracker(TrackerBase):
 
     @staticmethod
     def _state(g: Group, rig: StereoRig) -> TrackState:
-        X, Y, Z = (float(c) for c in g.position)
+        X, Y, Z = (float(c) for c in (g.position if rig.pose is None else rig.pose.to_world(g.position)[0]))
         J = rig.jacobian(g.position)
         du, dv, _ = J @ g.velocity
         x0, y0, x1, y1 = (float(c) for c in g.box)

@@ -31,7 +31,12 @@ from trackreplay.recorder.synth.groups.people import HEIGHT, TORSO_Z, Look, Pain
 from trackreplay.recorder.synth.groups.world import Rig, Stairs, World
 from trackreplay.recorder.writer import LogWriter
 from trackreplay.schemas import topics as T
-from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject
+from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
+from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
+
+from trackreplay.schemas.messages import FrameTransform
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, timestamp
+from trackreplay.trackers.geometry.rig_pose import RigPose
 
 GROUNDTRUTH_GROUPS = "/groundtruth/groups"
 SCENES = ("groups-crossing", "groups-merging", "groups-stairs", "groups-passing")
@@ -230,6 +235,14 @@ class GroupScene:
         return int(round(index * 1e9 / self.cfg.fps))
 
 
+def rig_pose_message(rig: Rig, t_ns: int) -> FrameTransform:
+    """The left camera in the world (Z up) as ``foxglove.FrameTransform`` (parent ``world``, child ``left``)."""
+    pose = RigPose(tuple(float(v) for v in rig.R.T.ravel()), tuple(float(v) for v in rig.centre))
+    q, c = pose.quaternion, pose.t
+    return FrameTransform(timestamp=timestamp(t_ns), parent_frame_id="world", child_frame_id="left",
+                          translation=Vector3(x=c[0], y=c[1], z=c[2]), rotation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3]))
+
+
 def write_group_scene(out: str | Path, cfg: GroupSceneConfig,
                       progress: Callable[[int, int], None] | None = None) -> SceneSummary:
     """Render ``cfg.scene`` to ``out``."""
@@ -248,6 +261,7 @@ def write_group_scene(out: str | Path, cfg: GroupSceneConfig,
             if index == 0:
                 log.write(T.STEREO_LEFT_CALIBRATION, left_cal.to_pb(t_ns, "left"), t_ns)
                 log.write(T.STEREO_RIGHT_CALIBRATION, right_cal.to_pb(t_ns, "right"), t_ns)
+                log.write(T.STEREO_POSE, rig_pose_message(scene.rig, t_ns), t_ns)
             left, right, ids, t = scene.render(index)
             log.write(T.STEREO_LEFT_IMAGE, image_message(left, cfg.encoding, t_ns, frame_id="left", jpeg_quality=cfg.jpeg_quality), t_ns)
             log.write(T.STEREO_RIGHT_IMAGE, image_message(right, cfg.encoding, t_ns, frame_id="right", jpeg_quality=cfg.jpeg_quality), t_ns)

@@ -48,8 +48,8 @@ def test_two_replays_give_one_digest(passing):
     assert a.trajectory.equals(b.trajectory)
 
 
-# The merging and crossing scenes at the paper's 48 fps (the defaults are per frame at 48 fps; at 24
-# fps the merge comes ~1.4 s late, docs/groups.md), cut short around the event with start_s.
+# The merging and crossing scenes at the paper's 48 fps (the defaults are per frame at 48 fps and
+# rescaled to the log's rate: 24 fps below), cut short around the event with start_s.
 
 @pytest.fixture(scope="module")
 def merging(tmp_path_factory):
@@ -113,3 +113,56 @@ def test_crossing_groups_keep_their_identities(crossing):
             owner[(gid, name)] = ids.mode().sort()[0]
         assert owner[(gid, "before")] == owner[(gid, "after")], owner
     assert owner[(1, "before")] != owner[(2, "before")]
+
+
+def test_positions_are_world_z_up_with_the_rig_pose_and_camera_frame_without(passing, tmp_path):
+    from trackreplay.recorder.filter import filter_log
+    from trackreplay.recorder.synth.groups.people import TORSO_Z
+    from trackreplay.replay.frames import read_rig_pose
+
+    reader = LogReader(passing)
+    pose = read_rig_pose(reader)
+    assert pose is not None  # the synthetic scenes write /stereo/pose
+    no_pose = tmp_path / "no_pose.mcap"
+    filter_log(passing, no_pose, topics=[t for t in sorted(reader.topics()) if t != "/stereo/pose"])
+    world = replay(ReplayRequest(log=passing, tracker="groups", seed=0, end_s=1.5))
+    camera = replay(ReplayRequest(log=no_pose, tracker="groups", seed=0, end_s=1.5))
+    assert world.summary(passing)["position_frame"] == "world" and camera.summary(no_pose)["position_frame"] == "camera"
+    w = world.trajectory.filter(pl.col("status") == "measured")
+    c = camera.trajectory.filter(pl.col("status") == "measured")
+    assert w.height > 20 and w.select("track_id", "frame").equals(c.select("track_id", "frame"))
+    # the same tracks, rotated and shifted by the pose; the EKF itself runs in the camera frame
+    assert np.allclose(pose.to_world(c.select("X", "Y", "Z").to_numpy()), w.select("X", "Y", "Z").to_numpy(), atol=1e-9)
+    # Z up: the groups' centres (their members' torsos) are about a torso's height above the ground
+    assert abs(float(w["Z"].median()) - TORSO_Z) < 0.35, w["Z"].describe()
+    # the truth is read in the same frame as the trajectory, so 3-D metrics do not depend on it
+    gt_w, gt_c = (read_groundtruth(LogReader(p), GROUNDTRUTH_GROUPS) for p in (passing, no_pose))
+    assert np.allclose(pose.to_world(gt_c.select("X", "Y", "Z").to_numpy()), gt_w.select("X", "Y", "Z").to_numpy())
+    assert np.allclose(gt_w["Z"].to_numpy(), TORSO_Z, atol=0.05)
+    mw = mot_metrics(world.trajectory, gt_w, space="3d", max_distance_m=1.0)
+    mc = mot_metrics(camera.trajectory, gt_c, space="3d", max_distance_m=1.0)
+    assert mw.mota == pytest.approx(mc.mota) and mw.motp == pytest.approx(mc.motp)
+    # the second table says its frame
+    assert set(world.extra_rows[0]) >= {"position_frame", "VX"} and world.extra_rows[0]["position_frame"] == "world"
+
+
+def test_the_same_defaults_at_24_fps_detect_the_merge(tmp_path):
+    """Per-frame parameters follow the log's frame rate: at 24 fps the merge is found (with the
+    48-fps frame counts it was missed in 4 s) within 0.5 s of the truth."""
+    merging = tmp_path / "merging24.mcap"
+    cfg = GroupSceneConfig(scene="groups-merging", fps=24.0, start_s=1.3, duration=1.5, encoding="jpeg")
+    write_group_scene(merging, cfg)
+    _, _, events = replay_groups(ReplayRequest(log=merging, tracker="groups", seed=0))
+    merges = [f for f, e in events if "1,2 merged into" in e]
+    true_frame = cfg.lead_in + int(np.ceil((cfg.merge_s - cfg.start_s) * cfg.fps))
+    assert merges and true_frame <= merges[0] <= true_frame + 12, (true_frame, events)
+
+
+@pytest.mark.xfail(strict=True, reason="known (docs/groups.md): at 24 fps the faster group's velocity estimate is "
+                   "pulled towards the slower one's while they overlap (its points go to the bigger group), and on this "
+                   "clip the two merge at frame 53; the full scene at 24 fps and every 48 fps case do not merge")
+def test_passing_groups_at_24_fps_do_not_merge_on_a_clip_from_1s(tmp_path):
+    passing = tmp_path / "passing24.mcap"
+    write_group_scene(passing, GroupSceneConfig(scene="groups-passing", fps=24.0, start_s=1.0, duration=3.0, encoding="jpeg"))
+    _, _, events = replay_groups(ReplayRequest(log=passing, tracker="groups", seed=0))
+    assert not [e for _, e in events if "merged into" in e or "absorbed" in e], events
