@@ -4,16 +4,20 @@
 
 Per scene (``trackreplay synth groups-…``, rendered at ``--fps``, VGA, JPEG 95, the paper's rig):
 CLEAR MOT and IDF1 of the group tracks against the per-group truth (/groundtruth/groups) on image
-boxes (IoU >= 0.5 and >= 0.3) and on 3-D positions (within 1 m, left camera frame), HOTA / DetA /
+boxes (IoU >= 0.5 and >= 0.3) and on 3-D positions (within 1 m, world frame: the scenes carry the
+rig's pose on /stereo/pose, so tracker and truth are both in X Y Z with Z up), HOTA / DetA /
 AssA / LocA (mean over alpha 0.05..0.95; similarity IoU, and max(0, 1 - d/1 m) in 3-D), 3-D position
 RMSE per true group (per frame a Hungarian match within 1 m; with the share of the group's frames
 matched), the tracker's merge events against the true merge frame (groups-merging) and whether any
-two groups merged in groups-passing. Ground truth is the mean of the group's torso centres and the
+two groups merged in groups-passing, with the margin by which they did not: per frame the merge
+gate's position and velocity distances of every pair of groups over their thresholds
+(d2p/gamma_position, d2v/gamma_velocity; a pair overlaps on a frame when both are below 1, and
+merges after merge.frames such frames in a row). Ground truth is the mean of the group's torso centres and the
 union of its members' boxes; the tracker's position is the EKF mean of its KLT observation points.
 
 The paper runs at 48 fps and so does this script by default (4 scenes x 202 frames, ~1 min of CPU).
-``--fps 24`` halves the runtime, but the tracker's parameters are per frame at 48 fps: at 24 fps
-pass ``--config '{"ekf": {"accel_sigma": 0.006}}'`` for the same 3.5 m/s² (docs/groups.md has both).
+``--fps 24 --out docs/groups_results_24fps.json --plot ''`` runs the same defaults at 24 fps: the
+tracker rescales its per-frame parameters to the log's frame rate (GroupsConfig.at_rate).
 The stairs scene gets 32 SGBM disparities (SCENE_CONFIG: its rig sees the group nearer than 5 m).
 """
 
@@ -35,11 +39,13 @@ sys.path.insert(0, str(HERE.parent))
 
 from trackreplay.recorder.synth.groups.scene import (  # noqa: E402
     GROUNDTRUTH_GROUPS, SCENES, GroupSceneConfig, write_group_scene)
-from trackreplay.replay.engine import ReplayRequest  # noqa: E402
-from trackreplay.replay.group_table import replay_groups  # noqa: E402
+from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.group_table import group_rows, group_table  # noqa: E402
 from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.mot import hota_metrics, mot_metrics  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.trajectory import state_row, trajectory_table  # noqa: E402
+from trackreplay.trackers.groups.merging import overlap_pairs  # noqa: E402
 
 MERGE_EVENTS = ("merged into", "absorbed by")
 # The stairs rig (2.1 m high, 15° down) sees the group at 3-6 m: disparities up to 18 px, beyond the
@@ -76,6 +82,65 @@ def position_errors(traj: pl.DataFrame, gt: pl.DataFrame, gate_m: float = 1.0) -
                   "matched": round(len(err.get(gid, [])) / n, 3)} for gid, n in sorted(frames.items())}
 
 
+def replay_with_gates(req: ReplayRequest) -> tuple[pl.DataFrame, pl.DataFrame, list, list[dict], dict]:
+    """Trajectory, second table, events, and per frame and pair of live groups the merge gate's
+    d2p/gamma_position and d2v/gamma_velocity (computed as the tracker's _merge does, from the
+    frame's group snapshot), plus the tracker's rate-scaled config."""
+    rows, extra, events, gates = [], [], [], []
+    steps = iter_steps(req)
+    try:
+        for step in steps:
+            rows.extend(state_row(req.tracker, step.frame.index, step.frame.t_ns, s) for s in step.states)
+            extra.extend(group_rows(req.tracker, step))
+            events.extend((step.frame.index, e) for e in getattr(step.intermediates, "events", ()))
+            cfg = steps.tracker.config
+            g = step.intermediates.groups
+            if len(g.ids) < 2:
+                continue
+            floor = np.eye(3) * cfg.association.min_extent_m**2
+            spread = 1.0 if cfg.merge.velocity_spread_in_gate else 0.0
+            vcov = np.array([g.P[k][np.ix_([1, 3, 5], [1, 3, 5])] + spread * g.velocity_spread[k] / max(int(g.members[k]), 1)
+                             + np.eye(3) * 1e-8 for k in range(len(g.ids))])
+            vel, gamma_v, pose = g.x[:, [1, 3, 5]], cfg.merge.gamma_velocity, steps.tracker.pose
+            if cfg.merge.ground_velocity and pose is not None:  # as the tracker: the ground plane's 2 dof
+                vel, vcov, gamma_v = pose.rotate(vel)[:, :2], pose.rotate_cov(vcov)[:, :2, :2], cfg.merge.gamma_velocity_ground
+            _, d2p, d2v = overlap_pairs(g.x[:, [0, 2, 4]], g.extent + floor, vel, vcov, cfg.merge.gamma_position, gamma_v)
+            for i, j in zip(*np.triu_indices(len(g.ids), 1)):
+                gates.append({"frame": step.frame.index, "pair": f"{g.ids[i]},{g.ids[j]}",
+                              "p": float(d2p[i, j] / cfg.merge.gamma_position), "v": float(d2v[i, j] / gamma_v)})
+        scaled = steps.tracker.config
+    finally:
+        steps.close()
+    info = {"fps": round(steps.tracker.fps, 3), "klt_window": scaled.klt.window, "merge_frames": scaled.merge.frames,
+            "max_empty_frames": scaled.tracks.max_empty_frames, "accel_sigma_m_per_frame2": scaled.ekf.accel_sigma,
+            "alpha_s": round(scaled.association.alpha_s, 4)}
+    return trajectory_table(rows), group_table(extra), events, gates, info
+
+
+def gate_margin(gates: list[dict], merge_frames: int) -> dict:
+    """How far the pairs of groups stayed from merging: the least velocity ratio on frames where the
+    positions overlapped, the least max(p, v) ratio (both < 1 = a frame counted towards a merge),
+    and the longest run of such frames per pair against ``merge_frames``."""
+    if not gates:
+        return {"pairs": 0}
+    df = pl.DataFrame(gates).sort("pair", "frame")
+    close = df.filter(pl.col("p") < 1.0)
+    runs = {}
+    for (pair,), part in df.partition_by("pair", as_dict=True).items():
+        both = ((part["p"] < 1.0) & (part["v"] < 1.0)).to_numpy()
+        frames = part["frame"].to_numpy()
+        best = run = 0
+        for k in range(len(both)):  # per frame of one pair (a few hundred), not per pixel
+            run = run + 1 if both[k] and (k == 0 or frames[k] == frames[k - 1] + 1) else int(both[k])
+            best = max(best, run)
+        runs[pair] = best
+    worst = df.with_columns(pl.max_horizontal("p", "v").alias("m")).sort("m").row(0, named=True)
+    return {"pairs": df["pair"].n_unique(), "position_overlap_frames": close.height,
+            "min_velocity_ratio_while_positions_overlap": None if close.is_empty() else round(float(close["v"].min()), 3),
+            "min_max_ratio": round(float(worst["m"]), 3), "at_frame": worst["frame"], "pair": worst["pair"],
+            "longest_overlap_run": runs, "merge_frames": merge_frames}
+
+
 def _hota(s) -> dict:
     return {k: v for k, v in s.as_dict().items() if k != "hota_alpha"}
 
@@ -86,11 +151,12 @@ def evaluate_scene(scene: str, fps: float, duration: float, seed: int, tmp: Path
     write_group_scene(log, cfg)
     started = time.perf_counter()
     config = _deep_merge(SCENE_CONFIG.get(scene, {}), config or {})
-    traj, table, events = replay_groups(ReplayRequest(log=log, tracker="groups", seed=0, config=config or None))
+    traj, table, events, gates, rate = replay_with_gates(ReplayRequest(log=log, tracker="groups", seed=0, config=config or None))
     seconds = time.perf_counter() - started
     gt = read_groundtruth(LogReader(log), GROUNDTRUTH_GROUPS)
     out = {
         "scene": scene, "seed": seed, "config": config, "frames": cfg.lead_in + int(round(duration * fps)), "replay_s": round(seconds, 1),
+        "rate_scaled": rate, "position_frame": "world" if LogReader(log).topics().get("/stereo/pose") else "camera",
         "image_iou50": mot_metrics(traj, gt, space="image", min_iou=0.5).as_dict(),
         "image_iou30": mot_metrics(traj, gt, space="image", min_iou=0.3).as_dict(),
         "ground_3d_1m": mot_metrics(traj, gt, space="3d", max_distance_m=1.0).as_dict(),
@@ -100,6 +166,7 @@ def evaluate_scene(scene: str, fps: float, duration: float, seed: int, tmp: Path
         "track_ids": sorted(set(traj["track_id"].to_list())),
         "events": [f"{f}: {e}" for f, e in events],
         "second_table_rows": table.height,
+        "merge_gate": gate_margin(gates, rate["merge_frames"]),
     }
     merges = [f for f, e in events if any(k in e for k in MERGE_EVENTS)]
     out["merge_frames"] = merges
@@ -107,6 +174,7 @@ def evaluate_scene(scene: str, fps: float, duration: float, seed: int, tmp: Path
         true_frame = cfg.lead_in + int(np.ceil(cfg.merge_s * fps))  # first frame with t >= merge_s
         out["true_merge_frame"] = true_frame
         out["merge_delay_frames"] = None if not merges else merges[0] - true_frame
+        out["merge_delay_s"] = None if not merges else round((merges[0] - true_frame) / fps, 3)
         last = traj.filter(pl.col("frame") == traj["frame"].max())
         out["groups_at_end"] = last.filter(pl.col("status") != "lost").height
     if scene == "groups-passing":
@@ -123,14 +191,14 @@ def plot(runs: list[tuple[dict, pl.DataFrame, pl.DataFrame]], path: Path) -> Non
     fig, axes = plt.subplots(1, len(runs), figsize=(4.2 * len(runs), 4.2))
     for ax, (res, traj, gt) in zip(np.atleast_1d(axes), runs):
         for gid, g in sorted(gt.partition_by("id", as_dict=True).items()):
-            ax.plot(g["X"], g["Z"], "k--", lw=1)
-            ax.annotate(f"truth {gid[0]}", (g["X"][0], g["Z"][0]), fontsize=7)
+            ax.plot(g["X"], g["Y"], "k--", lw=1)
+            ax.annotate(f"truth {gid[0]}", (g["X"][0], g["Y"][0]), fontsize=7)
         live = traj.filter((pl.col("status") != "lost") & pl.col("X").is_not_null())
         for (tid,), t in sorted(live.partition_by("track_id", as_dict=True).items()):
-            ax.plot(t["X"], t["Z"], "-", lw=1.5, label=f"group {tid}")
+            ax.plot(t["X"], t["Y"], "-", lw=1.5, label=f"group {tid}")
         ax.set_title(res["scene"], fontsize=9)
-        ax.set_xlabel("X (m, camera right)")
-        ax.set_ylabel("Z (m, camera forward)")
+        ax.set_xlabel("X (m, world)")
+        ax.set_ylabel("Y (m, world; the rig looks along +Y)")
         ax.legend(fontsize=6)
         ax.set_aspect("equal", adjustable="datalim")
     fig.tight_layout()
@@ -144,9 +212,9 @@ def main() -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--scenes", nargs="+", default=list(SCENES))
     ap.add_argument("--config", type=json.loads, default=None,
-                    help='tracker config overrides as JSON, e.g. \'{"ekf": {"accel_sigma": 0.006}}\' (per-frame values at 24 fps)')
+                    help='tracker config overrides as JSON, e.g. \'{"merge": {"frames": 10}}\' (per-frame values at rate_hz, 48)')
     ap.add_argument("--out", type=Path, default=HERE / "groups_results.json")
-    ap.add_argument("--plot", type=Path, default=HERE / "groups_tracks.png")
+    ap.add_argument("--plot", default=str(HERE / "groups_tracks.png"), help="'' for no plot")
     args = ap.parse_args()
     results, runs = [], []
     with tempfile.TemporaryDirectory() as tmp:
@@ -163,7 +231,7 @@ def main() -> int:
                 if "merge_delay_frames" in res:
                     extra = f"; merge at {res['merge_frames'][:1]} vs truth {res['true_merge_frame']}"
                 if "false_merge" in res:
-                    extra = f"; false merge: {res['false_merge']}"
+                    extra = f"; false merge: {res['false_merge']}; gate margin {res['merge_gate']}"
                 print(f"{scene} seed {seed} ({res['frames']} frames, {res['replay_s']} s): "
                       f"image@0.5 MOTA {i50['mota']:.3f} MOTP {i50['motp']:.3f} IDF1 {i50['idf1']:.3f} IDSW {i50['id_switches']} | "
                       f"image@0.3 MOTA {i30['mota']:.3f} IDF1 {i30['idf1']:.3f} IDSW {i30['id_switches']} | "
@@ -173,7 +241,8 @@ def main() -> int:
                       f"RMSE {rmse}{extra}")
     args.out.write_text(json.dumps({"fps": args.fps, "duration_s": args.duration, "config": args.config,
                                     "results": results}, indent=1) + "\n")
-    plot(runs, args.plot)
+    if args.plot:
+        plot(runs, Path(args.plot))
     print(f"wrote {args.out} and {args.plot}")
     return 0
 
