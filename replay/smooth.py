@@ -588,7 +588,8 @@ def observation_rows(tracker: str, frame_index: int, intermediates, states, rig=
     """The raw measurements of one replay step (:data:`OBS_SCHEMA` rows; empty for trackers whose
     output is already their measurement). Flow: the centroid of the moving set and the mean flow
     (eq. 11) before its Kalman filter. Groups: per group updated this frame (and not born of a merge),
-    the mean ``[u v d]`` of its points, carried to 3-D with the covariance of the EKF's σ_u, σ_v, σ_d."""
+    the mean ``[u v d]`` of its points, carried to 3-D with the covariance of the EKF's σ_u, σ_v, σ_d
+    (into the world frame, like the trajectory, when the rig's pose is known)."""
     if intermediates is None:
         return []
     rows: list[dict] = []
@@ -622,6 +623,9 @@ def observation_rows(tracker: str, frame_index: int, intermediates, states, rig=
             p = rig.to_points(m[None])[0]
             Ji = np.linalg.inv(rig.jacobian(p))
             R = Ji @ Ruvd @ Ji.T
+            pose = getattr(rig, "pose", None)
+            if pose is not None:  # the trajectory's X Y Z are then in the world frame: so are its observations
+                p, R = pose.to_world(p[None])[0], pose.rotate_cov(R)
             rows.append({"tracker": tracker, "track_id": int(gid), "frame": int(frame_index),
                          "zX": float(p[0]), "zY": float(p[1]), "zZ": float(p[2]),
                          "rXX": R[0, 0], "rXY": R[0, 1], "rXZ": R[0, 2], "rYY": R[1, 1], "rYZ": R[1, 2], "rZZ": R[2, 2]})
