@@ -6,13 +6,15 @@ CSRT lives only in opencv-contrib-python-headless, which must never share a venv
 opencv-python-headless: the CSRT side runs in its own venv (built here on first use:
 ``python -m venv DIR && DIR/bin/pip install opencv-contrib-python-headless numpy``), fed image files.
 Both sides: one OpenCV thread, the tracker's step alone timed (decode excluded). Results with the
-machine in benchmarks/results/colorpf.json.
+machine and its load average (start and end: the machine may be shared) in benchmarks/results/colorpf.json.
+The step times by N are the defaults'; N = 40 also for the paper's pipeline and with every switch on.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
@@ -28,7 +30,13 @@ sys.path.insert(0, str(HERE.parent))
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.trackers.colorpf.config import ColorPfConfig  # noqa: E402
+from trackreplay.replay.config import config_from_dict  # noqa: E402
+from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig  # noqa: E402
+
+# N = 40 step time of other pipelines: the paper's, and every switch of ours on
+VARIANTS = {"paper": PAPER, "defaults": {},
+            "all switches": {"likelihood": {"parts": 2}, "motion": {"model": "constant_velocity"},
+                             "refine": {"mode": "meanshift"}, "size": {"no_plane": "random_walk"}}}
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker  # noqa: E402
 
 DEFAULT_VENV = Path.home() / ".cache" / "trackreplay" / "csrt-venv"
@@ -42,11 +50,12 @@ def ensure_venv(venv: Path) -> Path:
     return py
 
 
-def colorpf_times(frames, n: int, repeats: int = 3) -> np.ndarray:
-    """Per-frame step times (s), the median over ``repeats`` passes."""
+def colorpf_times(frames, n: int, repeats: int = 3, overrides: dict | None = None) -> np.ndarray:
+    """Per-frame step times (s), the median over ``repeats`` passes; ``overrides`` a ``[colorpf]`` dict."""
     runs = []
+    config = config_from_dict(ColorPfConfig, {**(overrides or {}), "n_particles": n})
     for _ in range(repeats):
-        tracker = ColorPfTracker(ColorPfConfig(n_particles=n), np.random.default_rng(0))
+        tracker = ColorPfTracker(config, np.random.default_rng(0))
         t = []
         for f in frames:
             t0 = time.perf_counter()
@@ -66,7 +75,8 @@ def main() -> None:
     frames = list(iter_frames(LogReader(args.log), FrameTopics()))
     mark = frames[0].all_hints[0]
     start = [f for f in frames if f.index >= mark.frame]
-    result = {"machine": describe(), "log": args.log.name, "frames": len(start), "image": list(start[0].image.shape)}
+    result = {"machine": describe(), "log": args.log.name, "frames": len(start), "image": list(start[0].image.shape),
+              "load_average_start": list(os.getloadavg())}
     per_n = {}
     for n in (10, 20, 40, 80, 160, 320):
         t = colorpf_times(start, n)
@@ -77,6 +87,8 @@ def main() -> None:
     result["linear_fit_ms"] = {"per_particle": float(slope), "fixed": float(intercept),
                                "max_relative_residual": float(np.max(np.abs(slope * ns[0] + intercept - ns[1]) / ns[1]))}
     result["ratio_320_over_40"] = per_n[320] / per_n[40]
+    result["colorpf_step_ms_N40_by_variant"] = {name: float(np.median(colorpf_times(start, 40, overrides=o)[1:]) * 1e3)
+                                                for name, o in VARIANTS.items()}
     py = ensure_venv(args.csrt_venv)
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -89,6 +101,9 @@ def main() -> None:
     result["csrt_opencv"] = csrt["opencv"]
     result["csrt_step_ms"] = float(np.median(csrt["times"]) * 1e3)
     result["csrt_over_colorpf_N40"] = result["csrt_step_ms"] / per_n[40]
+    result["csrt_over_colorpf_N40_by_variant"] = {k: result["csrt_step_ms"] / v
+                                                  for k, v in result["colorpf_step_ms_N40_by_variant"].items()}
+    result["load_average_end"] = list(os.getloadavg())
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps({k: v for k, v in result.items() if k != "machine"}, indent=2))

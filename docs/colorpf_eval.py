@@ -1,7 +1,7 @@
 """The colour PF's Tables 1-3 as ablations on the synthetic scenes, and both against CSRT.
 
     python docs/colorpf_eval.py   # docs/colorpf_results.json + docs/colorpf_otb.png, docs/colorpf_synthetic.png
-    python docs/colorpf_eval.py --only otb   # re-run one part (synthetic | otb), the other kept from the JSON
+    python docs/colorpf_eval.py --only otb   # re-run one part (synthetic | otb | switches), the others kept from the JSON
 
 Metric: the paper's mean absolute error of x, y, w, h (px) over the visible frames where the track has
 a position, with coverage (share of those frames) beside it. Seeds 0-2, 96 walking frames, 720x480.
@@ -36,20 +36,60 @@ from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
 from trackreplay.replay.eval import evaluate  # noqa: E402
 from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.colorpf.config import PAPER  # noqa: E402
 
 REAL = HERE.parents[1] / "shared" / "data" / "real" / "otb_crossing"
 NOISE = {"size": {"mode": "noise"}}
+
+
+def merged(*cfgs: dict) -> dict:
+    """Config overrides merged table by table (later ones win)."""
+    out: dict = {}
+    for c in cfgs:
+        for k, v in c.items():
+            out[k] = {**out.get(k, {}), **v} if isinstance(v, dict) else v
+    return out
+
+
+# The Tables 1-3 ablations run on the paper's pipeline (PAPER: uniform pixel weights, fixed
+# reference), as the paper compares them; the last row of each is our defaults.
+P = PAPER
+OURS = "ours, defaults (Epanechnikov kernel + adaptive reference, geometry)"
 TABLES = {
     "Table 1 (colorpf-illumination)": ("colorpf-illumination", {
-        "H-S (proposed), size noise": NOISE, "H-S+V (Pérez), size noise": {**NOISE, "likelihood": {"histogram": "hsv"}},
-        "H-S, full (geometry)": {}, "H-S+V, full (geometry)": {"likelihood": {"histogram": "hsv"}}}),
+        "H-S (proposed), size noise": merged(P, NOISE),
+        "H-S+V (Pérez), size noise": merged(P, NOISE, {"likelihood": {"histogram": "hsv"}}),
+        "H-S, full (geometry)": P, "H-S+V, full (geometry)": merged(P, {"likelihood": {"histogram": "hsv"}}),
+        OURS: {}}),
     "Table 2 (colorpf-background)": ("colorpf-background", {
-        "mixed reference, size noise": NOISE, "target colours only, size noise": {**NOISE, "reference": {"mode": "target"}},
-        "mixed, full (geometry)": {}, "target only, full (geometry)": {"reference": {"mode": "target"}}}),
+        "mixed reference, size noise": merged(P, NOISE),
+        "target colours only, size noise": merged(P, NOISE, {"reference": {"mode": "target"}}),
+        "mixed, full (geometry)": P, "target only, full (geometry)": merged(P, {"reference": {"mode": "target"}}),
+        OURS: {}}),
     "Table 3 (colorpf-approach)": ("colorpf-approach", {
-        "with size estimation (geometry, fixed R)": {},
-        "with size estimation (geometry, paper's R_t)": {"aspect": {"mode": "likelihood"}},
-        "without size estimation (noise)": NOISE, "fixed box": {"size": {"mode": "fixed"}}}),
+        "with size estimation (geometry, fixed R)": P,
+        "with size estimation (geometry, paper's R_t)": merged(P, {"aspect": {"mode": "likelihood"}}),
+        "without size estimation (noise)": merged(P, NOISE), "fixed box": merged(P, {"size": {"mode": "fixed"}}),
+        OURS: {}}),
+}
+# Each departure alone on the paper's pipeline, then on the defaults: synthetic scenes (scene seeds
+# 0-2 x tracker seeds 0-2) and otb_crossing (tracker seeds 0-4).
+KERNEL, PARTS = {"likelihood": {"kernel": "epanechnikov"}}, {"likelihood": {"parts": 2}}
+CV, MS = {"motion": {"model": "constant_velocity"}}, {"refine": {"mode": "meanshift"}}
+UPDATE, RW = {"reference": {"update_rate": 0.05}}, {"size": {"no_plane": "random_walk"}}
+SWITCHES = {
+    "paper (before: uniform, fixed reference)": P,
+    "paper + Epanechnikov kernel": merged(P, KERNEL),
+    "paper + two parts": merged(P, PARTS),
+    "paper + constant velocity": merged(P, CV),
+    "paper + mean-shift refinement": merged(P, MS),
+    "paper + adaptive reference (0.05)": merged(P, UPDATE),
+    "paper + scale random walk without a plane": merged(P, RW),
+    "defaults (kernel + adaptive reference)": {},
+    "defaults + two parts": PARTS,
+    "defaults + constant velocity": CV,
+    "defaults + mean-shift refinement": MS,
+    "defaults + scale random walk without a plane": RW,
 }
 
 
@@ -119,6 +159,30 @@ def success_curve(ious: list[float]) -> list[float]:
     return [float((a > t).mean()) for t in IOU_THRESHOLDS]
 
 
+def switches(tmp: Path, otb_log: Path, otb_gt: pl.DataFrame) -> dict:
+    """AUC / precision@20 / centre error per variant of SWITCHES: each synthetic scene (scene seeds 0-2
+    x tracker seeds 0-2, 96 walking frames) and otb_crossing (tracker seeds 0-4)."""
+    logs = {}
+    for scene in ("colorpf-illumination", "colorpf-background", "colorpf-approach"):
+        for seed in (0, 1, 2):
+            log = tmp / f"sw-{scene}-{seed}.mcap"
+            write_colorpf_scene(log, ColorPfSceneConfig(scene=scene, seed=seed))
+            logs[(scene, seed)] = (log, read_groundtruth(LogReader(log)))
+    out = {}
+    for name, cfg in SWITCHES.items():
+        row = {}
+        for scene in ("colorpf-illumination", "colorpf-background", "colorpf-approach"):
+            rs = [scores(replay(ReplayRequest(log=log, tracker="colorpf", seed=ts, config=cfg)).trajectory, gt)[0]
+                  for (sc, _), (log, gt) in sorted(logs.items()) if sc == scene for ts in (0, 1, 2)]
+            row[scene] = mean_of(rs)
+        rs = [scores(replay(ReplayRequest(log=otb_log, tracker="colorpf", seed=ts, config=cfg)).trajectory, otb_gt)[0]
+              for ts in OTB_SEEDS]
+        row["otb_crossing"] = {**mean_of(rs), "auc_per_seed": [r["auc"] for r in rs]}
+        out[name] = row
+        print(name, json.dumps(row), flush=True)
+    return out
+
+
 def plots(results: dict) -> None:
     import matplotlib
 
@@ -165,16 +229,16 @@ def plots(results: dict) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--only", choices=("synthetic", "otb"), help="re-run one part, keep the other from the JSON")
+    ap.add_argument("--only", choices=("synthetic", "otb", "switches"), help="re-run one part, keep the others from the JSON")
     only = ap.parse_args().only
     path = HERE / "colorpf_results.json"
-    results: dict = {"tables": {}, "vs_csrt": {}, "otb": {}, "per_frame": {}}
+    results: dict = {"tables": {}, "vs_csrt": {}, "otb": {}, "per_frame": {}, "switches": {}}
     if only and path.exists():
-        results = json.loads(path.read_text())
+        results = {"switches": {}, **json.loads(path.read_text())}
     py = ensure_venv(DEFAULT_VENV)
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        for title, (scene, variants) in TABLES.items() if only != "otb" else ():
+        for title, (scene, variants) in TABLES.items() if only in (None, "synthetic") else ():
             rows: dict[str, list] = {}
             vs: dict[str, list] = {"colorpf (defaults)": [], "CSRT": []}
             for seed in (0, 1, 2):
@@ -184,6 +248,8 @@ def main() -> None:
                 for name, cfg in variants.items():
                     traj = replay(ReplayRequest(log=log, tracker="colorpf", seed=0, config=cfg)).trajectory
                     rows.setdefault(name, []).append(errors(traj, gt))
+                    if cfg is P:
+                        vs.setdefault("colorpf (paper)", []).append({**errors(traj, gt), **scores(traj, gt)[0]})
                     if not cfg:
                         summary, frames = scores(traj, gt)
                         vs["colorpf (defaults)"].append({**errors(traj, gt), **summary})
@@ -199,13 +265,16 @@ def main() -> None:
             results["vs_csrt"][scene] = {name: mean_of(rs) for name, rs in vs.items()}
             print(title, json.dumps(results["tables"][title], indent=1))
             print(json.dumps(results["vs_csrt"][scene], indent=1), flush=True)
-        if REAL.is_dir() and only != "synthetic":
+        if REAL.is_dir() and only in (None, "otb", "switches"):
             log, marked = tmp / "otb.mcap", tmp / "otbm.mcap"
             cli(["record", str(log), "--images", str(REAL / "img"), "--fps", "30", "--groundtruth",
                  str(REAL / "groundtruth_rect.txt"), "--quiet"])
             x, y, w, h = (float(v) for v in (REAL / "groundtruth_rect.txt").read_text().split()[0].split(","))
             cli(["annotate", str(log), "--frame", "0", "--box", f"{x - 1},{y - 1},{w},{h}", "--out", str(marked)])
             gt = read_groundtruth(LogReader(marked))
+        if REAL.is_dir() and only in (None, "switches"):
+            results["switches"] = switches(tmp, marked, gt)
+        if REAL.is_dir() and only in (None, "otb"):
             by_seed = []
             for seed in OTB_SEEDS:
                 summary, frames = scores(replay(ReplayRequest(log=marked, tracker="colorpf", seed=seed)).trajectory, gt)
@@ -215,6 +284,11 @@ def main() -> None:
             results["otb"]["colorpf (defaults), seed 0"] = by_seed[0]
             results["otb"][f"colorpf (defaults), mean of seeds {OTB_SEEDS[0]}-{OTB_SEEDS[-1]}"] = mean_of(by_seed)
             results["otb"]["colorpf (defaults), AUC per seed"] = [s["auc"] for s in by_seed]
+            paper = [scores(replay(ReplayRequest(log=marked, tracker="colorpf", seed=seed, config=P)).trajectory, gt)[0]
+                     for seed in OTB_SEEDS]
+            results["otb"][f"colorpf (paper: uniform, fixed reference), mean of seeds {OTB_SEEDS[0]}-{OTB_SEEDS[-1]}"] = \
+                mean_of(paper)
+            results["otb"]["colorpf (paper), AUC per seed"] = [s["auc"] for s in paper]
             for name, cfg in {"H-S+V": {"likelihood": {"histogram": "hsv"}},
                               "target-only reference": {"reference": {"mode": "target"}}, "size noise": NOISE,
                               "fixed box": {"size": {"mode": "fixed"}}}.items():

@@ -4,6 +4,12 @@ Pixels become bin indices once per frame (only inside the union of the particles
 N box histograms are counted together (:func:`box_histograms`). ``"hs"`` bins H and S only (§3.1:
 a uniform brightness change leaves them alone); ``"hsv"`` is Pérez et al.'s H-S + V histogram, the
 paper's comparison in Table 1.
+
+Two switches of ours weigh the pixels with an Epanechnikov kernel (``likelihood.kernel``, on by
+default; ``"uniform"`` is the paper) and split the box into bands (``likelihood.parts``, off by
+default), each with its own histogram
+(:func:`~trackreplay.trackers.appearance.histogram.box_part_histograms`); :func:`mean_shift` refines
+an estimate with the same histograms. A histogram here is flat, ``parts * n_bins`` long.
 """
 
 from __future__ import annotations
@@ -13,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackreplay.trackers.appearance.color import HSV_RANGES, to_hsv
-from trackreplay.trackers.appearance.histogram import box_histograms, hs_index, hs_v_index, intersection
+from trackreplay.trackers.appearance.histogram import box_part_histograms, hs_index, hs_v_index, kernel_and_part
 from trackreplay.trackers.colorpf.config import LikelihoodConfig
 
 
@@ -25,13 +31,39 @@ class ColourModel:
 
     @property
     def shape(self) -> tuple[int, ...]:
-        """The histogram's shape for display: (T, T) for "hs", (T*T + T,) for "hsv"."""
-        t = self.config.bins
-        return (t, t) if self.config.histogram == "hs" else (t * t + t,)
+        """The histogram's shape for display: (T, T) for "hs", (T*T + T,) for "hsv"; with parts > 1
+        the parts stacked: (parts T, T) and (parts, T*T + T)."""
+        t, p = self.config.bins, self.config.parts
+        if self.config.histogram == "hs":
+            return (p * t, t)
+        return (t * t + t,) if p == 1 else (p, t * t + t)
 
     @property
     def n_bins(self) -> int:
-        return int(np.prod(self.shape))
+        """Bins of one part's histogram."""
+        t = self.config.bins
+        return t * t if self.config.histogram == "hs" else t * t + t
+
+    @property
+    def parts(self) -> int:
+        return self.config.parts
+
+    def histograms(self, index: np.ndarray, boxes: np.ndarray, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray]:
+        """(K, parts * n_bins) histograms of integer boxes ``x0, y0, x1, y1`` in a bin-index image."""
+        cfg = self.config
+        h, n = box_part_histograms(index, boxes, self.n_bins, kernel=cfg.kernel, parts=cfg.parts, max_pixels=max_pixels)
+        return h.reshape(len(h), -1), n
+
+    def similarity(self, hists: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """Eq. (4) per histogram (rows of ``hists``): Swain's intersection, per part, and with parts
+        their geometric mean ``(prod_p S_p)^(1/parts)``."""
+        p = self.config.parts
+        hists = np.asarray(hists, dtype=np.float64)
+        per_part = np.minimum(hists.reshape(*hists.shape[:-1], p, self.n_bins),
+                              np.asarray(reference, dtype=np.float64).reshape(p, self.n_bins)).sum(axis=-1)
+        if p == 1:
+            return per_part[..., 0]
+        return np.prod(per_part, axis=-1) ** (1.0 / p)
 
     def index(self, bgr: np.ndarray) -> np.ndarray:
         """Bin index per pixel (int32, the image's shape without channels)."""
@@ -40,6 +72,19 @@ class ColourModel:
         if cfg.histogram == "hs":
             return hs_index(hsv, (cfg.bins, cfg.bins), HSV_RANGES)[0]
         return hs_v_index(hsv, (cfg.bins,) * 3, HSV_RANGES, s_min=cfg.s_min, v_min=cfg.v_min)[0]
+
+    def pooled_similarity(self, hists: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """Intersection of the parts' mean histogram with the reference's: the colours regardless of
+        where in the box they are (= :meth:`similarity` with one part). The status uses it (a target
+        seen at a wrong scale moves its colours between the bands, and the confidence should not say
+        "lost" for that); the particles' weights use :meth:`similarity`."""
+        p = self.config.parts
+        if p == 1:
+            return self.similarity(hists, reference)
+        hists = np.asarray(hists, dtype=np.float64)
+        mean_h = hists.reshape(*hists.shape[:-1], p, self.n_bins).mean(axis=-2)
+        mean_r = np.asarray(reference, dtype=np.float64).reshape(p, self.n_bins).mean(axis=0)
+        return np.minimum(mean_h, mean_r).sum(axis=-1)
 
     def likelihood(self, similarity: np.ndarray) -> np.ndarray:
         """Eq. (5): ``L = exp(k S²)``."""
@@ -84,8 +129,8 @@ def measure(model: ColourModel, image: np.ndarray, states: np.ndarray, reference
         return Measurement(zero, model.likelihood(zero), np.zeros(n, dtype=np.int64))
     index = model.index(image[y0:y1, x0:x1])  # only the union of the boxes is converted
     local = corners - np.array([x0, y0, x0, y0])
-    hists, pixels = box_histograms(index, local, model.n_bins, max_pixels=model.config.max_pixels)
-    similarity = np.asarray(intersection(hists, reference.reshape(-1)), dtype=np.float64)
+    hists, pixels = model.histograms(index, local, model.config.max_pixels)
+    similarity = model.similarity(hists, reference)
     return Measurement(similarity, model.likelihood(similarity), pixels)
 
 
@@ -94,7 +139,56 @@ def box_histogram(model: ColourModel, image: np.ndarray, state: np.ndarray) -> n
     height, width = image.shape[:2]
     x0, y0, x1, y1 = box_corners(state, width, height)[0]
     if x1 <= x0 or y1 <= y0:
-        return np.zeros(model.n_bins)
+        return np.zeros(model.parts * model.n_bins)
     index = model.index(image[y0:y1, x0:x1])
-    return box_histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), model.n_bins,
-                          max_pixels=model.config.max_pixels)[0][0]
+    return model.histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), model.config.max_pixels)[0][0]
+
+
+def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, reference: np.ndarray,
+               iterations: int) -> tuple[np.ndarray, float]:
+    """Comaniciu et al.'s mean shift from ``state`` ``(x, y, w, h)`` (size kept): each step moves the
+    centre to the mean of the box's pixels weighted by ``sqrt(q_u / p_u)`` (``q`` the reference,
+    ``p`` the box's histogram, ``u`` the pixel's bin, per part; the kernel's support only) and is kept
+    only when it raises S.
+    Returns the refined state and its S. The pixels are one vectorised block (at most
+    ``likelihood.max_pixels`` of them, as for the particles); the loop is over the few iterations.
+    """
+    height, width = image.shape[:2]
+    state = np.asarray(state, dtype=np.float64).copy()
+    q = np.asarray(reference, dtype=np.float64).reshape(model.parts, model.n_bins)
+    # one bin-index image covering every box the steps can reach (a box's half size around the start)
+    ux0, uy0, ux1, uy1 = box_corners(np.array([state[0], state[1], 2 * state[2], 2 * state[3]]), width, height)[0]
+    best_s, best_state = -1.0, state.copy()
+    if ux1 <= ux0 or uy1 <= uy0:
+        return state, 0.0
+    index = model.index(image[uy0:uy1, ux0:ux1])
+    step_kernel = "epanechnikov" if model.config.kernel == "epanechnikov" else "uniform"
+    for i in range(iterations + 1):
+        x0, y0, x1, y1 = box_corners(state, width, height)[0]
+        if x1 <= x0 or y1 <= y0 or x0 < ux0 or y0 < uy0 or x1 > ux1 or y1 > uy1:
+            break
+        local = np.array([[x0 - ux0, y0 - uy0, x1 - ux0, y1 - uy0]])
+        hist = model.histograms(index, local, None)[0][0].reshape(model.parts, model.n_bins)
+        s = float(model.similarity(hist.reshape(-1), q))
+        if i > 0 and s <= best_s:
+            state = best_state
+            break
+        best_s, best_state = s, state.copy()
+        if i == iterations:
+            break
+        bins = index[y0 - uy0:y1 - uy0, x0 - ux0:x1 - ux0]
+        dy, dx = np.arange(y1 - y0)[:, None] + 0.5, np.arange(x1 - x0)[None, :] + 0.5
+        kern, part = kernel_and_part(dy, dx, y1 - y0, x1 - x0, step_kernel, model.parts)
+        p = hist[part, bins]
+        # the Epanechnikov profile's derivative is constant on its support: the step is the mean of
+        # the support's pixels weighted by sqrt(q/p) alone (Comaniciu et al. 2003, eq. 13)
+        w = (kern > 0) * np.where(p > 0, np.sqrt(q[part, bins] / np.where(p > 0, p, 1.0)), 0.0)
+        total = w.sum()
+        if total <= 0:
+            break
+        cx = x0 + float((w * np.broadcast_to(dx, w.shape)).sum() / total)
+        cy = y0 + float((w * np.broadcast_to(dy, w.shape)).sum() / total)
+        if abs(cx - state[0]) < 0.25 and abs(cy - state[1]) < 0.25:
+            break
+        state[0], state[1] = cx, cy
+    return best_state, max(best_s, 0.0)

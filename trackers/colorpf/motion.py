@@ -53,13 +53,20 @@ def standing_box(xy: np.ndarray, h0: float | np.ndarray, model: WeakPerspectiveS
 
 def transition(*, sigma: np.ndarray, size: SizeConfig, ratio: float, box_wh: np.ndarray,
                model: WeakPerspectiveSize, plane: GroundPlane | None, side: float,
-               initial_wh: np.ndarray) -> Transition:
-    """Eq. (2) for :meth:`ParticleFilter.predict`."""
+               initial_wh: np.ndarray, drift: np.ndarray | None = None) -> Transition:
+    """Eq. (2) for :meth:`ParticleFilter.predict`; ``drift`` (ours, ``motion.model =
+    "constant_velocity"``): a displacement ``(dx, dy)`` added to every particle before the noise."""
 
     def step(particles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         out = particles.copy()
         out[:, :2] += rng.standard_normal((len(out), 2)) * sigma
-        if size.mode == "geometry":
+        if drift is not None:
+            out[:, :2] += drift
+        if size.mode == "geometry" and not model.has_distance and size.no_plane == "random_walk":
+            scale = np.maximum(1.0 + rng.standard_normal(len(out)) * size.noise, 0.5)  # aspect kept
+            w = out[:, 2] * scale
+            h = ratio * w
+        elif size.mode == "geometry":
             omega = rng.standard_normal(len(out)) * model.r_s
             area, distance = standing_box(out[:, :2], box_wh[1], model, plane, side, ratio, omega)  # eq. (9)
             w, h = box_from_area(area, ratio)  # eq. (12)

@@ -5,7 +5,10 @@ prints ``P_detect - P_square`` in the second weight, which would make it negativ
 (the two weights sum to one, so ``H_ref`` stays normalised).
 
 ``P_detect`` are the marked box's foreground pixels (their histogram is ``H_target``), ``P_square``
-the box's pixels, ``H_back`` the histogram of the **whole** background image.
+the box's pixels, ``H_back`` the histogram of the **whole** background image. With
+``likelihood.kernel`` (ours, on by default) / ``likelihood.parts`` (ours, off) the counts are kernel-weighted
+and eq. (7) is applied per part: ``H_ref,p = a_p H_target,p + (1 - a_p) H_back`` with ``a_p`` the
+(weighted) share of part ``p`` that the foreground covers.
 
 Where the background comes from (:class:`BackgroundFrames`): the per-pixel median of the frames
 before the marked one (``"before"``: the paper's background subtraction at initialisation, the
@@ -22,13 +25,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackreplay.trackers.appearance.histogram import box_histograms, index_histogram
+from trackreplay.trackers.appearance.histogram import image_part_histograms, index_histogram
 from trackreplay.trackers.colorpf.config import ReferenceConfig
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners
 from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
 
 
-def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: int, p_square: int) -> np.ndarray:
+def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: float, p_square: float) -> np.ndarray:
     """Eq. (7) with SPEC's fix: ``(P_d / P_s) H_target + ((P_s - P_d) / P_s) H_back``."""
     if p_square <= 0 or not 0 <= p_detect <= p_square:
         raise ValueError(f"eq. (7) needs 0 <= P_detect <= P_square and P_square > 0, not {p_detect}, {p_square}")
@@ -62,7 +65,7 @@ def box_reference(model: ColourModel, image: np.ndarray, box: np.ndarray) -> Ref
 def _box_hist(model: ColourModel, image: np.ndarray, box: np.ndarray) -> np.ndarray:
     x0, y0, x1, y1 = (int(v) for v in box)
     index = model.index(image[y0:y1, x0:x1])
-    return box_histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), model.n_bins)[0][0]
+    return model.histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), None)[0][0]
 
 
 def subtract_and_mix(model: ColourModel, cfg: ReferenceConfig, image: np.ndarray, background: np.ndarray,
@@ -81,12 +84,20 @@ def subtract_and_mix(model: ColourModel, cfg: ReferenceConfig, image: np.ndarray
         return None, (f"the foreground fills {fill:.0%} of the marked box (usable: {cfg.min_fill:.0%}-"
                       f"{cfg.max_fill:.0%})")
     index = model.index(image[y0:y1, x0:x1])
-    h_target = index_histogram(index, model.n_bins, fg)
+    lik = model.config
+    h_target, w_fg, w_all = image_part_histograms(index, model.n_bins, kernel=lik.kernel, parts=lik.parts, mask=fg)
     h_back = index_histogram(model.index(background), model.n_bins)  # the whole background
     if cfg.mode == "mixed":
-        h_ref, kind = mixed_reference(h_target, h_back, p_detect, p_square), "mixed"
+        if lik.parts == 1 and lik.kernel == "uniform":
+            h_ref = mixed_reference(h_target[0], h_back, p_detect, p_square)
+        else:  # eq. (7) per part, with the kernel-weighted foreground share
+            h_ref = np.stack([mixed_reference(h_target[j], h_back, min(w_fg[j], w_all[j]), w_all[j])
+                              if w_all[j] > 0 else h_back for j in range(lik.parts)])  # a loop over the parts
+        kind = "mixed"
     else:
         h_ref, kind = h_target, "target"
+    h_ref, h_target = np.asarray(h_ref).reshape(-1), np.asarray(h_target).reshape(-1)
+    h_back = np.tile(h_back, lik.parts)  # the same background for every part
     return Reference(h_ref, kind, source, h_target, h_back, p_detect, p_square, fg,
                      np.array([x0, y0], dtype=np.int64)), ""
 

@@ -17,6 +17,12 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
    (H-S cannot tell them apart), it cannot set the scale: ``c = S / S_mark`` then, said once.
    With an "early" reference ``S_mark`` is the marked box's score against the new reference.
 
+Departures of ours, each a switch (``colorpf.config``; measured in docs/colorpf.md): by default the
+histograms are Epanechnikov-weighted and the reference adapts (rate 0.05, only while the confidence
+against the reference as built is high and tells the target from the background); off by default,
+two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
+moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
+
 The first mark in the log (lowest frame; on one frame, the first listed), whatever its label,
 starts the track; later marks are not used (a notice says so).
 """
@@ -30,7 +36,7 @@ from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.config import ColorPfConfig
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
-from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, measure
+from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
 from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition
 from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
                                                     subtract_and_mix)
@@ -76,6 +82,8 @@ class ColorPfTracker(TrackerBase):
         self._marked_image: np.ndarray | None = None
         self._told: set[str] = set()
         self._s_mark: float | None = None
+        self.adapted: np.ndarray | None = None  # reference.update_rate > 0: the adapted H_ref (None: as built)
+        self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self._pending: list[str] = []
         self.intermediates = ColorPfIntermediates.idle()
 
@@ -153,7 +161,7 @@ class ColorPfTracker(TrackerBase):
         assert self.mark is not None and self.reference is not None
         m = self.mark
         h = box_histogram(self.model, image, np.array([m.x, m.y, m.w, m.h], dtype=np.float64))
-        return float(np.minimum(h, self.reference.histogram).sum())
+        return float(self.model.pooled_similarity(h, self.reference.histogram))
 
     def _no_background(self, why: str) -> str:
         return (f"no background for the reference histogram ({why}): the reference is the marked box's own "
@@ -176,6 +184,7 @@ class ColorPfTracker(TrackerBase):
             self._say(f"reference: eq. (7) from the median of {self.config.reference.frames} frames from the mark on "
                       "(the target was in the picture from the start); until then the marked box's own histogram")
         self.reference = ref
+        self.adapted = None
         return ref.mask
 
     def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
@@ -183,15 +192,25 @@ class ColorPfTracker(TrackerBase):
         assert self.reference is not None and self.size is not None and self.aspect is not None
         image, plane = frame.image, frame.ground_plane
         prev = self.pf.estimate()
+        working = self.reference.histogram if self.adapted is None else self.adapted
         if not weigh_only:
             self.pf.resample()  # select by the previous weights
+            drift = self.velocity if cfg.motion.model == "constant_velocity" else None
             self.pf.predict(transition(
                 sigma=position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), size=cfg.size, ratio=self.aspect.ratio,
-                box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh))  # eq. (2)
-        m = measure(self.model, image, self.pf.particles, self.reference.histogram)  # eqs. (4)-(5)
+                box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh,
+                drift=drift))  # eq. (2)
+        m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
         self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
         self.pf.weigh(lambda _: m.likelihood)
         estimate = self.pf.estimate()  # eq. (6)
+        if cfg.refine.mode == "meanshift" and not weigh_only:
+            refined, _ = mean_shift(self.model, image, estimate, working, cfg.refine.iterations)
+            self.pf.particles[:, :2] += refined[:2] - estimate[:2]  # the cloud moves with the estimate
+            estimate = self.pf.estimate()
+        if not weigh_only:
+            s = cfg.motion.smoothing
+            self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
         area_a, distance_a = standing_box(estimate[None, :2], estimate[3], self.size, plane, self.side, self.aspect.ratio)
         area, distance = float(area_a[0]), float(distance_a[0])
         if cfg.size.mode == "geometry" and cfg.aspect.mode == "likelihood" and not weigh_only:
@@ -199,11 +218,14 @@ class ColorPfTracker(TrackerBase):
         else:
             update = AspectUpdate(float("nan"), self.aspect.ratio, True)
         current = box_histogram(self.model, image, estimate)
-        s_est = float(np.minimum(current, self.reference.histogram).sum())
+        s_est = float(self.model.pooled_similarity(current, self.reference.histogram))  # against H_ref as built
         if weigh_only or self._s_mark is None:
             self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
         ref_h = self.reference.histogram
-        s_back = float(np.minimum(self.reference.h_back, ref_h).sum())
+        s_back = float(self.model.pooled_similarity(self.reference.h_back, ref_h))
+        # the confidence tells the target from the background only with a background-built reference
+        # whose mark stands out from it; only then may the reference adapt (reference.update_rate)
+        telling = self.reference.kind != "box" and self._s_mark - s_back >= cfg.min_separation
         if self._s_mark - s_back < cfg.min_separation:
             # the background scores (nearly) as well as the mark: it cannot scale the confidence
             self._say(f"the marked box scores S = {self._s_mark:.2f} against the reference and the background "
@@ -211,6 +233,9 @@ class ColorPfTracker(TrackerBase):
                       "is S relative to the mark's alone (as without a background) and says little")
             s_back = 0.0
         confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
+        rate = cfg.reference.update_rate
+        if rate > 0 and telling and not weigh_only and confidence >= cfg.reference.update_above and current.sum() > 0:
+            self.adapted = (1.0 - rate) * working + rate * current  # Nummiaro et al.'s adaptive model
         if confidence >= cfg.measured_fraction:
             status, self.misses = "measured", 0
         else:

@@ -28,3 +28,47 @@ def test_ycbcr_order_is_y_cb_cr() -> None:
     blue[..., 0] = 255
     y, cb, cr = to_ycbcr(blue)[0, 0]
     assert cb > 200 and cr < 128 and y < 64
+
+
+# --- kernel-weighted, multi-part box histograms (known answers) ----------------------------------
+from trackreplay.trackers.appearance.histogram import (  # noqa: E402
+    box_histograms, box_part_histograms, image_part_histograms, kernel_and_part)
+
+
+def test_kernel_and_part_known_answers() -> None:
+    # a 4 x 4 box: pixel centres at 0.5 .. 3.5, r^2 = u^2 + v^2 with u, v in {-0.75, -0.25, 0.25, 0.75}
+    w, p = kernel_and_part(np.arange(4)[:, None] + 0.5, np.arange(4)[None, :] + 0.5, 4, 4, "epanechnikov", 2)
+    assert w[1, 1] == 1 - 0.0625 - 0.0625 and w[0, 0] == 0.0 and w[0, 1] == 1 - 0.5625 - 0.0625
+    assert np.array_equal(p[:, 0], [0, 0, 1, 1])  # parts: top half 0, bottom half 1
+    u, _ = kernel_and_part(np.zeros(3), np.zeros(3), 4, 4, "uniform", 1)
+    assert np.array_equal(u, np.ones(3))
+
+
+def test_box_part_histograms_known_answer() -> None:
+    index = np.zeros((4, 4), np.int64)
+    index[2:, :] = 1  # bottom half bin 1, top half bin 0
+    index[1, 1] = 2  # one pixel near the centre in bin 2
+    box = np.array([[0, 0, 4, 4]])
+    h, n = box_part_histograms(index, box, 3, kernel="uniform", parts=2)
+    assert n[0] == 16
+    np.testing.assert_allclose(h[0], [[7 / 8, 0, 1 / 8], [0, 1, 0]])
+    # Epanechnikov: top-half weights per row 0: (0, .375, .375, 0), row 1: (.375, .875, .875, .375)
+    hk, _ = box_part_histograms(index, box, 3, kernel="epanechnikov", parts=1)
+    total = 2 * (0.75 + 2.5)
+    np.testing.assert_allclose(hk[0, 0], [(0.75 + 2.5 - 0.875) / total, (0.75 + 2.5) / total, 0.875 / total])
+    # uniform, one part: the same as box_histograms
+    rng = np.random.default_rng(1)
+    big = rng.integers(0, 7, (30, 40))
+    boxes = np.array([[0, 0, 40, 30], [3, 5, 20, 17], [10, 10, 10, 20]])
+    a, na = box_histograms(big, boxes, 7, max_pixels=100)
+    b, nb = box_part_histograms(big, boxes, 7, max_pixels=100)
+    np.testing.assert_allclose(b[:, 0], a)
+    assert np.array_equal(na, nb)
+
+
+def test_image_part_histograms_mask_share() -> None:
+    index = np.array([[0, 1], [2, 2]])
+    h, w_in, w_all = image_part_histograms(index, 3, parts=2, mask=np.array([[True, False], [True, True]]))
+    np.testing.assert_allclose(h, [[1, 0, 0], [0, 0, 1]])
+    np.testing.assert_allclose(w_in, [1, 2])
+    np.testing.assert_allclose(w_all, [2, 2])

@@ -42,3 +42,37 @@ def test_intersection_and_likelihood_per_particle():
     np.testing.assert_allclose(m.likelihood, np.exp(20.0 * np.array([1.0, 0.25, 0.0, 0.0])))
     assert m.pixels[3] == 0
     assert abs(model.similarity_for(25.0) - np.sqrt(np.log(25.0) / 20.0)) < 1e-12
+
+
+def test_parts_similarity_is_the_geometric_mean_of_the_parts():
+    model = ColourModel(LikelihoodConfig(parts=2, max_pixels=None))
+    img = np.zeros((40, 20, 3), np.uint8)
+    img[:20] = (0, 0, 255)  # red top half
+    img[20:] = (255, 0, 0)  # blue bottom half
+    box = np.array([9.5, 19.5, 20.0, 40.0])
+    ref = box_histogram(model, img, box)
+    assert ref.shape == (200,) and model.shape == (20, 10)
+    assert ref.reshape(2, 10, 10)[0, 0, 9] == 1.0 and ref.reshape(2, 10, 10)[1, 6, 9] == 1.0
+    assert model.similarity(ref, ref) == 1.0
+    flipped = np.concatenate([ref[100:], ref[:100]])  # upper and lower swapped: the same colours, wrong places
+    assert model.similarity(flipped, ref) == 0.0
+    half = np.concatenate([ref[:100], 0.5 * ref[100:] + 0.5 * ref[:100]])  # S_top 1, S_bottom 0.5
+    assert np.isclose(model.similarity(half, ref), np.sqrt(0.5))
+    # the one-part model sees only the colours: the swap costs nothing
+    one = ColourModel(LikelihoodConfig(max_pixels=None))
+    assert one.similarity(box_histogram(one, img, box), box_histogram(one, img, box)) == 1.0
+
+
+def test_mean_shift_climbs_to_the_target():
+    from trackreplay.trackers.colorpf.likelihood import mean_shift
+
+    img = np.full((80, 100, 3), (0, 160, 0), np.uint8)  # green field
+    img[30:50, 40:56] = (0, 0, 255)  # a 16 x 20 red target centred at (48, 40)
+    for kernel in ("uniform", "epanechnikov"):
+        model = ColourModel(LikelihoodConfig(kernel=kernel, max_pixels=None))
+        ref = box_histogram(model, img, np.array([48.0, 40.0, 16.0, 20.0]))
+        start = np.array([43.0, 36.0, 16.0, 20.0])
+        s0 = float(model.similarity(box_histogram(model, img, start), ref))
+        out, s = mean_shift(model, img, start, ref, iterations=10)
+        assert s > s0 and abs(out[0] - 48.0) < 2.0 and abs(out[1] - 40.0) < 2.0
+        assert np.array_equal(out[2:], start[2:])  # the size is kept

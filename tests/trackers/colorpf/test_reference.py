@@ -19,7 +19,7 @@ def test_mixed_reference_formula():
 
 
 def test_background_subtraction_mixes_target_and_whole_background():
-    model = ColourModel(LikelihoodConfig(max_pixels=None))
+    model = ColourModel(LikelihoodConfig(max_pixels=None, kernel="uniform"))  # the paper's eq. (7): pixel counts
     background = np.zeros((50, 80, 3), np.uint8)
     background[:] = GREEN
     background[:, 60:] = (200, 0, 0)  # the whole background: 3/4 green, 1/4 blue
@@ -37,3 +37,38 @@ def test_background_subtraction_mixes_target_and_whole_background():
     assert target_only.histogram.reshape(10, 10)[0, 9] == pytest.approx(1.0)
     unusable, why = subtract_and_mix(model, ReferenceConfig(open_px=1), background, background, np.array([5, 10, 25, 30]), "before")
     assert unusable is None and "fills 0%" in why
+
+
+def _scene():
+    background = np.zeros((50, 80, 3), np.uint8)
+    background[:] = GREEN
+    background[:, 60:] = (200, 0, 0)  # the whole background: 3/4 green, 1/4 blue
+    return background
+
+
+def test_kernel_weighted_mix_counts_the_centre_more():
+    from trackreplay.trackers.appearance.histogram import kernel_and_part
+
+    background = _scene()
+    image = background.copy()
+    image[10:30, 10:20] = RED  # the central 10 of the box's 20 columns
+    model = ColourModel(LikelihoodConfig(max_pixels=None, kernel="epanechnikov"))
+    ref, _ = subtract_and_mix(model, ReferenceConfig(open_px=1), image, background, np.array([5, 10, 25, 30]), "before")
+    w, _ = kernel_and_part(np.arange(20)[:, None] + 0.5, np.arange(20)[None, :] + 0.5, 20, 20, "epanechnikov")
+    a = w[:, 5:15].sum() / w.sum()  # the kernel-weighted P_detect / P_square
+    assert 0.5 < a < 1.0  # the target sits in the middle: it weighs more than its 200 of 400 pixels
+    h = ref.histogram.reshape(10, 10)
+    assert h[0, 9] == pytest.approx(a) and h[3, 9] == pytest.approx((1 - a) * 0.75)
+    assert h.sum() == pytest.approx(1.0)
+
+
+def test_two_parts_mix_per_part():
+    background = _scene()
+    image = background.copy()
+    image[10:20, 5:25] = RED  # the top half of the marked box (rows 10-29) is all target, the bottom none
+    model = ColourModel(LikelihoodConfig(max_pixels=None, kernel="uniform", parts=2))
+    ref, _ = subtract_and_mix(model, ReferenceConfig(open_px=1, max_fill=1.0), image, background,
+                              np.array([5, 10, 25, 30]), "before")
+    top, bottom = ref.histogram.reshape(2, 10, 10)
+    assert top[0, 9] == pytest.approx(1.0)  # a_top = 1: H_target alone
+    assert bottom[0, 9] == 0.0 and bottom[3, 9] == pytest.approx(0.75)  # a_bottom = 0: H_back alone
