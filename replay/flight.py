@@ -461,13 +461,18 @@ def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarr
     mean = obs.los[still].mean(axis=0)
     mean /= np.linalg.norm(mean)
     p0 = _ground_point(obs.camera, mean, contact)
+    # The launch bound holds only if the tracker saw the ball at rest on the ground (a track that
+    # starts in the air — the "beside" shot, marked over the sky — has no tee frames to bound it).
+    on_tee = p0 is not None and k >= 3
     if p0 is None:
         notes.append("the first frames do not look down at the ground: launch point guessed 10 m in front of the camera")
         p0 = obs.camera + 10.0 * mean
         p0[2] = contact
-    if k > 0:
+    if k > 0 and on_tee:
         t_last = float(obs.t[k - 1])
         t0, t_hi = min(t_last + 0.5 / fps, 0.5 * (t_last + obs.t[k])), min(t_last + 1.0 / fps, float(obs.t[k]))
+    elif k > 0:
+        t0, t_hi = 0.5 * (obs.t[k - 1] + obs.t[k]), math.inf
     else:
         t0, t_hi = obs.t[0] - 0.5 / fps, math.inf
     # Azimuth: towards where the ball ends (its last line of sight on the ground), else along the view.

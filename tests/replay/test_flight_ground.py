@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from trackreplay.recorder.synth.golf.flight import ROLL, BallModel, Launch, simulate_shot
-from trackreplay.replay.flight import NAMES, FlightConfig, Observations, fit_flight, simulate
+from trackreplay.replay.flight import NAMES, FlightConfig, Observations, _initial, fit_flight, simulate
 
 CAMERA = np.array([-10.0, -2.0, 2.5])  # behind the tee, as the synthetic scenes' "behind" camera
 FPS, T_LAUNCH = 30.0, 0.5
@@ -69,6 +69,19 @@ def test_the_launch_is_within_a_frame_of_the_last_tee_frame(drive) -> None:
     the middle of the 1.4 s gap (where speed, launch time and lift trade off)."""
     _, fit = drive
     assert T_LAUNCH - 0.5 / FPS <= fit.report.launch_time.value <= T_LAUNCH + 1.0 / FPS + 1e-9
+
+
+def test_no_launch_bound_without_frames_on_the_tee() -> None:
+    """A track that starts in the air (marked over the sky) has no frame of the ball at rest: its
+    first frame must not bound the launch (it did, and the 'beside' shot launched at its first frame)."""
+    ball = BallModel(friction=0.6, rolling_resistance=0.3)
+    traj = simulate_shot(Launch(speed=46.0, elevation=22.0, azimuth=0.0, backspin_rpm=8000.0), ball)
+    on_tee, _, _ = _observe(traj, ball, lambda ts, phase: ~((ts >= 0.0) & (ts < 1.4)))
+    in_air, _, _ = _observe(traj, ball, lambda ts, phase: ts >= 2.0)
+    _, _, t_hi = _initial(on_tee, FlightConfig(), FPS)
+    assert abs(t_hi - T_LAUNCH) < 1e-9  # the last frame on the tee is one frame before the launch
+    _, _, t_hi = _initial(in_air, FlightConfig(), FPS)
+    assert t_hi == math.inf
 
 
 def test_bounce_model_matches_the_truths_impacts() -> None:
