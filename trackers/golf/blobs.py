@@ -147,9 +147,12 @@ class GatedBlobs:
         return cls(Blobs.empty(), np.zeros(0, np.int64), -1, np.full(2, np.nan), 1.0)
 
 
-def find_blobs(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, cfg: BlobConfig, scale: float) -> Blobs:
-    """The silhouette's blobs; shapes measured for the ``max_blobs`` nearest to the prediction."""
-    return measure_blobs(mask, offset, min_area=cfg.min_area_px * scale * scale, max_measured=cfg.max_blobs, near=predicted)
+def find_blobs(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, cfg: BlobConfig, scale: float, *,
+               moments: bool = True) -> Blobs:
+    """The silhouette's blobs; shapes measured for the ``max_blobs`` nearest to the prediction
+    (their covariance only with ``moments``: only the motion check reads it)."""
+    return measure_blobs(mask, offset, min_area=cfg.min_area_px * scale * scale, max_measured=cfg.max_blobs, near=predicted,
+                         moments=moments)
 
 
 def start_targets(mask: np.ndarray, offset: tuple[int, int], near: np.ndarray, cfg: BlobConfig, scale: float) -> BlobTargets | None:
@@ -209,7 +212,7 @@ def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray
     """Blobs of the silhouette, gated (widened by ``misses``, ``widen_lost`` once the track is lost;
     shape against ``motion`` when it is known), and the accepted one nearest ``predicted``."""
     widen = cfg.widen_lost if lost else min(1.0 + cfg.widen_per_miss * misses, cfg.widen_max)
-    blobs = find_blobs(mask, offset, predicted, cfg, scale)
+    blobs = find_blobs(mask, offset, predicted, cfg, scale, moments=motion is not None)
     reason = gate(blobs, targets, cfg, scale, widen=widen, motion=motion)
     selected = nearest(blobs.centroid, reason == OK, predicted)
     return GatedBlobs(blobs, reason, selected, np.array([targets.area, targets.circularity]), float(widen))
