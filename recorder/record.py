@@ -21,7 +21,7 @@ from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
 from trackreplay.recorder.sources.ground_plane import read_ground_plane
 from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
 from trackreplay.recorder.sources.images import check_count, list_images, read_images
-from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration
+from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration, pose_message
 from trackreplay.recorder.sources.video import frame_count_hint, read_video, video_clock
 from trackreplay.recorder.writer import LogWriter
 from trackreplay.schemas import topics as T
@@ -44,6 +44,7 @@ class RecordTopics:
     lens_table: str = T.PTZ_LENS_TABLE
     groundtruth: str = T.GROUNDTRUTH
     ground_plane: str = T.CAMERA_GROUND_PLANE
+    stereo_pose: str = T.STEREO_POSE
 
     @classmethod
     def keys(cls) -> tuple[str, ...]:
@@ -218,6 +219,8 @@ def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo
         if stereo:
             rec.write(topics.left_calibration, calib.left.to_pb(t, "left"), t)
             rec.write(topics.right_calibration, calib.right.to_pb(t, "right"), t)
+            if calib.pose is not None:
+                rec.write(topics.stereo_pose, pose_message(calib.pose, t), t)
         else:
             rec.write(topics.camera_calibration, calib.left.to_pb(t, "camera"), t)
     if lens_table is not None:

@@ -9,7 +9,11 @@ Calibration file: JSON (``.json``) or OpenCV FileStorage (``.yaml``/``.yml``/``.
 - ``R`` (3x3, default identity) and ``P`` (3x4, default ``[K | 0]``): optional;
 - stereo only: ``baseline_m`` (metres, the right camera ``baseline_m`` to the right of the left),
   or the right camera's own ``right_P``; ``right_K``/``right_D``/``right_R`` optional (default: the
-  left's). The right ``P`` defaults to ``[right_K | (-fx * baseline_m, 0, 0)]``.
+  left's). The right ``P`` defaults to ``[right_K | (-fx * baseline_m, 0, 0)]``;
+- stereo, optional: the rig's pose in a world frame (metres, Z up), ``world_t`` (the left camera's
+  centre in the world) with ``world_R`` (3x3, left camera frame → world: ``p_world = R p_cam + t``)
+  or ``world_quaternion`` (``x y z w`` of that rotation). ``record`` writes it on ``/stereo/pose``
+  and the group tracker then reports positions in that world frame.
 """
 
 from __future__ import annotations
@@ -26,9 +30,13 @@ import numpy as np
 from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_text, require_file
 from trackreplay.recorder.sources.images import check_count, list_images, read_image_files
 from trackreplay.recorder.sources.video import read_video
+from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
+from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
+
 from trackreplay.schemas import messages as m
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.records import timestamp
+from trackreplay.trackers.geometry.rig_pose import RigPose
 
 _ALIASES = {
     "width": ("width", "image_width"),
@@ -61,6 +69,7 @@ class CameraModel:
 class Calibration:
     left: CameraModel  # the mono camera, or the left of a pair
     right: CameraModel | None = None
+    pose: RigPose | None = None  # a pair's left camera in a world frame (Z up), when the file gives it
 
     @property
     def baseline_m(self) -> float | None:
@@ -182,7 +191,34 @@ def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
             raise SourceError(f"calibration {path}: baseline_m is not a number") from None
         if not baseline > 0:
             raise SourceError(f"calibration {path}: baseline_m must be positive")
-    return Calibration(left, _camera(data, path, "right_", left, baseline))
+    return Calibration(left, _camera(data, path, "right_", left, baseline), _pose(data, path))
+
+
+def pose_message(pose: RigPose, t_ns: int) -> m.FrameTransform:
+    """The left camera in the world (Z up) as ``foxglove.FrameTransform`` (parent ``world``, child ``left``)."""
+    q, c = pose.quaternion, pose.t
+    return m.FrameTransform(timestamp=timestamp(t_ns), parent_frame_id="world", child_frame_id="left",
+                            translation=Vector3(x=c[0], y=c[1], z=c[2]), rotation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3]))
+
+
+def _pose(data: dict[str, Any], path: Path) -> RigPose | None:
+    """The rig's world pose from ``world_t`` with ``world_R`` or ``world_quaternion`` (None without ``world_t``)."""
+    given = [k for k in ("world_t", "world_R", "world_quaternion") if k in data]
+    if not given:
+        return None
+    if "world_t" not in data or ("world_R" in data) == ("world_quaternion" in data):
+        raise SourceError(f"calibration {path}: a rig pose needs world_t and one of world_R or world_quaternion, "
+                          f"got {', '.join(given)}")
+    t = _floats(data["world_t"], 3, "world_t", path)
+    try:
+        if "world_R" in data:
+            return RigPose(_floats(data["world_R"], 9, "world_R", path), (t[0], t[1], t[2]))
+        q = np.array(_floats(data["world_quaternion"], 4, "world_quaternion", path))
+        if not np.linalg.norm(q) > 0:
+            raise ValueError("the quaternion is zero")
+        return RigPose.from_quaternion(q, np.array(t))
+    except ValueError as err:
+        raise SourceError(f"calibration {path}: {err}") from None
 
 
 @dataclass(frozen=True)

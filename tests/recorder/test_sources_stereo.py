@@ -98,3 +98,38 @@ def test_calibration_size_must_match_images(tmp_path, make_images):
     bad.write_text('{"width": 64,\n "height": }')
     with pytest.raises(SourceError, match=r"bad\.json:2: not valid JSON"):
         record(tmp_path / "out.mcap", images=folder, fps=10, calibration=bad, quiet=True)
+
+
+def test_rig_pose_in_the_calibration_reaches_the_log_and_the_reader(tmp_path, make_images, log_messages):
+    """A rig 2 m up, looking along world +Y and tilted 30° down: written on /stereo/pose, read back
+    as the same rotation and centre."""
+    from trackreplay.replay.frames import read_rig_pose
+    from trackreplay.replay.reader import LogReader
+
+    tilt = np.radians(30.0)
+    # camera axes in the world: x right = world +X; z forward = (0, cos, -sin); y down = z x x
+    x, z = np.array([1.0, 0, 0]), np.array([0.0, np.cos(tilt), -np.sin(tilt)])
+    R = np.stack([x, np.cross(z, x), z], axis=1)  # columns: the camera axes in world coordinates
+    left, right = make_images(tmp_path / "L", 3), make_images(tmp_path / "R", 3)
+    calib = write_json(tmp_path / "calib.json", baseline_m=0.12, world_t=[0.5, -1.0, 2.0], world_R=R.tolist())
+    record(tmp_path / "out.mcap", stereo=(left, right), calibration=calib, fps=10, quiet=True)
+    poses = [m for m in log_messages(tmp_path / "out.mcap") if m.topic == "/stereo/pose"]
+    assert len(poses) == 1 and poses[0].schema == "foxglove.FrameTransform" and poses[0].pb.parent_frame_id == "world"
+    pose = read_rig_pose(LogReader(tmp_path / "out.mcap"))
+    assert np.allclose(pose.R, R) and np.allclose(pose.t, [0.5, -1.0, 2.0])
+    assert np.allclose(pose.to_world(np.array([[0.0, 0.0, 4.0]]))[0], [0.5, -1.0 + 4 * np.cos(tilt), 2.0 - 4 * np.sin(tilt)])
+    q = write_json(tmp_path / "q.json", baseline_m=0.12, world_t=[0.5, -1.0, 2.0], world_quaternion=list(pose.quaternion))
+    assert np.allclose(load_calibration(q, stereo=True).pose.R, R)
+    assert load_calibration(write_json(tmp_path / "none.json", baseline_m=0.12), stereo=True).pose is None
+
+
+@pytest.mark.parametrize("extra, match", [
+    ({"world_t": [0, 0, 1]}, "needs world_t and one of world_R or world_quaternion"),
+    ({"world_R": np.eye(3).tolist()}, "needs world_t"),
+    ({"world_t": [0, 0, 1], "world_R": (2 * np.eye(3)).tolist()}, "not a rotation"),
+    ({"world_t": [0, 0], "world_quaternion": [0, 0, 0, 1]}, "world_t has 2 numbers"),
+    ({"world_t": [0, 0, 1], "world_quaternion": [0, 0, 0, 0]}, "quaternion is zero"),
+])
+def test_bad_rig_pose_is_named(tmp_path, extra, match):
+    with pytest.raises(SourceError, match=match):
+        load_calibration(write_json(tmp_path / "c.json", baseline_m=0.12, **extra), stereo=True)

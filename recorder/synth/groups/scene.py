@@ -26,13 +26,11 @@ from pathlib import Path
 import numpy as np
 
 from trackreplay.recorder.image_codec import image_message
-from trackreplay.recorder.sources.stereo import CameraModel
+from trackreplay.recorder.sources.stereo import CameraModel, pose_message
 from trackreplay.recorder.synth.groups.people import HEIGHT, TORSO_Z, Look, Painter, person_corners, person_faces
 from trackreplay.recorder.synth.groups.world import Rig, Stairs, World
 from trackreplay.recorder.writer import LogWriter
 from trackreplay.schemas import topics as T
-from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
-from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 
 from trackreplay.schemas.messages import FrameTransform
 from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, timestamp
@@ -237,10 +235,7 @@ class GroupScene:
 
 def rig_pose_message(rig: Rig, t_ns: int) -> FrameTransform:
     """The left camera in the world (Z up) as ``foxglove.FrameTransform`` (parent ``world``, child ``left``)."""
-    pose = RigPose(tuple(float(v) for v in rig.R.T.ravel()), tuple(float(v) for v in rig.centre))
-    q, c = pose.quaternion, pose.t
-    return FrameTransform(timestamp=timestamp(t_ns), parent_frame_id="world", child_frame_id="left",
-                          translation=Vector3(x=c[0], y=c[1], z=c[2]), rotation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3]))
+    return pose_message(RigPose(tuple(float(v) for v in rig.R.T.ravel()), tuple(float(v) for v in rig.centre)), t_ns)
 
 
 def write_group_scene(out: str | Path, cfg: GroupSceneConfig,
