@@ -34,7 +34,12 @@ def quaternion_from_matrix(R: np.ndarray) -> np.ndarray:
 
 
 def matrix_from_quaternion(q: np.ndarray) -> np.ndarray:
-    x, y, z, w = np.asarray(q, dtype=np.float64) / np.linalg.norm(q)
+    """3×3 rotation of a quaternion ``(x, y, z, w)`` of any non-zero finite length."""
+    q = np.asarray(q, dtype=np.float64).reshape(-1)
+    norm = float(np.linalg.norm(q)) if len(q) == 4 and np.isfinite(q).all() else float("nan")
+    if not norm > 0:
+        raise ValueError(f"the rotation quaternion (x y z w) {q.tolist()} is not a finite non-zero 4-vector")
+    x, y, z, w = q / norm
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
@@ -48,9 +53,10 @@ class RigPose:
     translation: tuple[float, float, float]
 
     def __post_init__(self) -> None:
+        if len(self.rotation) != 9 or len(self.translation) != 3 or not (np.isfinite(self.rotation).all()
+                                                                         and np.isfinite(self.translation).all()):
+            raise ValueError("a rig pose needs a finite 3x3 rotation and a finite 3-vector translation")
         R = self.R
-        if len(self.rotation) != 9 or len(self.translation) != 3 or not np.isfinite(R).all():
-            raise ValueError("a rig pose needs a finite 3x3 rotation and a 3-vector translation")
         if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
             raise ValueError("the rig pose's rotation is not a rotation (R R^T != I or det < 0)")
 

@@ -46,3 +46,30 @@ def test_rig_pose_rejects_a_non_rotation():
         RigPose(tuple(np.diag([1.0, 1.0, -1.0]).ravel()), (0.0, 0.0, 0.0))
     with pytest.raises(ValueError):
         RigPose(tuple((2 * np.eye(3)).ravel()), (0.0, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("q, t", [((0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), ((0.0, 0.0, float("nan"), 1.0), (0.0, 0.0, 1.0)),
+                                  ((0.0, 0.0, 0.0, 1.0), (float("nan"), 0.0, 1.0)), ((0.0, 0.0, 0.0, 1.0), (0.0, float("inf"), 1.0))])
+def test_rig_pose_rejects_a_degenerate_quaternion_or_translation(q, t):
+    with pytest.raises(ValueError):
+        RigPose.from_quaternion(np.array(q), np.array(t))
+
+
+@pytest.mark.parametrize("q, t", [((0.0, 0.0, 0.0, 0.0), (0.0, 0.0, 1.0)), ((0.0, 0.0, 0.0, 1.0), (float("nan"), 0.0, 1.0))])
+def test_a_malformed_pose_message_is_one_log_error_naming_file_and_topic(tmp_path, q, t):
+    from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
+    from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
+
+    from trackreplay.recorder.writer import LogWriter
+    from trackreplay.replay.frames import read_rig_pose
+    from trackreplay.replay.reader import LogReader
+    from trackreplay.schemas import messages as m
+    from trackreplay.schemas.errors import LogError
+
+    path = tmp_path / "bad-pose.mcap"
+    with LogWriter(path) as w:
+        w.write("/stereo/pose", m.FrameTransform(parent_frame_id="world", child_frame_id="left",
+                                                 translation=Vector3(x=t[0], y=t[1], z=t[2]),
+                                                 rotation=Quaternion(x=q[0], y=q[1], z=q[2], w=q[3])), 1)
+    with pytest.raises(LogError, match=r"bad-pose\.mcap: topic /stereo/pose is not a usable rig pose"):
+        read_rig_pose(LogReader(path))
