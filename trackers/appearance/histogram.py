@@ -100,28 +100,10 @@ def box_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *,
     ``ceil(sqrt(area / max_pixels))`` from its top-left pixel. Returns the (K, n_bins) histograms
     and the (K,) number of pixels counted per box.
 
-    The boxes' pixels are gathered as one (K, rows, columns) block padded to the largest box
-    (boxes of one tracker differ in size by tens of per cent), the padding counted into a spare bin.
+    Uniform pixel weights and one part of :func:`box_part_histograms`, which does the counting.
     """
-    boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
-    k = len(boxes)
-    x0, y0 = boxes[:, 0], boxes[:, 1]
-    w = np.maximum(boxes[:, 2] - x0, 0)
-    h = np.maximum(boxes[:, 3] - y0, 0)
-    stride = np.ones(k, dtype=np.int64)
-    if max_pixels is not None:
-        stride = np.maximum(np.ceil(np.sqrt(w * h / float(max_pixels))).astype(np.int64), 1)
-    nx, ny = -(-w // stride), -(-h // stride)
-    n = nx * ny
-    if k == 0 or n.max(initial=0) == 0:
-        return np.zeros((k, n_bins)), n
-    rows, cols = np.arange(int(ny.max())), np.arange(int(nx.max()))
-    inside = (rows[None, :, None] < ny[:, None, None]) & (cols[None, None, :] < nx[:, None, None])
-    flat = (y0 * index.shape[1] + x0)[:, None, None] + stride[:, None, None] * (
-        rows[None, :, None] * index.shape[1] + cols[None, None, :])
-    bins = index.reshape(-1)[np.where(inside, flat, 0)] + (np.arange(k) * n_bins)[:, None, None]
-    counts = np.bincount(np.where(inside, bins, k * n_bins).reshape(-1), minlength=k * n_bins + 1)
-    return counts[:-1].reshape(k, n_bins) / np.maximum(n, 1)[:, None], n
+    hists, n = box_part_histograms(index, boxes, n_bins, max_pixels=max_pixels)
+    return hists[:, 0], n
 
 
 # --- kernel-weighted, multi-part box histograms ---------------------------------------------------
@@ -165,7 +147,8 @@ def box_part_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *, ke
     histograms, each part normalised to sum 1 over its weights (all zeros when it holds no weight),
     and the (K,) number of pixels counted per box. One ``np.bincount`` over all boxes and parts.
 
-    With ``kernel="uniform"`` and ``parts=1`` the histograms equal :func:`box_histograms`'.
+    The boxes' pixels are gathered as one (K, rows, columns) block padded to the largest box
+    (boxes of one tracker differ in size by tens of per cent), the padding counted into a spare bin.
     """
     boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
     k = len(boxes)

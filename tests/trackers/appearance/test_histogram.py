@@ -72,3 +72,14 @@ def test_image_part_histograms_mask_share() -> None:
     np.testing.assert_allclose(h, [[1, 0, 0], [0, 0, 1]])
     np.testing.assert_allclose(w_in, [1, 2])
     np.testing.assert_allclose(w_all, [2, 2])
+
+
+def test_box_histograms_sampled_grid_known_answer() -> None:
+    # a 4 x 4 box with max_pixels = 4: stride ceil(sqrt(16 / 4)) = 2, the pixels (0,0) (0,2) (2,0) (2,2)
+    index = np.arange(16).reshape(4, 4) % 5  # bins: row 0: 0 1 2 3, row 2: 3 4 0 1; sampled: 0 2 3 0
+    h, n = box_histograms(index, np.array([[0, 0, 4, 4], [1, 1, 1, 3]]), 5, max_pixels=4)
+    assert np.array_equal(n, [4, 0])
+    assert np.array_equal(h, [[0.5, 0.0, 0.25, 0.25, 0.0], [0.0] * 5])  # the empty box: zeros
+    # two parts: the sampled rows 0 and 2 fall in the top and the bottom band
+    hp, _ = box_part_histograms(index, np.array([[0, 0, 4, 4]]), 5, parts=2, max_pixels=4)
+    assert np.array_equal(hp[0], [[0.5, 0.0, 0.5, 0.0, 0.0], [0.5, 0.0, 0.0, 0.5, 0.0]])
