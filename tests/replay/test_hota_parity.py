@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -77,14 +75,8 @@ print(json.dumps(out))
 """
 
 
-def test_hota_matches_trackeval_run_live() -> None:
-    python = Path(os.environ.get("TRACKREPLAY_TRACKEVAL_PYTHON", "/tmp/tevenv/bin/python"))
-    if not python.is_file():
-        pytest.skip(f"no trackeval venv at {python}")
-    out = subprocess.run([str(python), "-c", _SIDE, str(SEQUENCES)], capture_output=True, text=True, timeout=120)
-    if out.returncode:
-        pytest.skip(f"trackeval side failed: {out.stderr.strip().splitlines()[-1:]}")
-    live = json.loads(out.stdout)
+def test_hota_matches_trackeval_run_live(reference_side) -> None:
+    live = reference_side("TRACKREPLAY_TRACKEVAL_PYTHON", "/tmp/tevenv/bin/python", _SIDE, SEQUENCES)
     assert sorted(live) == sorted(TRACKEVAL_1_3_0)
     for name, ref in live.items():
         _check(name, ref)

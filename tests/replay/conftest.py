@@ -1,0 +1,32 @@
+"""Fixtures of the replay tests."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+
+@pytest.fixture
+def reference_side() -> Callable[..., Any]:
+    """Runs a reference implementation that cannot live in our venv (motmetrics needs numpy < 2,
+    TrackEval its own pins) in its own venv: ``reference_side(env_var, default_python, script, *args)``
+    runs ``script`` (Python source printing JSON) with the interpreter named by ``env_var`` (else
+    ``default_python``) and returns the parsed output. Skips when that interpreter is missing; a
+    failing script fails the test (the venv was given, so a crash is a finding, not an absence)."""
+
+    def run(env_var: str, default_python: str, script: str, *args: str | Path) -> Any:
+        python = Path(os.environ.get(env_var, default_python))
+        if not python.is_file():
+            pytest.skip(f"no reference venv at {python} (set {env_var})")
+        out = subprocess.run([str(python), "-c", script, *map(str, args)], capture_output=True, text=True, timeout=120)
+        if out.returncode:
+            pytest.fail(f"the reference side ({python}) failed: {out.stderr.strip().splitlines()[-1:]}")
+        return json.loads(out.stdout)
+
+    return run
