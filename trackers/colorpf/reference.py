@@ -41,7 +41,7 @@ def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: float, p
 
 @dataclass(frozen=True, eq=False)
 class Reference:
-    """The reference and how it was made (flat histograms, ``model.n_bins`` long)."""
+    """The reference and how it was made (flat histograms, ``model.parts * model.n_bins`` long)."""
 
     histogram: np.ndarray  # H_ref used by eq. (4)
     kind: str  # "mixed" (eq. 7) | "target" (H_target only) | "box" (the marked box's histogram: no background)
@@ -88,11 +88,10 @@ def subtract_and_mix(model: ColourModel, cfg: ReferenceConfig, image: np.ndarray
     h_target, w_fg, w_all = image_part_histograms(index, model.n_bins, kernel=lik.kernel, parts=lik.parts, mask=fg)
     h_back = index_histogram(model.index(background), model.n_bins)  # the whole background
     if cfg.mode == "mixed":
-        if lik.parts == 1 and lik.kernel == "uniform":
-            h_ref = mixed_reference(h_target[0], h_back, p_detect, p_square)
-        else:  # eq. (7) per part, with the kernel-weighted foreground share
-            h_ref = np.stack([mixed_reference(h_target[j], h_back, min(w_fg[j], w_all[j]), w_all[j])
-                              if w_all[j] > 0 else h_back for j in range(lik.parts)])  # a loop over the parts
+        # eq. (7) per part with the (kernel-weighted) foreground share: uniform weights and one part
+        # give the paper's P_detect / P_square exactly (sums of ones)
+        h_ref = np.stack([mixed_reference(h_target[j], h_back, min(w_fg[j], w_all[j]), w_all[j])
+                          if w_all[j] > 0 else h_back for j in range(lik.parts)])  # a loop over the parts
         kind = "mixed"
     else:
         h_ref, kind = h_target, "target"
