@@ -1,7 +1,7 @@
 """The colour likelihood of a box, eqs. (4)-(5): Swain's intersection with the reference, then exp(k S²).
 
 Pixels become bin indices once per frame (only inside the union of the particles' boxes), then all
-N box histograms are counted together (:func:`box_histograms`). ``"hs"`` bins H and S only (§3.1:
+N box histograms are counted together (:meth:`ColourModel.histograms`). ``"hs"`` bins H and S only (§3.1:
 a uniform brightness change leaves them alone); ``"hsv"`` is Pérez et al.'s H-S + V histogram, the
 paper's comparison in Table 1.
 
@@ -150,8 +150,9 @@ def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, referen
     centre to the mean of the box's pixels weighted by ``sqrt(q_u / p_u)`` (``q`` the reference,
     ``p`` the box's histogram, ``u`` the pixel's bin, per part; the kernel's support only) and is kept
     only when it raises S.
-    Returns the refined state and its S. The pixels are one vectorised block (at most
-    ``likelihood.max_pixels`` of them, as for the particles); the loop is over the few iterations.
+    Returns the refined state and its S. Each step counts every pixel of the box (not sampled to
+    ``likelihood.max_pixels``: one box, a few steps) as one vectorised block; the loop is over the
+    iterations.
     """
     height, width = image.shape[:2]
     state = np.asarray(state, dtype=np.float64).copy()
@@ -162,7 +163,6 @@ def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, referen
     if ux1 <= ux0 or uy1 <= uy0:
         return state, 0.0
     index = model.index(image[uy0:uy1, ux0:ux1])
-    step_kernel = "epanechnikov" if model.config.kernel == "epanechnikov" else "uniform"
     for i in range(iterations + 1):
         x0, y0, x1, y1 = box_corners(state, width, height)[0]
         if x1 <= x0 or y1 <= y0 or x0 < ux0 or y0 < uy0 or x1 > ux1 or y1 > uy1:
@@ -170,15 +170,14 @@ def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, referen
         local = np.array([[x0 - ux0, y0 - uy0, x1 - ux0, y1 - uy0]])
         hist = model.histograms(index, local, None)[0][0].reshape(model.parts, model.n_bins)
         s = float(model.similarity(hist.reshape(-1), q))
-        if i > 0 and s <= best_s:
-            state = best_state
+        if i > 0 and s <= best_s:  # the step did not help: keep the previous position
             break
         best_s, best_state = s, state.copy()
         if i == iterations:
             break
         bins = index[y0 - uy0:y1 - uy0, x0 - ux0:x1 - ux0]
         dy, dx = np.arange(y1 - y0)[:, None] + 0.5, np.arange(x1 - x0)[None, :] + 0.5
-        kern, part = kernel_and_part(dy, dx, y1 - y0, x1 - x0, step_kernel, model.parts)
+        kern, part = kernel_and_part(dy, dx, y1 - y0, x1 - x0, model.config.kernel, model.parts)
         p = hist[part, bins]
         # the Epanechnikov profile's derivative is constant on its support: the step is the mean of
         # the support's pixels weighted by sqrt(q/p) alone (Comaniciu et al. 2003, eq. 13)
@@ -186,8 +185,8 @@ def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, referen
         total = w.sum()
         if total <= 0:
             break
-        cx = x0 + float((w * np.broadcast_to(dx, w.shape)).sum() / total)
-        cy = y0 + float((w * np.broadcast_to(dy, w.shape)).sum() / total)
+        cx = x0 + float((w * dx).sum() / total)
+        cy = y0 + float((w * dy).sum() / total)
         if abs(cx - state[0]) < 0.25 and abs(cy - state[1]) < 0.25:
             break
         state[0], state[1] = cx, cy
