@@ -223,10 +223,11 @@ class ColorPfTracker(TrackerBase):
             self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
         ref_h = self.reference.histogram
         s_back = float(self.model.pooled_similarity(self.reference.h_back, ref_h))
+        separated = self._s_mark - s_back >= cfg.min_separation
         # the confidence tells the target from the background only with a background-built reference
         # whose mark stands out from it; only then may the reference adapt (reference.update_rate)
-        telling = self.reference.kind != "box" and self._s_mark - s_back >= cfg.min_separation
-        if self._s_mark - s_back < cfg.min_separation:
+        telling = self.reference.kind != "box" and separated
+        if not separated:
             # the background scores (nearly) as well as the mark: it cannot scale the confidence
             self._say(f"the marked box scores S = {self._s_mark:.2f} against the reference and the background "
                       f"{s_back:.2f}: H-S colour barely tells this target from the background, so the confidence "
