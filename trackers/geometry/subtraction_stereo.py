@@ -169,7 +169,11 @@ def foreground_crops(mask: np.ndarray, cfg: SgbmConfig, margin: int = 8, min_are
         if len(rows) == 0:
             continue
         k0, k1 = (b * bc + int(rows[0])) * CELL, min((b * bc + int(rows[-1]) + 1) * CELL, h)
-        x0, x1 = max(c0 * CELL - ((left * CELL) - margin - reach), 0), min(c1 * CELL, w)
+        # a run reaches `left` cells before its first foreground cell and `right` after its last
+        # (unless cut at the image's edge), margin + reach and margin rounded up to cells: the
+        # crop is grown by the exact pixels, as the box crops are
+        x0 = (c0 + left) * CELL - margin - reach if c0 > 0 else 0
+        x1 = min((c1 - right) * CELL + margin, w) if c1 < W else w
         box = [x0, max(k0 - margin, 0), x1, min(k1 + margin, h), k0, k1]
         for o in crops[::-1]:  # join with a crop of the band above whose kept rows end where these start
             if o[5] == k0 and o[0] < x1 and x0 < o[2]:

@@ -4,6 +4,7 @@ silhouette-hugging bands, and the disparity they give against full-frame SGBM.""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from trackreplay.trackers.geometry.subtraction_stereo import (SgbmConfig, _cells, disparity_agreement, foreground_crops,
                                                             full_disparity, subtraction_stereo)
@@ -75,3 +76,16 @@ def test_band_crops_agree_with_full_frame_sgbm():
         assert np.nanmedian(sub.disparity[mask]) == d_fg
         assert np.isnan(sub.disparity[~mask]).all()
         assert sub.kept_rows is not None and len(sub.kept_rows) == len(sub.crops)
+
+
+@pytest.mark.parametrize("margin", [0, 1, 5, 6, 7, 8, 11])
+def test_band_crops_grow_a_rectangle_as_the_box_crop_does(margin):
+    """Away from the image's edges a rectangle's band crops span exactly its box crop's columns
+    (``margin`` and the disparity reach rounded up to the 4-px cells is not grown twice)."""
+    cfg = SgbmConfig()
+    mask = np.zeros((120, 200), bool)
+    mask[40:80, 100:120] = True
+    box = foreground_crops(mask, cfg, margin=margin)
+    band = foreground_crops(mask, cfg, margin=margin, band_px=16)
+    assert len(box) == 1 and len(band) >= 1
+    assert (band[:, 0] == box[0, 0]).all() and (band[:, 2] == box[0, 2]).all()
