@@ -23,7 +23,7 @@ TOML (every table and key optional; ``trackreplay replay LOG --tracker groups --
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -134,6 +134,8 @@ class TrackConfig:
 
 @dataclass(frozen=True)
 class GroupsConfig:
+    """Parameters of the group tracker (seed 003); per-frame values at ``rate_hz``, rescaled to the log's rate."""
+
     background: BackgroundConfig = field(default_factory=BackgroundConfig)
     stereo: StereoConfig = field(default_factory=StereoConfig)
     klt: KltConfig = field(default_factory=KltConfig)
@@ -142,14 +144,12 @@ class GroupsConfig:
     grouping: GroupingConfig = field(default_factory=GroupingConfig)
     merge: MergeConfig = field(default_factory=MergeConfig)
     tracks: TrackConfig = field(default_factory=TrackConfig)
-    rate_hz: float = 48.0  # the frame rate the per-frame values above are given at
+    rate_hz: float = 48.0  # the frame rate the per-frame values (frame counts, m/frame) are given at
     scale_with_rate: bool = True  # rescale them to the log's frame rate (off: use them as they are)
 
     def at_rate(self, fps: float) -> GroupsConfig:
         """This config with every per-frame value rescaled from ``rate_hz`` to ``fps`` (itself when
         ``scale_with_rate`` is off or the rates agree to 0.1 %)."""
-        from dataclasses import replace
-
         if not self.scale_with_rate or not np.isfinite(fps) or fps <= 0 or abs(fps / self.rate_hz - 1.0) < 1e-3:
             return self
         s = fps / self.rate_hz  # frames at fps per frame at rate_hz
