@@ -28,6 +28,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from trackreplay.trackers.appearance.histogram import KERNELS  # the pixel weights the histograms know
+
 # Overrides (a ``[colorpf]`` table as a dict) that give the paper's pipeline: uniform pixel weights
 # and a reference fixed at initialisation (the other switches of ours are off by default).
 PAPER: dict = {"likelihood": {"kernel": "uniform"}, "reference": {"update_rate": 0.0}}
@@ -36,8 +38,8 @@ HISTOGRAMS = ("hs", "hsv")
 REFERENCES = ("mixed", "target")
 BACKGROUNDS = ("auto", "before", "early", "none")
 SIZES = ("geometry", "noise", "fixed")
+NO_PLANES = ("constant", "random_walk")
 ASPECTS = ("likelihood", "fixed")
-KERNELS = ("uniform", "epanechnikov")
 MOTIONS = ("random_walk", "constant_velocity")
 REFINES = ("none", "meanshift")
 
@@ -134,8 +136,8 @@ class SizeConfig:
     def __post_init__(self) -> None:
         if self.mode not in SIZES:
             raise ValueError(f"size.mode must be one of {', '.join(SIZES)}, not {self.mode!r}")
-        if self.no_plane not in ("constant", "random_walk"):
-            raise ValueError(f"size.no_plane must be constant or random_walk, not {self.no_plane!r}")
+        if self.no_plane not in NO_PLANES:
+            raise ValueError(f"size.no_plane must be one of {', '.join(NO_PLANES)}, not {self.no_plane!r}")
         if self.r_s < 0 or self.noise < 0 or self.min_px <= 0:
             raise ValueError("size.r_s and size.noise must be >= 0 and size.min_px positive")
 
