@@ -142,8 +142,19 @@ def test_positions_are_world_z_up_with_the_rig_pose_and_camera_frame_without(pas
     mw = mot_metrics(world.trajectory, gt_w, space="3d", max_distance_m=1.0)
     mc = mot_metrics(camera.trajectory, gt_c, space="3d", max_distance_m=1.0)
     assert mw.mota == pytest.approx(mc.mota) and mw.motp == pytest.approx(mc.motp)
-    # the second table says its frame
+    # the second table says its frame, and its velocities and covariances are rotated once (no shift)
     assert set(world.extra_rows[0]) >= {"position_frame", "VX"} and world.extra_rows[0]["position_frame"] == "world"
+    assert {r["position_frame"] for r in camera.extra_rows} == {"camera"}
+    assert len(world.extra_rows) == len(camera.extra_rows) > 20
+    cov = ("cov_xx", "cov_xy", "cov_xz", "cov_xy", "cov_yy", "cov_yz", "cov_xz", "cov_yz", "cov_zz")
+    for rw, rc in zip(world.extra_rows, camera.extra_rows):
+        assert (rw["frame"], rw["track_id"]) == (rc["frame"], rc["track_id"])
+        vw, vc = (np.array([r["VX"], r["VY"], r["VZ"]]) for r in (rw, rc))
+        assert np.allclose(vw, pose.rotate(vc)[0], atol=1e-9, equal_nan=True)
+        Sw, Sc = (np.array([r[k] for k in cov]).reshape(3, 3) for r in (rw, rc))
+        assert np.allclose(Sw, pose.rotate_cov(Sc), atol=1e-12)
+        sw, sc = (np.array([r["sigma_X"], r["sigma_Y"], r["sigma_Z"]]) for r in (rw, rc))
+        assert np.isclose(np.sum(sw**2), np.sum(sc**2))  # a rotation keeps the trace of the EKF position covariance
 
 
 def test_the_same_defaults_at_24_fps_detect_the_merge(tmp_path):
