@@ -55,7 +55,7 @@ def transition(*, sigma: np.ndarray, size: SizeConfig, ratio: float, box_wh: np.
                model: WeakPerspectiveSize, plane: GroundPlane | None, side: float,
                initial_wh: np.ndarray, drift: np.ndarray | None = None) -> Transition:
     """Eq. (2) for :meth:`ParticleFilter.predict`; ``drift`` (ours, ``motion.model =
-    "constant_velocity"``): a displacement ``(dx, dy)`` added to every particle before the noise."""
+    "constant_velocity"``): a displacement ``(dx, dy)`` added to every particle, besides the noise."""
 
     def step(particles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         out = particles.copy()
