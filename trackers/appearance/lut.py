@@ -98,14 +98,15 @@ class ColourLut:
     bin: int = 1
 
     def __post_init__(self) -> None:
+        if self.bin < 1 or 256 % self.bin:
+            raise ValueError(f"a LUT's bin must be a power of 2 up to 256, not {self.bin}")
         q = 256 // self.bin
-        if self.bin < 1 or 256 % self.bin or self.coarse.shape != (q, q, q):
+        if self.coarse.shape != (q, q, q):
             raise ValueError(f"a LUT with bin {self.bin} needs a ({q}, {q}, {q}) table, not {self.coarse.shape}")
 
     def lookup(self, pixels: np.ndarray) -> np.ndarray:
         """Boolean mask (the pixels' leading shape): one fancy index into the coarse table."""
-        flat = self.coarse.reshape(-1)
-        return flat[flat_index(pixels)] if self.bin == 1 else flat[coarse_index(pixels, self.bin)]
+        return self.coarse.reshape(-1)[coarse_index(pixels, self.bin)]  # bin 1: flat_index's index
 
     @functools.cached_property
     def table(self) -> np.ndarray:

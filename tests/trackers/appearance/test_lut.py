@@ -59,3 +59,15 @@ def test_the_coarse_lookup_answers_exactly_as_the_expanded_table():
     assert np.array_equal(lut.table, full)
     with pytest.raises(ValueError):
         ColourLut(coarse, 8)  # a 64³ table is not a bin-8 table
+
+
+def test_bin_one_lookup_is_the_full_table_and_bad_bins_are_refused():
+    rng = np.random.default_rng(2)
+    pixels = rng.integers(0, 256, size=(30, 20, 3), dtype=np.uint8)
+    full = np.zeros((256, 256, 256), bool)
+    full[pixels[0, 0, 0], pixels[0, 0, 1], pixels[0, 0, 2]] = True
+    hits = ColourLut(full).lookup(pixels)
+    assert hits[0, 0] and hits.sum() == (pixels == pixels[0, 0]).all(axis=-1).sum()
+    for bad in (0, 3):
+        with pytest.raises(ValueError, match="power of 2"):
+            ColourLut(np.zeros((1, 1, 1), bool), bad)
