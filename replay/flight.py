@@ -202,25 +202,14 @@ class Shot:
         return pos, phase
 
 
-def _accel(vx: float, vy: float, vz: float, kd: float, kl: tuple[float, float, float],
-           w: tuple[float, float, float]) -> tuple[float, float, float]:
-    """Gravity, drag and lift; ``kl = (k C_L0, k C_L1, v0)``: ``C_L = C_L0 + C_L1 (v0/|v| − 1)``."""
-    s = math.sqrt(vx * vx + vy * vy + vz * vz)
-    ax, ay, az = -kd * s * vx, -kd * s * vy, -kd * s * vz - G
-    if kl[0] or kl[1]:
-        wx, wy, wz = w
-        kl = kl[0] + kl[1] * (kl[2] / max(s, 1e-6) - 1.0)
-        ax += kl * s * (wy * vz - wz * vy)
-        ay += kl * s * (wz * vx - wx * vz)
-        az += kl * s * (wx * vy - wy * vx)
-    return ax, ay, az
-
-
 def _fly(p, v, t, h, kd, kl, w, contact_z, t_end, phase, out):
     """RK4 until the centre comes down to ``contact_z`` (returns the contact state) or ``t_end``.
 
-    The acceleration is :func:`_accel` written out four times (this loop is the fit's whole cost:
-    a function call per evaluation made it ~2x slower)."""
+    The acceleration (gravity, drag and lift; ``kl = (k C_L0, k C_L1, v0)``,
+    ``C_L = C_L0 + C_L1 (v0/|v| − 1)``: ``a = −g ẑ − kd |v| v + k C_L |v| (ŵ × v)``) is written out
+    once per RK4 stage, four times: this loop is the fit's whole cost, and a call per evaluation,
+    even to a local closure, made it ~15 % slower (a module-level function, ~2x).
+    ``tests/replay/test_flight_ground.py`` checks the four copies against one reference."""
     sqrt = math.sqrt
     px, py, pz = p
     vx, vy, vz = v
