@@ -213,10 +213,7 @@ def _pose(data: dict[str, Any], path: Path) -> RigPose | None:
     try:
         if "world_R" in data:
             return RigPose(_floats(data["world_R"], 9, "world_R", path), (t[0], t[1], t[2]))
-        q = np.array(_floats(data["world_quaternion"], 4, "world_quaternion", path))
-        if not np.linalg.norm(q) > 0:
-            raise ValueError("the quaternion is zero")
-        return RigPose.from_quaternion(q, np.array(t))
+        return RigPose.from_quaternion(np.array(_floats(data["world_quaternion"], 4, "world_quaternion", path)), np.array(t))
     except ValueError as err:
         raise SourceError(f"calibration {path}: {err}") from None
 
