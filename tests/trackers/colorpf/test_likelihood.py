@@ -76,3 +76,20 @@ def test_mean_shift_climbs_to_the_target():
         out, s = mean_shift(model, img, start, ref, iterations=10)
         assert s > s0 and abs(out[0] - 48.0) < 2.0 and abs(out[1] - 40.0) < 2.0
         assert np.array_equal(out[2:], start[2:])  # the size is kept
+
+
+def test_pooled_similarity_ignores_where_in_the_box_the_colours_are():
+    model = ColourModel(LikelihoodConfig(parts=2, max_pixels=None))
+    img = np.zeros((40, 20, 3), np.uint8)
+    img[:20] = (0, 0, 255)  # red top half
+    img[20:] = (255, 0, 0)  # blue bottom half
+    ref = box_histogram(model, img, np.array([9.5, 19.5, 20.0, 40.0]))
+    flipped = np.concatenate([ref[100:], ref[:100]])
+    assert model.similarity(flipped, ref) == 0.0 and model.pooled_similarity(flipped, ref) == 1.0
+    top_only = np.concatenate([ref[:100], ref[:100]])  # red in both bands: half the colours
+    assert model.pooled_similarity(top_only, ref) == 0.5
+    assert np.array_equal(model.pooled_similarity(np.stack([flipped, top_only]), ref), [1.0, 0.5])  # rows
+    one = ColourModel(LikelihoodConfig(max_pixels=None))
+    red, whole = (box_histogram(one, img, np.array([9.5, y, 20.0, h])) for y, h in ((9.5, 20.0), (19.5, 40.0)))
+    assert one.pooled_similarity(red, whole) == one.similarity(red, whole)  # one part: the same
+    assert np.isclose(one.similarity(red, whole), 0.5)
