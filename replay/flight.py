@@ -387,7 +387,12 @@ def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id:
                                 f"(at least 10 are needed)")
     frames = rows["frame"].to_numpy()
     los = rows.select("dx", "dy", "dz").to_numpy().astype(float)
-    los /= np.linalg.norm(los, axis=1, keepdims=True)
+    norm = np.linalg.norm(los, axis=1)
+    bad = np.flatnonzero(~(np.isfinite(norm) & (norm > 0)))
+    if bad.size:
+        raise TrackreplayError(f"the trajectory's line of sight (dx, dy, dz) at measured frame {int(frames[bad[0]])}"
+                               + (f" (and {bad.size - 1} more)" if bad.size > 1 else "") + " is not a finite, non-zero vector")
+    los /= norm[:, None]
     w, h = rows["w"].to_numpy().astype(float), rows["h"].to_numpy().astype(float)
     size = np.sqrt(np.where(np.isfinite(w) & (w > 0), w, np.nan) * np.where(np.isfinite(h) & (h > 0), h, np.nan))
     fx = np.array([math.sqrt(cameras[int(f)].intrinsics.fx * cameras[int(f)].intrinsics.fy) for f in frames])
@@ -445,7 +450,10 @@ def _initial(obs: Observations, cfg: FlightConfig, fps: float) -> tuple[np.ndarr
     ang = np.degrees(np.arccos(np.clip(obs.los @ first, -1, 1)))
     # The ball moves when its line of sight leaves the first one by more than ~3 px of the frame.
     moved = np.flatnonzero(ang * np.pi / 180 * obs.fx > 3.0)
-    k = int(moved[0]) if moved.size else len(ang) - 1
+    if not moved.size:
+        raise FlightUnavailable(f"3-D not available: the ball does not move in the {len(ang)} measured frames "
+                                f"(its line of sight stays within 3 px of the first): there is no flight to fit")
+    k = int(moved[0])
     still = slice(0, max(1, k))
     mean = obs.los[still].mean(axis=0)
     mean /= np.linalg.norm(mean)

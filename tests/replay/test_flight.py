@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import polars as pl
@@ -11,6 +12,7 @@ import pytest
 
 from trackreplay.recorder.synth.golf.flight import BallModel, Launch, simulate_shot
 from trackreplay.replay.cli import main
+from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.replay.flight import FlightConfig, FlightUnavailable, Observations, fit_flight, observations
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
@@ -72,3 +74,26 @@ def test_no_encoders_says_3d_is_not_available(tmp_path, capsys) -> None:
     assert main(["replay", str(log), "--tracker", "flow", "--export", str(path), "--quiet"]) == 0
     assert main(["flight", str(path), str(log)]) == 2
     assert "3-D not available" in capsys.readouterr().err
+
+
+def _rows(n: int, los) -> pl.DataFrame:
+    los = np.broadcast_to(np.asarray(los, float), (n, 3)).copy()
+    return pl.DataFrame({"track_id": [1] * n, "frame": np.arange(n), "t_ns": np.arange(n) * 33_333_333, "x": [1.0] * n,
+                         "w": [6.0] * n, "h": [6.0] * n, "dx": los[:, 0], "dy": los[:, 1], "dz": los[:, 2],
+                         "status": ["measured"] * n})
+
+
+def test_bad_lines_of_sight_and_a_ball_that_never_moves_are_named() -> None:
+    """Not a finite non-zero line of sight: one sentence naming the frame (exit 2), not least_squares'
+    'Residuals are not finite' (exit 70). A ball still on the tee in every frame: no flight to fit
+    (the fit used to report a 5 m/s launch with σ in the hundreds of metres)."""
+    cams = {f: SimpleNamespace(intrinsics=SimpleNamespace(fx=2000.0, fy=2000.0), position=(0.0, 0.0, 2.0)) for f in range(12)}
+    for bad in ((float("nan"), 0.0, -1.0), (0.0, 0.0, 0.0)):
+        traj = _rows(12, (1.0, 0.0, -0.1)).with_columns(
+            *[pl.when(pl.col("frame") == 4).then(v).otherwise(pl.col(c)).alias(c) for c, v in zip(("dx", "dy", "dz"), bad)])
+        with pytest.raises(TrackreplayError, match="at measured frame 4 is not a finite, non-zero vector") as err:
+            observations(traj, cams)
+        assert err.value.exit_code == 2
+    obs = observations(_rows(12, (1.0, 0.0, -0.1)), cams)
+    with pytest.raises(FlightUnavailable, match="the ball does not move in the 12 measured frames"):
+        fit_flight(obs)
