@@ -154,6 +154,7 @@ class ValidateConfig:
     gate_sigmas: float = 3.0  # gate radius = this x (cloud spread + ball radius)
     max_spread_px: float = 40.0  # the cloud spread the gate uses is capped here (reference height)
     min_confidence: float = 0.25  # below this the row is "predicted" (about 1.7 s off with a perfect fit)
+    min_fit: float = 0.4  # ... and below this shape/area fit alone, however close to the prediction (0.4: area ~4x off, or not round)
     confirm_frames: int = 3  # a blob outside the gate (or after a loss) must be seen this many frames running
     confirm_px: float = 12.0  # ... each within this (+ a diameter) of the previous ones' extrapolation
     entry_margin_px: float = 24.0  # fixed camera, ball gone out of the picture: a new track starts this near the edge
@@ -161,8 +162,8 @@ class ValidateConfig:
     confirm_fit: float = 0.5  # ... and agree with each other in area and be round (validate.track_fit) at least this well
 
     def __post_init__(self) -> None:
-        if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1:
-            raise ValueError("validate: need confirm_frames >= 1, gate_sigmas > 0, 0 <= min_confidence <= 1")
+        if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1 or not 0 <= self.min_fit <= 1:
+            raise ValueError("validate: need confirm_frames >= 1, gate_sigmas > 0, 0 <= min_confidence <= 1, 0 <= min_fit <= 1")
 
 
 @dataclass(frozen=True)

@@ -8,8 +8,10 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   at most ``max_spread_px + D`` so a cloud spread wide after a loss does not accept anything in
   the picture. Only shape-accepted blobs inside the gate are the observation ``z_t`` of eq. (2);
 - **confidence** of the in-gate blob nearest the prediction: ``fit * exp(-d² / 2s²)``, ``fit``
-  from its area and roundness against the targets. ``measured`` needs ``min_confidence``; below,
-  the row is ``predicted`` and nothing (targets, EKF, LUTs) learns from the blob;
+  from its area and roundness against the targets. ``measured`` needs ``min_confidence``, and
+  ``min_fit`` from the shape alone (a speck a fifth of the ball's area right on the predicted path
+  is not the ball: the edge of a cup's liner after the ball merged with it); below, the row is
+  ``predicted`` and nothing (targets, EKF, LUTs) learns from the blob;
 - **no jumps without evidence**: a shape-accepted blob outside the gate, or any blob once the
   track is lost, or while the prediction has left the picture, starts or extends a *tentative*
   track. Only when it has been seen on ``confirm_frames`` consecutive frames, each within
@@ -124,7 +126,7 @@ class Validator:
         fit = blob_fit(gated, k, self.blobs, scale)
         motion = math.exp(-0.5 * (float(d[k]) / s) ** 2)
         confidence = fit * motion
-        verdict = "measured" if confidence >= self.cfg.min_confidence else "low_confidence"
+        verdict = "measured" if confidence >= self.cfg.min_confidence and fit >= self.cfg.min_fit else "low_confidence"
         return Validation(verdict, confidence, fit, motion, radius, k, np.zeros((0, 3)), in_gate), in_gate, outside
 
     def validate(self, *, index: int, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,

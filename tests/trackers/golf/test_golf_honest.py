@@ -1,6 +1,8 @@
 """Issue 10: honest status. Hidden or departed balls go predicted then lost (never measured), a far
 jump needs evidence over several frames, every mark re-anchors, roundness does not drift above 1."""
 
+import dataclasses
+
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
@@ -146,3 +148,26 @@ def test_two_lookalike_balls_after_a_loss_confirm_neither(backdrop, draw_ball):
     results = run(sequence(backdrop, draw_ball, positions, [(0, path[0])], extra=extra))
     assert "measured" not in statuses(results)[12:]
     assert "ambiguous" in [inter.validation.verdict for _, inter in results[24:]]
+
+
+def test_a_fragment_on_the_predicted_path_is_not_measured_as_the_ball(backdrop, draw_ball):
+    """The ball (r = 5 px) is hidden for three frames (the area gate widens), then only a white speck
+    a sixth of its area sits on the predicted path (a cup liner's edge, a divot): close to the
+    prediction, but the shape/area fit alone (``min_fit``) keeps it from being ``measured``."""
+    path = [(300.0 + 4 * k, 250.0) for k in range(20)]
+    frames = sequence(backdrop, draw_ball, [p if k < 12 else None for k, p in enumerate(path)], [(0, path[0])])
+    for k in range(15, 20):
+        frames[k] = Frame(k, k * NS, draw_ball(frames[k].image, path[k], 2.0), hints=(), all_hints=frames[k].all_hints)
+
+    def run_with(min_fit):
+        cfg = GolfConfig()
+        tracker = GolfTracker(dataclasses.replace(cfg, validate=dataclasses.replace(cfg.validate, min_fit=min_fit)),
+                              np.random.default_rng(0))
+        return [(tracker.step(f), tracker.intermediates) for f in frames]
+
+    speck = run_with(GolfConfig().validate.min_fit)
+    assert all(s[0].status == "measured" for s, _ in speck[:12])
+    assert "measured" not in statuses(speck)[15:]
+    fits = [inter.validation.fit for _, inter in speck[15:] if inter.validation.candidate >= 0]
+    assert fits and max(fits) < GolfConfig().validate.min_fit  # it was considered, and failed on its fit
+    assert "measured" in statuses(run_with(0.0))[15:]  # without the floor the speck would have been taken
