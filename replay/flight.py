@@ -535,6 +535,11 @@ def _step(theta: np.ndarray, i: int) -> float:
     return 1e-4 * max(1.0, abs(float(theta[i])))
 
 
+UNSEEN_LANDING = slice(2, 12)  # _derived's carry .. rest time: not reported when no frame saw the landing
+UNSEEN_REST = slice(8, 12)
+BOUNCE_PARAMS = slice(11, 15)  # NAMES' restitution, friction, landing spin, roll deceleration  # its rest point and time: not reported when no frame saw the ball at rest
+
+
 def _derived(theta: np.ndarray, cfg: FlightConfig, t_end: float) -> np.ndarray:
     s = simulate(theta, cfg, t_end)
     p0 = theta[1:4]
@@ -631,13 +636,26 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
     resid = _residuals(theta, obs, cfg, t_end, basis)
     los_px = np.hypot(resid[:nobs], resid[nobs:2 * nobs]) * cfg.sigma_px
     size_r = resid[2 * nobs:] * cfg.sigma_size if cfg.use_size else np.zeros(0)
+    last_seen = float(obs.t[-1])
+    theta_out = np.array(theta, dtype=np.float64)
     if not math.isfinite(shot.landing_time):
         notes.append("the fitted ball does not come down within the log: no landing, carry or rest")
-    elif not math.isfinite(shot.rest_time):
-        notes.append("the log ends before the fitted ball rests")
+    elif shot.landing_time > last_seen:
+        # Nothing seen at or after the landing: the descent's end is an extrapolation of the model
+        # (a log cut 10 ms before a 149 m landing fitted a 202 m carry, σ 3.4 m). Not reported.
+        notes.append(f"the ball is not seen after the fitted landing (due {shot.landing_time - last_seen:.2f} s after the "
+                     "last measured frame): landing, carry, time of flight and rest are extrapolations, not reported")
+        base[UNSEEN_LANDING] = np.nan
+        dstd[UNSEEN_LANDING] = np.nan
+        theta_out[BOUNCE_PARAMS] = np.nan  # no impact seen: the bounce and roll are their starting values
+        pstd[BOUNCE_PARAMS] = np.nan
+    elif not (math.isfinite(shot.rest_time) and shot.rest_time <= last_seen):
+        notes.append("the log ends before the fitted ball rests: no rest point")
+        base[UNSEEN_REST] = np.nan
+        dstd[UNSEEN_REST] = np.nan
 
     def v(i: int) -> Value:
-        return Value(float(theta[i]), float(pstd[i]))
+        return Value(float(theta_out[i]), float(pstd[i]))
 
     def dv(i: int) -> Value:
         return Value(float(base[i]), float(dstd[i]))

@@ -129,3 +129,19 @@ def test_the_inlined_rk4_stages_agree_with_one_acceleration() -> None:
         a4 = accel(v + h * a3)
         p, v = p + h / 6 * (v + 2 * (v + h / 2 * a1) + 2 * (v + h / 2 * a2) + (v + h * a3)), v + h / 6 * (a1 + 2 * a2 + 2 * a3 + a4)
         np.testing.assert_allclose(row[1:7], np.concatenate([p, v]), rtol=1e-11, atol=1e-11)
+
+
+def test_a_landing_no_frame_saw_is_not_reported() -> None:
+    """The log ends during the descent, 0.1 s before the ball comes down: whatever the fit puts
+    there is an extrapolation, so landing, carry and rest come out as NaN, with the reason; the
+    launch and apex, which frames did see, are still reported; the bounce and roll parameters, which
+    no frame constrained, are not."""
+    ball = BallModel(friction=0.6, rolling_resistance=0.3)
+    traj = simulate_shot(Launch(speed=46.0, elevation=22.0, azimuth=0.0, backspin_rpm=8000.0), ball)
+    obs, _, _ = _observe(traj, ball, lambda ts, phase: ((ts < 0.0) | (ts >= 1.4)) & (ts < traj.landing_time - 0.1))
+    rep = fit_flight(obs, FlightConfig(jackknife_blocks=0), FPS).report
+    assert any("not seen after the fitted landing" in n for n in rep.notes), rep.notes
+    unreported = (rep.carry, *rep.landing_point, rep.landing_time, rep.time_of_flight, *rep.rest_point, rep.rest_time)
+    assert all(math.isnan(v.value) and math.isnan(v.std) for v in unreported)
+    assert all(math.isnan(v.value) for v in (rep.restitution, rep.friction, rep.landing_spin, rep.roll_decel))  # no impact seen
+    assert math.isfinite(rep.apex_height.value) and math.isfinite(rep.launch_speed.value)
