@@ -390,7 +390,7 @@ def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id:
     norm = np.linalg.norm(los, axis=1)
     bad = np.flatnonzero(~(np.isfinite(norm) & (norm > 0)))
     if bad.size:
-        raise TrackreplayError(f"the trajectory's line of sight (dx, dy, dz) at measured frame {int(frames[bad[0]])}"
+        raise TrackreplayError(f"{what}: the line of sight (dx, dy, dz) at measured frame {int(frames[bad[0]])}"
                                + (f" (and {bad.size - 1} more)" if bad.size > 1 else "") + " is not a finite, non-zero vector")
     los /= norm[:, None]
     w, h = rows["w"].to_numpy().astype(float), rows["h"].to_numpy().astype(float)

@@ -44,7 +44,7 @@ def run(args: argparse.Namespace) -> int:
         counts = traj.filter(pl.col("status") == "measured").group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
         track = int(counts["track_id"][0]) if counts.height else None
     times, cameras = log_context(args.log)
-    obs = observations(traj, cameras, track_id=track, what=str(args.log))
+    obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
     fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
     fit = fit_flight(obs, FlightConfig(use_size=not args.no_size), fps)
     print(fit.report.describe())

@@ -73,7 +73,8 @@ def test_no_encoders_says_3d_is_not_available(tmp_path, capsys) -> None:
     path = tmp_path / "t.parquet"
     assert main(["replay", str(log), "--tracker", "flow", "--export", str(path), "--quiet"]) == 0
     assert main(["flight", str(path), str(log)]) == 2
-    assert "3-D not available" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "3-D not available" in err and str(path) in err and str(log) in err  # both files named
 
 
 def _rows(n: int, los) -> pl.DataFrame:
