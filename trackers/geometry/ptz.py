@@ -32,6 +32,24 @@ def intrinsics_at(lens: LensTable, zoom: float, focus: float) -> Intrinsics:
     The table is a grid over (zoom, focus): interpolate along zoom within each focus row,
     then along focus. Readings beyond the table clamp to its edge.
     """
+    focuses, rows_by_focus = _lens_grid(lens)
+    rows = [[np.interp(zoom, zooms, column) for column in columns] for zooms, columns in rows_by_focus]
+    rows_arr = np.array(rows)
+    values = [np.interp(focus, focuses, rows_arr[:, k]) for k in range(4)]
+    return Intrinsics(*values, lens.width, lens.height)
+
+
+_GRID: tuple[LensTable, tuple] | None = None  # the last table's grid (a replay passes the same table every frame)
+
+
+def _lens_grid(lens: LensTable) -> tuple[np.ndarray, list[tuple[np.ndarray, tuple[np.ndarray, ...]]]]:
+    """The table's focus values and, per focus row, its zooms (sorted) and fx, fy, cx, cy columns:
+    what every ``intrinsics_at`` on the table interpolates in, built once per table object (was
+    ~60 µs of a ~90 µs call on a 123-entry table)."""
+    global _GRID
+    last = _GRID
+    if last is not None and last[0] is lens:
+        return last[1]
     if not lens.entries:
         raise ValueError("the lens table has no entries")
     table = np.array([(e.zoom, e.focus, e.fx, e.fy, e.cx, e.cy) for e in lens.entries], dtype=np.float64)
@@ -40,10 +58,10 @@ def intrinsics_at(lens: LensTable, zoom: float, focus: float) -> Intrinsics:
     for f in focuses:
         sub = table[table[:, 1] == f]
         sub = sub[np.argsort(sub[:, 0], kind="stable")]
-        rows.append([np.interp(zoom, sub[:, 0], sub[:, k]) for k in range(2, 6)])
-    rows_arr = np.array(rows)
-    values = [np.interp(focus, focuses, rows_arr[:, k]) for k in range(4)]
-    return Intrinsics(*values, lens.width, lens.height)
+        rows.append((np.ascontiguousarray(sub[:, 0]), tuple(np.ascontiguousarray(sub[:, k]) for k in range(2, 6))))
+    grid = (focuses, rows)
+    _GRID = (lens, grid)
+    return grid
 
 
 def rotation_world_from_camera(pan_deg: float, tilt_deg: float) -> np.ndarray:

@@ -64,3 +64,14 @@ def test_rotation_and_matrices_are_computed_once_per_camera() -> None:
     cam = PtzCamera.from_reading(PtzReading(0, 25.0, 5.0, 60, 3), LENS)
     assert cam.R is cam.R and cam.K is cam.intrinsics.K
     assert cam.R == pytest.approx(rotation_world_from_camera(25.0, 5.0))
+
+
+def test_intrinsics_of_two_tables_in_turn() -> None:
+    """The grid kept for the last table is rebuilt for another table (and an equal copy gives the same)."""
+    other = LensTable(LENS.width, LENS.height, tuple(LensEntry(e.zoom, e.focus, 2 * e.fx, e.fy, e.cx, e.cy)
+                                                     for e in LENS.entries))
+    copy = LensTable(LENS.width, LENS.height, tuple(LENS.entries))
+    first = intrinsics_at(LENS, 50, 5)
+    doubled = intrinsics_at(other, 50, 5)
+    assert doubled.fx == 2 * first.fx and doubled.fy == first.fy
+    assert intrinsics_at(copy, 50, 5) == first == intrinsics_at(LENS, 50, 5)
