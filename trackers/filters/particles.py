@@ -62,6 +62,20 @@ class ParticleFilter:
         self.particles = np.asarray(mean, dtype=np.float64) + self.rng.standard_normal((self.n, self.dim)) * sigma
         self.weights = np.full(self.n, 1.0 / self.n)
 
+    def inject(self, share: float, mean: np.ndarray, sigma: np.ndarray | float) -> np.ndarray:
+        """Replace about ``share`` of the particles (a random subset) by draws ``mean + N(0,
+        diag(sigma)²)`` with the mean weight (ICONDENSATION's importance samples from a detection,
+        without the prior/importance weight correction); returns the replaced rows' mask."""
+        chosen = self.rng.random(self.n) < share
+        k = int(chosen.sum())
+        if k:
+            self.particles = self.particles.copy()
+            self.particles[chosen] = np.asarray(mean, dtype=np.float64) + self.rng.standard_normal((k, self.dim)) * sigma
+            self.weights = self.weights.copy()
+            self.weights[chosen] = float(self.weights.mean())
+            self.weights /= self.weights.sum()
+        return chosen
+
     def resample(self) -> None:
         """Selection: draw N particles by weight (systematic); weights become uniform."""
         self.particles = self.particles[systematic_resample(self.weights, self.rng)]

@@ -41,6 +41,21 @@ class ParticleConfig:
     noise_vel_px: float = 1.5  # eq. (1) G w: velocity part of w, px/frame
     init_spread_px: float = 4.0  # particle spread around the marked start box
     init_velocity_spread_px: float = 10.0  # unknown at the start: the first frames pick the velocity out
+    # eq. (1) mixed state (ours): while a following camera holds the ball, this share of the
+    # samples is given velocity 0 each frame, so the cloud keeps a hypothesis where the ball stops
+    # or turns in the image (the operator catching up); never in a fixed view (particles.motion)
+    stop_share: float = 0.1
+    # Ours (ICONDENSATION-like): on a measured frame this share of the samples is drawn around the
+    # measured blob (velocity: the step from the last measured frame), so the cloud follows an
+    # image acceleration its constant-velocity noise cannot (the eq. (2) weights alone cannot pull
+    # a cloud that has no sample near the blob).
+    detection_share: float = 0.1
+    # Ours: a ball seen lying still (rest_frames frames within rest_px) and then missed was struck:
+    # the samples' velocities (and the missed frame's step) are spread by this (px/frame), so the
+    # search region and gate open to where it can have flown (an iron: ~60 px/frame at 1280 lines)
+    launch_velocity_px: float = 40.0
+    rest_frames: int = 2
+    rest_px: float = 1.5
     miss_velocity_damping: float = 0.85  # per frame without a ball the sample velocities decay: no drift when lost
     # With encoders, move the samples by each pose change (they then live in camera-independent
     # directions). Off by default: the operator keeps the ball nearly still in the picture, which the
@@ -108,6 +123,12 @@ class ContrastConfig:
     noise_sigmas: float = 6.0  # ... and this many robust sigmas of the region's top-hat
     kernel_diameters: float = 3.0  # the opening's disc, in ball diameters (the background is what is wider)
     max_kernel_px: float = 61.0  # ... at most this wide (reference height)
+    # With encoders (silhouette.moving_silhouette): the previous frame brought into this pose lines
+    # up everything fixed in the world; a pixel brighter now than every pixel within
+    # registration_px of its place before is moving. Clutter gone, a lower contrast is enough.
+    moving: bool = True
+    moving_min_contrast: float = 15.0  # levels (a 2 px ball against sky: +20 to +50 once its blur is shorter than ~10 px)
+    registration_px: float = 2.0  # pose error tolerated (encoder noise and quantisation, rolling shutter)
 
     def __post_init__(self) -> None:
         if self.min_contrast <= 0 or self.kernel_diameters <= 1:
@@ -157,6 +178,10 @@ class ValidateConfig:
     min_fit: float = 0.4  # ... and below this shape/area fit alone, however close to the prediction (0.4: area ~4x off, or not round)
     confirm_frames: int = 3  # a blob outside the gate (or after a loss) must be seen this many frames running
     confirm_px: float = 12.0  # ... each within this (+ a diameter) of the previous ones' extrapolation
+    # ... but the second within this (+ a diameter) of the first: the speed is not known yet (a ball
+    # falling back into the picture after a hop moves 30-110 px a frame at 720p)
+    confirm_first_step_px: float = 120.0
+    max_tentative: int = 16  # tentative tracks kept at once (longest first, then nearest the prediction)
     entry_margin_px: float = 24.0  # fixed camera, ball gone out of the picture: a new track starts this near the edge
     confirm_min_area_px: float = 2.0  # ... each blob of at least this many pixels (not scaled: one pixel has no shape)
     confirm_fit: float = 0.5  # ... and agree with each other in area and be round (validate.track_fit) at least this well
@@ -197,6 +222,11 @@ class RangeConfig:
 
     photometric: bool = True  # area from the light the ball adds, not its silhouette's pixel count
     rel_sigma: float = 0.1  # relative range error from the area, plus a blob-size term
+    # Ours: a ball the EKF has rolling on the ground (at contact height, |vertical speed| below
+    # ground_vz) is ranged where its line of sight meets the ground, to this relative error (a flat
+    # course: a 0.3 m rise 150 m out is ~5 % of a 2.5 m camera height... hence not tighter)
+    ground_vz: float = 0.5
+    ground_sigma: float = 0.05
 
 
 @dataclass(frozen=True)

@@ -194,6 +194,10 @@ class BallisticEkf:
         if self.armed:
             self.kf.P[3:, 3:] += np.diag([4.0, 4.0, 4.0]) ** 2  # the bounce is poorly known
 
+    def on_ground(self, max_vz: float) -> bool:
+        """The filter has the ball rolling or resting: at the contact height, hardly moving up or down."""
+        return self.initialised and self.kf.x[2] <= self.contact_z + 1e-6 and abs(float(self.kf.x[5])) < max_vz
+
     def advance(self, dt: float) -> np.ndarray | None:
         """Predict by ``dt``; the ground contact point when this is the flight's landing (§2.3).
 

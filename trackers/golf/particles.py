@@ -7,7 +7,10 @@ State ``s = (x, y, vx, vy)`` in frame pixels and pixels per frame, N weighted sa
 - eq. (1) ``s = F s' + G w``: constant velocity ``F``, ``G = I``, Gaussian ``w`` with standard
   deviations ``(pos, pos, vel, vel)``. Ours on top: after a miss the velocities are damped (an
   unseen ball's velocity is ever less known; without this the cloud drifts away), and ``k``
-  dropped frames coast ``k`` more constant-velocity steps with the noise grown by ``√(k+1)``.
+  dropped frames coast ``k`` more constant-velocity steps with the noise grown by ``√(k+1)``;
+  and a mixed state (Isard & Blake's mixed-state CONDENSATION): each frame a share of the samples
+  stop. A broadcast ball's image velocity is mostly the operator's error, which can stop or reverse
+  within a frame or two (catching up after a hop); constant-velocity samples alone run on past it.
 - eq. (2) ``π ∝ α + 1/(√(2π) σ) Σ_m exp(−d(z_m, x)² / 2σ²)`` over the M candidate centroids
   (the printed formula shows ``1 +``; ``α`` is the constant the text names).
 - eq. (3) ``E[x] = Σ π s``: ``ParticleFilter.estimate``.
@@ -46,19 +49,39 @@ def spread_sigma(position: float | np.ndarray, velocity: float) -> np.ndarray:
     return sig
 
 
-def motion(cfg: ParticleConfig, scale: float, *, damp: bool, steps: int) -> Transition:
-    """Eq. (1) over ``steps`` frames (1 = the next frame), with velocity damping after a miss."""
+def motion(cfg: ParticleConfig, scale: float, *, damp: bool, steps: int, followed: bool = False) -> Transition:
+    """Eq. (1) over ``steps`` frames (1 = the next frame), with velocity damping after a miss
+    (``damp``), else, when an operator's camera follows the ball (``followed``), the mixed state's
+    stopping share: the image velocity is then the operator's error, which stops or turns as the
+    operator catches up. Not in a fixed view (the image velocity is the ball's own, and a stop
+    hypothesis there would favour the scenery), nor after a miss (the damping slows the samples
+    already, and a ball struck from rest must not be held back)."""
     root = math.sqrt(steps)
     noise = linear_gaussian(F, np.array([cfg.noise_pos_px * scale * root] * 2 + [cfg.noise_vel_px * scale * root] * 2))
 
     def transition(particles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        if damp or steps > 1:
-            particles = particles.copy()
+        particles = particles.copy()
+        if cfg.stop_share > 0 and followed and not damp:  # mixed state: these samples bet that the ball stopped in the image this frame
+            particles[rng.random(len(particles)) < cfg.stop_share, 2:] = 0.0
         if damp:
             particles[:, 2:] *= cfg.miss_velocity_damping
         if steps > 1:  # dropped frames: constant velocity over the gap
             particles[:, :2] += (steps - 1) * particles[:, 2:]
         return noise(particles, rng)
+
+    return transition
+
+
+def launch(sigma: float) -> Transition:
+    """The ball was struck during the last (missed) frame: velocities spread by ``sigma`` px/frame,
+    positions by the step such a velocity made in that frame."""
+
+    def transition(particles: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        kick = rng.standard_normal((len(particles), 2)) * sigma
+        out = particles.copy()
+        out[:, 2:] += kick
+        out[:, :2] += kick
+        return out
 
     return transition
 

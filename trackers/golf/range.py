@@ -10,6 +10,9 @@ ball only a few pixels across:
 - **calibration** (:meth:`RangeFromArea.calibrate`): where the start box is a ball resting on the
   ground, its line of sight meets the ground plane at the true range; the ratio corrects every
   later range (the silhouette of a small ball is not exactly its disc: blur, JPEG, the LUT's cut).
+
+Ours: once the filter has the ball rolling on the ground, the same intersection *is* the range
+(:meth:`RangeFromArea.on_ground`, to the ground's flatness), far tighter than any area.
 """
 
 from __future__ import annotations
@@ -70,6 +73,18 @@ def photometric_area(y: np.ndarray, cx: float, cy: float, radius: float, ball_lu
     return float(np.maximum(win[inner] - bg, 0.0).sum() / contrast)
 
 
+def ground_range(camera: PtzCamera, pixel: np.ndarray, centre_height_m: float) -> float | None:
+    """Distance along ``pixel``'s line of sight to a ball lying on the ground (its centre
+    ``centre_height_m`` up), or None when that line does not come down to the ground in front of
+    the camera within ``MAX_CALIBRATION_RANGE_M``."""
+    los = camera.line_of_sight(np.asarray(pixel, dtype=np.float64).reshape(1, 2))[0]
+    height = camera.position[2] - centre_height_m
+    if los[2] >= -1e-6 or height <= 0:
+        return None
+    r = height / -float(los[2])
+    return r if r <= MAX_CALIBRATION_RANGE_M else None
+
+
 class RangeFromArea:
     """Range measurements of one ball: the area to use, the calibrated range and its uncertainty."""
 
@@ -103,19 +118,20 @@ class RangeFromArea:
         """Range (m, calibrated) and its relative sigma for a ball of ``area`` pixels."""
         return self.scale * range_from_area(area, camera, self.diameter_m), range_rel_sigma(area, self.config.rel_sigma)
 
+    def on_ground(self, camera: PtzCamera, pixel: np.ndarray) -> tuple[float, float] | None:
+        """Range (m) and relative sigma of a ball known to lie on the ground at ``pixel``: where its
+        line of sight meets the ground (``ground_sigma``; None when it does not)."""
+        r = ground_range(camera, pixel, self.diameter_m / 2.0)
+        return None if r is None else (r, self.config.ground_sigma)
+
     def calibrate(self, camera: PtzCamera, pixel: np.ndarray, area: float) -> None:
         """Correct later ranges by the ground-plane range of a ball resting at ``pixel`` (of ``area`` px).
 
         No correction when that line of sight does not meet the ground in front of the camera within
         1 km; the correction is clamped to [0.5, 2].
         """
-        los = camera.line_of_sight(np.asarray(pixel, dtype=np.float64).reshape(1, 2))[0]
-        height = camera.position[2] - self.diameter_m / 2.0
-        if los[2] >= -1e-6 or height <= 0:
-            self.scale = 1.0
-            return
-        true_range = height / -los[2]
-        if true_range > MAX_CALIBRATION_RANGE_M:
+        true_range = ground_range(camera, pixel, self.diameter_m / 2.0)
+        if true_range is None:
             self.scale = 1.0
             return
         self.scale = float(np.clip(true_range / range_from_area(area, camera, self.diameter_m), 0.5, 2.0))

@@ -85,6 +85,14 @@ class ReinitPolicy:
         self.history.append((index, x, y))
         self.parabola_used = False
 
+    def at_rest(self, index: int, frames: int, tolerance_px: float) -> bool:
+        """The last ``frames`` measurements were on consecutive frames up to ``index`` - 1 and
+        all within ``tolerance_px`` of their mean: the ball was lying still when last seen."""
+        recent = np.array(self.history, float).reshape(-1, 3)[-frames:]
+        if len(recent) < frames or recent[-1, 0] != index - 1 or recent[-1, 0] - recent[0, 0] != frames - 1:
+            return False
+        return bool(np.all(np.hypot(*(recent[:, 1:] - recent[:, 1:].mean(axis=0)).T) <= tolerance_px))
+
     def centre_search(self, camera: PtzCamera | None, width: int, height: int) -> bool:
         """Whether a lost ball is searched for mid-picture (``lost``: "centre", or "auto" when the
         camera followed the ball: a pose, or the last measurements all in the central half)."""

@@ -8,6 +8,13 @@ Ours, when neither LUT finds the ball near the prediction: :func:`contrast_silho
 clearly brighter than their local background (a white top-hat of the luminance, the opening's
 disc a few ball diameters wide). A white ball against open sky keeps that contrast while its
 colour drifts away from what the LUT learned (fading with distance, sun, compression).
+
+Ours, with encoders: :func:`moving_silhouette`. A camera that only rotates and zooms maps its
+previous frame onto this one exactly (:func:`~trackreplay.trackers.geometry.ptz.pose_homography`,
+whatever the depth), so everything fixed in the world (clouds, turf, tree line, tee markers,
+a spare ball) lines up, and what is brighter now than anything near the same place before is
+moving: the ball, a bird. A 2-3 px ball among cloud puffs of the same brightness passes no LUT and
+no contrast threshold that the puffs do not, but only it moves against the sky.
 """
 
 from __future__ import annotations
@@ -65,10 +72,45 @@ def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, s
     y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
     if y.size == 0:
         return np.zeros(y.shape, np.uint8)
-    side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
-    side += 1 - side % 2
-    hat = cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+    hat = _top_hat(y, diameter, cfg, scale)
     med = float(np.median(hat))
     noise = 1.4826 * float(np.median(np.abs(hat.astype(np.float32) - med)))
     threshold = max(cfg.min_contrast, med + cfg.noise_sigmas * noise)
     return (hat >= threshold).astype(np.uint8)
+
+
+def _top_hat(y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+    side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
+    side += 1 - side % 2
+    return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+
+
+def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
+    """The luminance of the previous frame (BGR) brought into this pose over a crop at ``offset``
+    of ``shape`` (h, w): ``homography`` maps previous pixels to this frame's. Where the previous
+    frame did not see, 255 (nothing can be brighter than that: no motion is claimed there)."""
+    h, w = shape
+    to_crop = np.array([[1.0, 0.0, -offset[0]], [0.0, 1.0, -offset[1]], [0.0, 0.0, 1.0]]) @ homography
+    bgr = cv2.warpPerspective(previous, to_crop, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                              borderValue=(255, 255, 255))
+    return to_ycbcr(bgr)[..., 0]
+
+
+def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+    """Pixels of the crop that stand above their local background now (white top-hat, as
+    :func:`contrast_silhouette`) *and* are brighter than every pixel within
+    ``registration_px`` of the same place in the previous frame brought into this pose
+    (``previous_y``, :func:`previous_in_pose`): bright and new there, i.e. moving against a
+    background fixed in the world. The smaller of the two rises must clear ``moving_min_contrast``
+    and ``noise_sigmas`` robust sigmas of its spread over the crop. A 0/1 uint8 mask."""
+    y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
+    if y.size == 0:
+        return np.zeros(y.shape, np.uint8)
+    hat = _top_hat(y, diameter, cfg, scale).astype(np.int16)
+    side = 2 * max(int(round(cfg.registration_px)), 0) + 1
+    before = cv2.dilate(np.ascontiguousarray(previous_y, dtype=np.uint8), np.ones((side, side), np.uint8))
+    rise = np.minimum(hat, y.astype(np.int16) - before.astype(np.int16))
+    med = float(np.median(rise))
+    noise = 1.4826 * float(np.median(np.abs(rise - med)))
+    threshold = max(cfg.moving_min_contrast, med + cfg.noise_sigmas * noise)
+    return (rise >= threshold).astype(np.uint8)

@@ -37,12 +37,13 @@ from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
 from trackreplay.trackers.golf.lut import GolfLuts
 from trackreplay.trackers.golf.marks import Marks
 from trackreplay.trackers.golf.notices import Notices
-from trackreplay.trackers.golf.particles import (DIM, ParticleSet, likelihood, motion, spread_sigma, state, warp,
+from trackreplay.trackers.golf.particles import (DIM, ParticleSet, launch, likelihood, motion, spread_sigma, state, warp,
                                                  with_camera_motion)
 from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.search_region import search_region
-from trackreplay.trackers.golf.silhouette import CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette
+from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
+                                                  moving_silhouette, previous_in_pose)
 from trackreplay.trackers.foreground.silhouette import silhouette
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
 from trackreplay.trackers.golf.validate import Validator
@@ -72,6 +73,8 @@ class GolfTracker(TrackerBase):
         self.started = False
         self.misses = 0
         self._prev: tuple[PtzCamera | None, int | None, int | None] = (None, None, None)  # camera, index, t_ns
+        self._prev_image: np.ndarray | None = None
+        self._last_measured: tuple[int, float, float] | None = None  # frame, x, y
         self.intermediates = GolfIntermediates.idle("")
 
     def prepare(self, marked: Marked) -> None:
@@ -98,6 +101,7 @@ class GolfTracker(TrackerBase):
         else:
             self.intermediates = GolfIntermediates.idle(notice)
             self._prev = (camera, frame.index, frame.t_ns)
+            self._prev_image = frame.image
             return []
         if camera is not None and prev_camera is not None and reinit.kind != "start":
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
@@ -108,6 +112,9 @@ class GolfTracker(TrackerBase):
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames
         motion = None if lost else self._apparent_motion(search.centre, camera, compensated)
+        moving = self._moving(frame, ycc, sil.offset, diameter, scale)
+        if lost and moving is not None:  # once lost, a ball moving against the world is a candidate too
+            sil = dataclasses.replace(sil, mask=sil.mask | moving)
         gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
                             motion=motion)  # §2.1
         found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
@@ -125,7 +132,7 @@ class GolfTracker(TrackerBase):
                     sil, gated, self.lut_name = other, alt, name
                     break
             else:
-                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion)
+                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion, moving)
                 if found is not None:
                     sil, gated = found
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
@@ -135,16 +142,19 @@ class GolfTracker(TrackerBase):
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
             sigma = cfg.particles.init_spread_px * scale
-            self.pf.initialise(state(point, self.validator.confirmed_velocity()),
-                               spread_sigma(sigma, cfg.particles.init_velocity_spread_px * scale))
+            velocity, unsure = self.validator.confirmed_velocity()
+            self.pf.initialise(state(point, velocity), spread_sigma(sigma, max(cfg.particles.init_velocity_spread_px * scale, unsure)))
             reinit = Reinit("confirmed", point.copy(), np.full(2, sigma))
             area, rnd = self.validator.confirmed_shape()  # the ball's size starts again from what was confirmed
             self.targets = BlobTargets(area, float(min(max(rnd, 0.6), 1.0)))
             observed = gated.blobs.centroid[[check.candidate]]
             self.validator.reset()
+            self._last_measured = None
         else:
             observed = gated.blobs.centroid[check.in_gate]
         gated = dataclasses.replace(gated, selected=check.candidate if seen else -1)
+        if check.verdict == "measured" and cfg.particles.detection_share > 0:
+            self._inject(frame.index, gated.blobs.centroid[check.candidate], scale)
         self.pf.weigh(likelihood(observed, cfg.particles.sigma_px * scale, cfg.particles.alpha / scale))  # eq. (2)
         estimate = self.pf.estimate()  # eq. (3)
 
@@ -156,6 +166,8 @@ class GolfTracker(TrackerBase):
             status = "predicted" if self.misses <= cfg.max_predicted_frames else "lost"
             x, y, w, h = float(estimate[0]), float(estimate[1]), diameter, diameter
             confidence = check.confidence
+        if status == "measured":
+            self._last_measured = (frame.index, x, y)
         los = camera.line_of_sight(np.array([[x, y]]))[0] if camera is not None else NAN3
         self.trail.add((x, y) if status == "measured" else None, los, self.ekf.x)
         vx, vy = float(estimate[2]), float(estimate[3])
@@ -163,6 +175,7 @@ class GolfTracker(TrackerBase):
             vx, vy = with_camera_motion((vx, vy), (x, y), pose_homography(prev_camera, camera))
 
         self._prev = (camera, frame.index, frame.t_ns)
+        self._prev_image = frame.image
         self.intermediates = GolfIntermediates(
             "ptz" if camera is not None else "image", reinit, search, sil, gated,
             ParticleSet(self.pf.particles, self.pf.weights, estimate), EkfState.of(self.ekf, camera),
@@ -182,26 +195,55 @@ class GolfTracker(TrackerBase):
             velocity = np.array(with_camera_motion(tuple(velocity), tuple(position), pose_homography(self._prev[0], camera)))
         return ApparentMotion(velocity, float(np.max(self.pf.spread(slice(2, 4)))))
 
+    def _inject(self, index: int, point: np.ndarray, scale: float) -> None:
+        """Importance samples around this frame's measured blob, moving as it moved since the last measured frame."""
+        cfg = self.config.particles
+        last = self._last_measured
+        velocity = point - np.array(last[1:]) if last is not None and last[0] == index - 1 else self.pf.estimate()[2:]
+        # As spread out as the cloud itself: the samples move to the blob without the cloud
+        # narrowing (a ball at rest must still be caught when it is struck).
+        sigma = np.maximum(self.pf.spread(), spread_sigma(cfg.noise_pos_px * scale, cfg.noise_vel_px * scale))
+        self.pf.inject(cfg.detection_share, state(point, velocity), sigma)
+
+    def _moving(self, frame: Frame, ycc: np.ndarray, offset: np.ndarray, diameter: float, scale: float) -> np.ndarray | None:
+        """The moving-against-the-world silhouette over the crop (None: no pose for this frame and
+        the one before it, or not the frame right after it)."""
+        prev_camera, prev_index, _ = self._prev
+        if (not self.config.contrast.moving or frame.camera is None or prev_camera is None or self._prev_image is None
+                or prev_index != frame.index - 1 or ycc.size == 0):
+            return None
+        before = previous_in_pose(self._prev_image, pose_homography(prev_camera, frame.camera), (int(offset[0]), int(offset[1])),
+                                  ycc.shape[:2])
+        return moving_silhouette(ycc, before, diameter, self.config.contrast, scale)
+
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
-                           scale: float, lost: bool, motion: ApparentMotion | None) -> tuple[LutSilhouette, GatedBlobs] | None:
-        """Neither LUT saw the ball near the prediction: the local-contrast silhouette, taken only
-        when it finds a blob the validation gate measures (same gate, same confidence)."""
+                           scale: float, lost: bool, motion: ApparentMotion | None,
+                           moving: np.ndarray | None) -> tuple[LutSilhouette, GatedBlobs] | None:
+        """Neither LUT saw the ball near the prediction: the local-contrast silhouette (with the
+        moving one when there is a pose), taken only when it finds a blob the validation gate
+        measures (same gate, same confidence)."""
         cfg = self.config
         if not cfg.contrast.enabled:
             return None
-        mask = contrast_silhouette(ycc, diameter, cfg.contrast, scale)
-        other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
-        gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
-                            motion=motion)
-        seen, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
-                                                 diameter=diameter, size=size, scale=scale, lost=lost)
-        return (other, gated) if seen is not None and seen.verdict == "measured" else None
+        masks = [contrast_silhouette(ycc, diameter, cfg.contrast, scale)]
+        if moving is not None:  # tried second and alone: joined, its pixels would reshape a contrast blob
+            masks.append(moving)
+        for mask in masks:
+            other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
+            gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
+                                motion=motion)
+            seen, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
+                                                     diameter=diameter, size=size, scale=scale, lost=lost)
+            if seen is not None and seen.verdict == "measured":
+                return other, gated
+        return None
 
     def _start(self, frame: Frame, region: InitRegion, scale: float) -> Reinit:
         """§2.3 initialisation: targets from the marked box's own silhouette, samples around the box."""
         cfg = self.config
         self.started = True
         self.misses = 0
+        self._last_measured = None  # a re-anchor is no step of the ball's
         self.validator.reset()
         name, self.lut_name = self.luts.start_names(frame.image, region)
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
@@ -237,7 +279,10 @@ class GolfTracker(TrackerBase):
         self.pf.resample()
         if compensated:
             self.pf.particles = warp(self.pf.particles, pose_homography(prev_camera, camera))
-        self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps))
+        if self.misses == 1 and self.reinit.at_rest(frame.index - 1, cfg.particles.rest_frames, cfg.particles.rest_px * scale):
+            self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
+        followed = self.reinit.centre_search(camera, width, height)
+        self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 
     def _measured(self, frame: Frame, camera: PtzCamera | None, gated: GatedBlobs, ycc: np.ndarray,
@@ -255,6 +300,10 @@ class GolfTracker(TrackerBase):
         self.misses = 0
         self.reinit.measured(frame.index, x, y)
         if camera is not None:
-            area = self.range.area(ycc[..., 0], blobs.centroid[k] - offset, blobs.size[k], float(blobs.area[k]))
-            self.ekf.update(camera, np.array([x, y]), *self.range.measure(area, camera))
+            pixel = np.array([x, y])
+            ground = self.range.on_ground(camera, pixel) if self.ekf.on_ground(self.config.range.ground_vz) else None
+            if ground is None:
+                area = self.range.area(ycc[..., 0], blobs.centroid[k] - offset, blobs.size[k], float(blobs.area[k]))
+                ground = self.range.measure(area, camera)
+            self.ekf.update(camera, pixel, *ground)
         return x, y, w, h

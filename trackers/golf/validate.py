@@ -89,18 +89,38 @@ def track_fit(areas: np.ndarray, rounds: np.ndarray, cfg: BlobConfig, scale: flo
     return math.exp(-0.5 * spread * spread) * math.exp(-0.5 * short * short)
 
 
+@dataclass
+class Tentative:
+    """One unconfirmed track: (frame, x, y) rows and the (area, roundness) of each blob."""
+
+    rows: list[tuple[int, float, float]]
+    shapes: list[tuple[float, float]]
+
+    def expected(self) -> np.ndarray:
+        """Constant-velocity extrapolation of its last two points to the next frame (its last point when it has one)."""
+        last = np.array(self.rows[-1][1:])
+        return last + (last - np.array(self.rows[-2][1:])) if len(self.rows) > 1 else last
+
+
 class Validator:
-    """Decides per frame whether the ball was seen, with a tentative track for jumps."""
+    """Decides per frame whether the ball was seen, with tentative tracks for jumps.
+
+    Several tentative tracks are kept at once (at most ``max_tentative``): every shape-accepted blob
+    that no track takes starts one, so a distractor nearer the prediction does not stop the ball's
+    own track from forming. A track's second blob may be up to ``confirm_first_step_px`` (+ D) from
+    its first (the speed is not known yet: a ball falling back into the picture moves tens of px
+    per frame); every later one within ``confirm_px`` (+ D) of the constant-velocity extrapolation.
+    """
 
     def __init__(self, cfg: ValidateConfig, blobs: BlobConfig) -> None:
         self.cfg = cfg
         self.blobs = blobs
-        self.tentative: list[tuple[int, float, float]] = []
-        self.shapes: list[tuple[float, float]] = []  # (area, roundness) of each tentative blob
+        self.tracks: list[Tentative] = []
+        self.best: Tentative | None = None  # the longest live track (shown; confirmed from)
 
     def reset(self) -> None:
-        self.tentative = []
-        self.shapes = []
+        self.tracks = []
+        self.best = None
 
     def gate(self, spread: np.ndarray, diameter: float, scale: float) -> tuple[float, float]:
         """``(s, radius)``: the motion scale and the gate radius for this frame."""
@@ -148,12 +168,8 @@ class Validator:
         border = None
         if outside and entry_only:
             border = (size, cfg.entry_margin_px * scale + 2.0 * diameter)
-        k = self._extend(index, gated, predicted, diameter, scale, border)
-        fit = 0.0
-        if k >= 0:
-            shapes = np.array(self.shapes[-cfg.confirm_frames:], float).reshape(-1, 2)
-            fit = track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, cfg.confirm_min_area_px)
-        if k >= 0 and len(self.tentative) >= cfg.confirm_frames and fit >= cfg.confirm_fit:
+        k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only)
+        if k >= 0 and fit >= cfg.confirm_fit:
             if self._ambiguous(gated, k, scale):
                 return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
             return Validation("confirmed", fit, fit, 0.0, radius, k, self._rows(), in_gate)
@@ -165,56 +181,91 @@ class Validator:
         of two such balls is its own (a spare ball, a tee marker), so it confirms neither."""
         others = np.flatnonzero(gated.accepted)
         others = others[others != k]
-        if not others.size:
+        if not others.size or self.best is None:
             return False
         slack = self.blobs.area_slack_px * scale * scale
-        typical = float(np.median(np.array(self.shapes, float).reshape(-1, 2)[:, 0]))
+        typical = float(np.median(np.array(self.best.shapes, float).reshape(-1, 2)[:, 0]))
         ratio = np.abs(np.log((gated.blobs.area[others] + slack) / (typical + slack)))
         return bool((ratio <= math.log(self.blobs.area_tolerance)).any())
 
-    def confirmed_velocity(self) -> np.ndarray:
-        """Per-frame velocity of the confirmed tentative track (px/frame)."""
-        t = np.array(self.tentative, float)
-        return (t[-1, 1:] - t[0, 1:]) / max(t[-1, 0] - t[0, 0], 1.0)
+    def confirmed_velocity(self) -> tuple[np.ndarray, float]:
+        """The confirmed track's velocity for the next frame (px/frame): its last step plus the
+        change between its last two steps (a ball slowing at the top of a hop changes speed by
+        ~10 px/frame each frame), and that change's size (how unsure the velocity is)."""
+        t = self._rows()
+        steps = np.diff(t[:, 1:], axis=0) / np.maximum(np.diff(t[:, 0]), 1.0)[:, None]
+        if len(steps) < 2:
+            return (steps[-1] if len(steps) else np.zeros(2)), 0.0
+        change = steps[-1] - steps[-2]
+        return steps[-1] + change, float(np.hypot(*change))
 
     def _rows(self) -> np.ndarray:
-        return np.array(self.tentative, float).reshape(-1, 3)
+        return np.array(self.best.rows if self.best is not None else [], float).reshape(-1, 3)
+
+    def _fit(self, track: Tentative, scale: float, min_move: float = 0.0) -> float:
+        if len(track.rows) < self.cfg.confirm_frames:
+            return 0.0
+        rows = np.array(track.rows[-self.cfg.confirm_frames:], float)
+        if min_move > 0 and float(np.hypot(*(rows[-1, 1:] - rows[0, 1:]))) < min_move:
+            return 0.0
+        shapes = np.array(track.shapes[-self.cfg.confirm_frames:], float).reshape(-1, 2)
+        return track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, self.cfg.confirm_min_area_px)
 
     def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float,
-                border: tuple[tuple[int, int], float] | None = None) -> int:
-        """Continue the tentative track with a shape-accepted blob (or start one: only within
-        ``border = ((width, height), margin)`` of the picture's edge when given); the blob row or -1."""
+                border: tuple[tuple[int, int], float] | None = None, must_move: bool = False) -> tuple[int, float]:
+        """Continue the tentative tracks with this frame's shape-accepted blobs (each track takes the
+        blob nearest its extrapolation, longest tracks first; a blob extends one track), start a track
+        from every blob left over (only within ``border = ((width, height), margin)`` of the picture's
+        edge when given), and drop tracks that missed this frame. Returns the blob row of the best
+        track that can be confirmed (``confirm_frames`` long, its track fit; of several, the one whose
+        blobs' area is nearest the targets'; -1: none) and that fit.
+        ``must_move``: the view is fixed, so a track that stays put over its confirm frames (less
+        than a ball diameter) is part of the scene, not a ball in play, and is not confirmed."""
+        cfg = self.cfg
         ok = np.flatnonzero(gated.accepted)
-        if not ok.size:
-            if self.tentative and index - self.tentative[-1][0] > 1:
-                self.reset()
-            return -1
         c = gated.blobs.centroid
-        if self.tentative and index - self.tentative[-1][0] == 1:
-            last = np.array(self.tentative[-1][1:])
-            velocity = last - np.array(self.tentative[-2][1:]) if len(self.tentative) > 1 else np.zeros(2)
-            expected = last + velocity
-            dist = np.hypot(c[ok, 0] - expected[0], c[ok, 1] - expected[1])
+        rounds = roundness(gated.blobs)
+        live = sorted((t for t in self.tracks if index - t.rows[-1][0] == 1), key=lambda t: -len(t.rows))
+        free = np.ones(len(ok), bool)
+        kept: list[tuple[Tentative, int]] = []
+        for track in live:
+            if not free.any():
+                break
+            reach = (cfg.confirm_px if len(track.rows) > 1 else cfg.confirm_first_step_px) * scale + diameter
+            expected = track.expected()
+            dist = np.where(free, np.hypot(c[ok, 0] - expected[0], c[ok, 1] - expected[1]), np.inf)
             j = int(np.argmin(dist))
-            if dist[j] <= self.cfg.confirm_px * scale + diameter:
+            if dist[j] <= reach:
+                free[j] = False
                 k = int(ok[j])
-                self.tentative.append((index, float(c[k, 0]), float(c[k, 1])))
-                self.shapes.append((float(gated.blobs.area[k]), float(roundness(gated.blobs)[k])))
-                return k
-        if border is not None:
+                track.rows.append((index, float(c[k, 0]), float(c[k, 1])))
+                track.shapes.append((float(gated.blobs.area[k]), float(rounds[k])))
+                kept.append((track, k))
+        starts = ok[free]
+        if border is not None and starts.size:
             (width, height), margin = border
-            x, y = c[ok, 0], c[ok, 1]
-            ok = ok[(x < margin) | (y < margin) | (x > width - 1 - margin) | (y > height - 1 - margin)]
-            if not ok.size:
-                self.reset()
-                return -1
-        dist = np.hypot(c[ok, 0] - predicted[0], c[ok, 1] - predicted[1])
-        k = int(ok[int(np.argmin(dist))])
-        self.tentative = [(index, float(c[k, 0]), float(c[k, 1]))]
-        self.shapes = [(float(gated.blobs.area[k]), float(roundness(gated.blobs)[k]))]
-        return k
+            x, y = c[starts, 0], c[starts, 1]
+            starts = starts[(x < margin) | (y < margin) | (x > width - 1 - margin) | (y > height - 1 - margin)]
+        order = np.argsort(np.hypot(c[starts, 0] - predicted[0], c[starts, 1] - predicted[1]), kind="stable")
+        for k in starts[order]:
+            kept.append((Tentative([(index, float(c[k, 0]), float(c[k, 1]))],
+                                   [(float(gated.blobs.area[k]), float(rounds[k]))]), int(k)))
+        kept = kept[:cfg.max_tentative]
+        self.tracks = [t for t, _ in kept]
+        self.best = self.tracks[0] if self.tracks else None
+        min_move = diameter if must_move else 0.0
+        fits = [self._fit(track, scale, min_move) for track, _ in kept]
+        ready = [j for j, fit in enumerate(fits) if fit >= cfg.confirm_fit]
+        if ready:  # several could be confirmed: the one most like the ball last seen (its area)
+            slack = self.blobs.area_slack_px * scale * scale
+            target = float(gated.targets[0]) + slack
+            unlike = [abs(math.log((float(np.median(np.array(kept[j][0].shapes)[:, 0])) + slack) / target)) for j in ready]
+            j = ready[int(np.argmin(unlike))]
+            self.best = kept[j][0]
+            return kept[j][1], fits[j]
+        return (kept[0][1], fits[0]) if kept else (-1, 0.0)
 
     def confirmed_shape(self) -> tuple[float, float]:
         """Median area and roundness of the confirmed tentative blobs: the ball's new targets."""
-        shapes = np.array(self.shapes, float).reshape(-1, 2)
+        shapes = np.array(self.best.shapes if self.best is not None else [], float).reshape(-1, 2)
         return float(np.median(shapes[:, 0])), float(np.nanmedian(shapes[:, 1])) if np.isfinite(shapes[:, 1]).any() else 0.9

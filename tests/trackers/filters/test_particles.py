@@ -58,3 +58,17 @@ def test_zero_likelihood_everywhere_keeps_the_weights() -> None:
 def test_bad_sizes_are_refused() -> None:
     with pytest.raises(ValueError):
         ParticleFilter(0, 4, np.random.default_rng(0))
+
+
+def test_inject_replaces_a_share_of_the_particles_around_a_detection() -> None:
+    pf = ParticleFilter(2000, 2, np.random.default_rng(3))
+    pf.initialise(np.zeros(2), 1.0)
+    chosen = pf.inject(0.1, np.array([50.0, -20.0]), 0.5)
+    assert 150 <= chosen.sum() <= 250
+    assert np.allclose(pf.particles[chosen].mean(axis=0), [50.0, -20.0], atol=0.1)
+    assert np.all(np.abs(pf.particles[~chosen]) < 6.0)  # the others untouched
+    assert pf.weights.sum() == pytest.approx(1.0)
+    again = ParticleFilter(2000, 2, np.random.default_rng(3))
+    again.initialise(np.zeros(2), 1.0)
+    again.inject(0.1, np.array([50.0, -20.0]), 0.5)
+    assert np.array_equal(again.particles, pf.particles)  # the caller's generator: same seed, same draws

@@ -153,3 +153,29 @@ def test_range_calibration_on_a_ball_resting_on_the_ground():
     r, rel = ranging.measure(0.64 * true_area, cam)
     assert r == pytest.approx(np.linalg.norm(point - cam.position), rel=1e-3)
     assert rel > RangeConfig().rel_sigma
+
+
+def test_a_ball_on_the_ground_is_ranged_where_its_line_of_sight_meets_the_ground():
+    point = np.array([140.0, -3.0, D / 2])
+    cam = follow(point, diameter_px=6.0)
+    uv = cam.project_points(point.reshape(1, 3))[0]
+    r, rel = RangeFromArea(RangeConfig(), D).on_ground(cam, uv)
+    assert r == pytest.approx(np.linalg.norm(point - cam.position), rel=1e-9)
+    assert rel == RangeConfig().ground_sigma
+    sky = follow(np.array([60.0, 0.0, 30.0]))  # a line of sight above the horizon never meets the ground
+    assert RangeFromArea(RangeConfig(), D).on_ground(sky, np.array([640.0, 360.0])) is None
+
+
+def test_the_filter_knows_when_the_ball_rolls():
+    ekf = BallisticEkf(EkfConfig(), D / 2)
+    assert not ekf.on_ground(0.5)  # not started
+    rolling = np.array([100.0, 0.0, D / 2])
+    cam = follow(rolling)
+    ekf.update(cam, cam.project_points(rolling.reshape(1, 3))[0], np.linalg.norm(rolling - cam.position), 0.05)
+    ekf.kf.x[3:] = [8.0, 0.0, 0.0]
+    ekf.kf.x[2] = D / 2
+    assert ekf.on_ground(0.5)
+    ekf.kf.x[5] = 3.0  # bouncing up again
+    assert not ekf.on_ground(0.5)
+    ekf.kf.x[2], ekf.kf.x[5] = 1.0, 0.0  # in the air
+    assert not ekf.on_ground(0.5)
