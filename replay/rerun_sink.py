@@ -51,6 +51,7 @@ class FrameLogger:
         self._frame = 0
         self._t_ns = 0
         self._series: dict[str, tuple[list[int], list[int], list[float]]] = {}
+        self._series_rows: dict[tuple[str, ...], tuple[list[int], list[int], list[np.ndarray]]] = {}
         self._static: set[str] = set()
         self._rows: dict[str, list[tuple[int, int, list]]] = {}
         self._deferred: dict[str, dict[tuple, list[tuple[int, int, dict]]]] = {}
@@ -87,22 +88,23 @@ class FrameLogger:
             self.log(path, entity)
             return
         key = (path, archetype, None if raw else (data.shape, data.flags.c_contiguous),
-               tuple(sorted((k, repr(v)) for k, v in params.items())) if params else ())
+               tuple([(k, repr(v)) for k, v in params.items()]) if params else ())
+        # The pixels are kept as they are and become Arrow at the send, all frames' at once (_Pixels)
+        pixels = bytes(data) if raw and not isinstance(data, bytes) else data if raw else np.ascontiguousarray(data).reshape(-1)
         template = self._templates.get(key)
         if template is None:
             entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
-            components = _components([entity])
-            self._templates[key] = [(d, a, str(d).endswith((":buffer", ":blob"))) for d, a in components]
+            built = _components([entity])
+            size = sum(a.get_total_buffer_size() for _, a in built)
+            pixel = [str(d).endswith((":buffer", ":blob")) for d, _ in built]
+            # later frames count what their own Arrow arrays held: the template's other components,
+            # and per pixel buffer its bytes and two int32 offsets
+            fixed = sum(a.get_total_buffer_size() for (_, a), p in zip(built, pixel) if not p) + 8 * sum(pixel)
+            template = self._templates[key] = ([(d, a.type if p else a) for (d, a), p in zip(built, pixel)], fixed)
         else:
-            pixels = np.frombuffer(data, dtype=np.uint8) if raw else np.ascontiguousarray(data).reshape(-1)
-            components = []
-            for descriptor, array, pixel_buffer in template:
-                if pixel_buffer:
-                    array = pa.ListArray.from_arrays(pa.array(np.array([0, pixels.size], dtype=np.int32)),
-                                                     pa.array(pixels), type=array.type)
-                components.append((descriptor, array))
+            size = template[1] + len(pixels) * sum(isinstance(a, pa.DataType) for _, a in template[0])
+        components = [(d, _Pixels(pixels, a) if isinstance(a, pa.DataType) else a) for d, a in template[0]]
         self._rows.setdefault(path, []).append((self._frame, self._t_ns, components))
-        size = sum(a.get_total_buffer_size() for _, a in components)
         self._buffered += size
         held = self._image_bytes[path] = self._image_bytes.get(path, 0) + size
         if self._buffered > self.flush_bytes:
@@ -138,6 +140,32 @@ class FrameLogger:
         times.append(self._t_ns)
         values.append(float(value))
 
+    def scalars(self, paths: tuple[str, ...], values: np.ndarray) -> None:
+        """A point on each of ``paths`` (``values[k]`` on ``paths[k]``, float64) at the current frame,
+        kept as one row and split into the paths' series at the end; a non-finite value is skipped
+        there, as ``scalar`` callers skip it (one call a frame for a filter's dozen series)."""
+        frames, times, rows = self._series_rows.setdefault(paths, ([], [], []))
+        frames.append(self._frame)
+        times.append(self._t_ns)
+        rows.append(values)
+
+    def _split_series_rows(self) -> None:
+        """``scalars`` rows into the per-path series (frame order kept where a path has both)."""
+        for paths, (frames, times, rows) in self._series_rows.items():
+            table = np.asarray(rows, dtype=np.float64).reshape(len(rows), len(paths))
+            finite = np.isfinite(table)
+            for k, path in enumerate(paths):
+                keep = finite[:, k]
+                f, t, v = self._series.setdefault(path, ([], [], []))
+                merge = bool(f)
+                f += [x for x, ok in zip(frames, keep.tolist()) if ok]
+                t += [x for x, ok in zip(times, keep.tolist()) if ok]
+                v += table[keep, k].tolist()
+                if merge:  # a path given by scalar() too: back into frame order (stable)
+                    order = sorted(range(len(f)), key=f.__getitem__)
+                    self._series[path] = ([f[i] for i in order], [t[i] for i in order], [v[i] for i in order])
+        self._series_rows.clear()
+
     def _send_rows(self, path: str, rows: list[tuple]) -> None:
         groups: dict[tuple, list] = {}
         for row in rows:
@@ -172,6 +200,7 @@ class FrameLogger:
 
     def flush_scalars(self) -> None:
         self.flush()
+        self._split_series_rows()
         for path in sorted(self._series):
             frames, times, values = self._series[path]
             self.rec.send_columns(
@@ -193,7 +222,11 @@ def _timelines(rows: list[tuple]) -> dict[str, pa.Array]:
 
 
 def _concat(values: list) -> object:
-    """Batches of several frames as one batch: arrays concatenated, anything else chained as a list."""
+    """Batches of several frames as one batch: arrays concatenated, a field that builds itself late
+    (``parts.Ellipses``) built for all frames at once, anything else chained as a list."""
+    build = getattr(type(values[0]), "build_all", None)
+    if build is not None and all(type(v) is type(values[0]) for v in values):
+        return build(values)
     if all(isinstance(v, np.ndarray) for v in values):
         shapes = {v.shape[1:] for v in values if len(v)}
         if len(shapes) <= 1:
@@ -216,6 +249,34 @@ def _components(entities) -> list[tuple]:
     return out
 
 
+class _Pixels:
+    """One image's pixel buffer (or encoded blob) as logged: uint8 array or bytes, and the Arrow type
+    of its component (``list<uint8>``). ``_send`` makes one Arrow array of a chunk's frames from
+    these (``column``), which holds what each frame's own ``from_arrays`` held (~8 µs a frame less)."""
+
+    __slots__ = ("data", "type")
+
+    def __init__(self, data: np.ndarray | bytes, type: pa.DataType) -> None:
+        self.data, self.type = data, type
+
+    def __len__(self) -> int:
+        return 1
+
+    def get_total_buffer_size(self) -> int:
+        return len(self.data) + 8
+
+    def arrow(self) -> pa.Array:
+        return _Pixels.column([self])
+
+    @staticmethod
+    def column(items: list[_Pixels]) -> pa.Array:
+        offsets = np.zeros(len(items) + 1, dtype=np.int32)
+        np.cumsum([len(p.data) for p in items], out=offsets[1:])
+        flat = [np.frombuffer(p.data, dtype=np.uint8) if isinstance(p.data, bytes) else p.data for p in items]
+        values = flat[0] if len(flat) == 1 else np.concatenate(flat)
+        return pa.ListArray.from_arrays(pa.array(offsets), pa.array(values, type=pa.uint8()), type=items[0].type)
+
+
 def _send(rec: rr.RecordingStream, path: str, timelines: dict, rows: list[list[tuple]]) -> None:
     """One chunk: ``rows`` (each a list of (descriptor, array), all with the same descriptors) at ``timelines``."""
     import rerun_bindings as bindings
@@ -223,6 +284,11 @@ def _send(rec: rr.RecordingStream, path: str, timelines: dict, rows: list[list[t
     columns = {}
     for k, (descriptor, _) in enumerate(rows[0]):
         arrays = [row[k][1] for row in rows]
+        if all(type(a) is _Pixels for a in arrays) and len({a.type for a in arrays}) == 1:
+            offsets = np.arange(len(arrays) + 1, dtype=np.int32)
+            columns[descriptor] = pa.ListArray.from_arrays(pa.array(offsets), _Pixels.column(arrays))
+            continue
+        arrays = [a.arrow() if type(a) is _Pixels else a for a in arrays]
         offsets = np.zeros(len(arrays) + 1, dtype=np.int32)
         np.cumsum([len(a) for a in arrays], out=offsets[1:])
         values = arrays[0] if len(arrays) == 1 else pa.concat_arrays(arrays)

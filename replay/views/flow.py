@@ -83,11 +83,12 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
 
     parts.histogram_steps(rec, f"{root}/histogram", inter.hist_edges, (inter.hist_u, inter.hist_v), labels=["u", "v"],
                           colors=[(255, 120, 60), (60, 160, 255)], x_scale=HIST_X_SCALE)
-    for (raw, filtered, names), k in zip(_series_names(root), (0, 1)):
-        parts.scalar(rec, raw, inter.raw_velocity[k])
-        parts.scalar(rec, filtered, inter.filtered_velocity[k])
+    raw_x, filtered_x, names_x, raw_y, filtered_y, names_y, moving = _series_names(root)
+    parts.scalars(rec, (raw_x, filtered_x, raw_y, filtered_y, moving),
+                  [inter.raw_velocity[0], inter.filtered_velocity[0], inter.raw_velocity[1], inter.filtered_velocity[1],
+                   float(inter.moving_pixels)])
+    for k, names in ((0, names_x), (1, names_y)):
         parts.kalman_series(rec, f"{root}/kalman", inter.kalman_x[k], inter.kalman_P[k], names)
-    parts.scalar(rec, f"{root}/moving_pixels", float(inter.moving_pixels))
 
 
 _ARROW_COLOURS = np.array([[80, 200, 255], [255, 60, 60]], dtype=np.uint8)  # still, moving
@@ -103,6 +104,9 @@ def _arrow_grid(shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.lru_cache(maxsize=8)
-def _series_names(root: str) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
-    return tuple((f"{root}/velocity/raw_{axis}", f"{root}/velocity/filtered_{axis}",
-                  tuple(f"{axis}/{part}" for part in ("position", "velocity", "acceleration"))) for axis in ("x", "y"))
+def _series_names(root: str) -> tuple:
+    """raw_x, filtered_x, the x filter's state names, the same for y, then moving_pixels' path."""
+    per_axis = tuple(x for axis in ("x", "y") for x in (
+        f"{root}/velocity/raw_{axis}", f"{root}/velocity/filtered_{axis}",
+        tuple(f"{axis}/{part}" for part in ("position", "velocity", "acceleration"))))
+    return per_axis + (f"{root}/moving_pixels",)

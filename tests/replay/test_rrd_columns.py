@@ -12,7 +12,7 @@ import rerun as rr
 from trackreplay.replay.cli import main
 from trackreplay.replay.diff_rrd import diff_rrd
 from trackreplay.replay.engine import ReplayRequest, iter_steps, replay
-from trackreplay.replay.rerun_sink import CAMERA, FrameLogger, _components
+from trackreplay.replay.rerun_sink import CAMERA, FrameLogger, _components, _Pixels
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 
@@ -50,7 +50,7 @@ def test_images_from_a_template_equal_images_built_each_time() -> None:
             data = make()
             logger.set_frame(k, k)
             logger.image("p", archetype, data, **params)
-            got = logger._rows["p"][-1][2]
+            got = [(d, a.arrow() if isinstance(a, _Pixels) else a) for d, a in logger._rows["p"][-1][2]]
             built = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
             ref = _components([built])
             assert [str(d) for d, _ in got] == [str(d) for d, _ in ref]
@@ -82,3 +82,18 @@ def test_an_image_path_sent_early_holds_the_same_rows(tmp_path: Path, monkeypatc
     replay(ReplayRequest(log=log, tracker="flow", rrd=early))
     result = diff_rrd(whole, early)
     assert result.identical, result.report()
+
+
+def test_rows_of_scalars_split_into_series_in_frame_order() -> None:
+    """``FrameLogger.scalars`` rows become each path's series; a non-finite value is skipped (as
+    ``parts.scalar`` skips it) and a path also given point by point stays in frame order."""
+    logger = FrameLogger(rr.RecordingStream("t"))
+    for k in range(4):
+        logger.set_frame(k, 10 * k)
+        if k % 2:
+            logger.scalars(("p", "q"), np.array([float(k), np.nan if k == 3 else -k]))
+        else:
+            logger.scalar("p", 100.0 + k)
+    logger._split_series_rows()
+    assert logger._series["p"] == ([0, 1, 2, 3], [0, 10, 20, 30], [100.0, 1.0, 102.0, 3.0])
+    assert logger._series["q"] == ([1], [10], [-1.0])
