@@ -16,10 +16,15 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
    the colour is found again. When the background scores within ``min_separation`` of the mark
    (H-S cannot tell them apart), it cannot set the scale: ``c = S / S_mark`` then, said once.
    With an "early" reference ``S_mark`` is the marked box's score against the new reference.
+   Ours (``neighbour_check``): a "measured" estimate with a neighbouring box (its size, beside it)
+   holding more foreground than the marked box did is reported "predicted" (on or against a
+   larger moving region; :func:`.foreground.neighbour_shares`).
 
 Departures of ours, each a switch (``colorpf.config``; measured in docs/colorpf.md): by default the
-histograms are Epanechnikov-weighted and the reference adapts (rate 0.05, only while the confidence
-against the reference as built is high and tells the target from the background); off by default,
+histograms are Epanechnikov-weighted, the reference adapts (rate 0.05, only while the confidence
+against the reference as built is high and tells the target from the background) and, once eq. (7)'s
+background exists, each particle's likelihood is multiplied by a foreground centre-surround cue
+(:mod:`~trackreplay.trackers.colorpf.foreground`; the confidence stays colour's alone); off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -35,6 +40,8 @@ from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.config import ColorPfConfig
+from trackreplay.trackers.colorpf.foreground import (brightness_gain, foreground_contrast, neighbour_shares,
+                                                     scene_changed)
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
 from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition
@@ -45,6 +52,8 @@ from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
+SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
+                "changed): on such frames the foreground cue and the neighbour check are off")
 NO_PLANE_NOTICE = ("no ground plane (/camera/ground_plane) in the log: the size estimate takes the distance as constant "
                    "(S' stays at the marked box's area, eq. (9) with Z = Z_0)")
 
@@ -82,6 +91,7 @@ class ColorPfTracker(TrackerBase):
         self._marked_image: np.ndarray | None = None
         self._told: set[str] = set()
         self._s_mark: float | None = None
+        self.background_image: np.ndarray | None = None  # eq. (7)'s background, once there is one
         self.adapted: np.ndarray | None = None  # reference.update_rate > 0: the adapted H_ref (None: as built)
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self._pending: list[str] = []
@@ -185,6 +195,7 @@ class ColorPfTracker(TrackerBase):
                       "(the target was in the picture from the start); until then the marked box's own histogram")
         self.reference = ref
         self.adapted = None
+        self.background_image = background  # likelihood.foreground: what differs from it is foreground
         return ref.mask
 
     def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
@@ -201,8 +212,19 @@ class ColorPfTracker(TrackerBase):
                 box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh,
                 drift=drift))  # eq. (2)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
+        likelihood = m.likelihood
+        background, gain = self.background_image, 1.0
+        if background is not None and (cfg.likelihood.foreground > 0 or cfg.neighbour_check):
+            gain = brightness_gain(image, background)  # a uniform illumination change is not foreground
+            if scene_changed(image, background, cfg.reference.threshold, gain):
+                self._say(SCENE_NOTICE)
+                background = None  # no foreground cue and no neighbour check on this frame
+        if cfg.likelihood.foreground > 0 and background is not None:  # ours: the foreground cue
+            contrast = foreground_contrast(image, background, self.pf.particles[:, :2], prev[2:4],
+                                           cfg.reference.threshold, cfg.reference.open_px, gain)
+            likelihood = likelihood * np.exp(cfg.likelihood.foreground * contrast)
         self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
-        self.pf.weigh(lambda _: m.likelihood)
+        self.pf.weigh(lambda _: likelihood)
         estimate = self.pf.estimate()  # eq. (6)
         if cfg.refine.mode == "meanshift" and not weigh_only:
             refined, _ = mean_shift(self.model, image, estimate, working, cfg.refine.iterations)
@@ -239,6 +261,14 @@ class ColorPfTracker(TrackerBase):
             self.adapted = (1.0 - rate) * working + rate * current  # Nummiaro et al.'s adaptive model
         if confidence >= cfg.measured_fraction:
             status, self.misses = "measured", 0
+            if cfg.neighbour_check and background is not None and self.reference.p_square > 0 and not weigh_only:
+                # a neighbour holds more foreground than the marked box did: the estimate is on or against
+                # a larger moving region; its colour matches, its position is not vouched for. Only the
+                # status changes (the misses towards "lost" are colour's)
+                shares = neighbour_shares(image, background, estimate, cfg.reference.threshold,
+                                          cfg.reference.open_px, gain)
+                if shares.max() > self.reference.p_detect / self.reference.p_square:
+                    status = "predicted"
         else:
             self.misses += 1
             status = "lost" if self.misses >= cfg.lost_after else "predicted"

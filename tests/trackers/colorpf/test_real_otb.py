@@ -22,10 +22,11 @@ def test_otb_crossing_is_followed(tmp_path):
     assert main(["annotate", str(log), "--frame", "0", "--box", f"{x - 1},{y - 1},{w},{h}", "--out", str(marked)]) == 0
     result = replay(ReplayRequest(log=marked, tracker="colorpf", seed=0))
     summary, _ = evaluate(result.trajectory, read_groundtruth(LogReader(marked)))
-    # measured (seed 0; docs/colorpf.md): coverage 0.95, precision 0.78, AUC 0.44; CSRT 0.73 on the same
-    # frames. The last frames are declared lost: the walker has shrunk to 2/3 of the box (no ground
-    # plane, so no size estimate) and the box's colours fall to the background's score.
-    assert summary.coverage > 0.85 and summary.precision_at_20px > 0.7 and summary.success_auc > 0.40, summary
+    # measured (seed 0; docs/colorpf.md): coverage 0.92, precision 0.83, AUC 0.51 (0.44 before the
+    # foreground cue); CSRT 0.73 on the same frames. Some late frames are declared lost: the walker has
+    # shrunk to 2/3 of the box (no ground plane, so no size estimate) and the box's colours fall to
+    # the background's score.
+    assert summary.coverage > 0.85 and summary.precision_at_20px > 0.7 and summary.success_auc > 0.45, summary
     assert any("no ground plane" in n for n in result.notices)  # said, not silently assumed
 
 
