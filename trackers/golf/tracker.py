@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 
 import numpy as np
 
@@ -112,9 +113,9 @@ class GolfTracker(TrackerBase):
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames
         motion = None if lost else self._apparent_motion(search.centre, camera, compensated)
-        moving = self._moving(frame, ycc, sil.offset, diameter, scale)
-        if lost and moving is not None:  # once lost, a ball moving against the world is a candidate too
-            sil = dataclasses.replace(sil, mask=sil.mask | moving)
+        moving = (lambda: self._moving(frame, ycc, sil.offset, diameter, scale)) if cfg.contrast.moving else (lambda: None)
+        if lost and (mask := moving()) is not None:  # once lost, a ball moving against the world is a candidate too
+            sil = dataclasses.replace(sil, mask=sil.mask | mask)
         gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
                             motion=motion)  # §2.1
         found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
@@ -218,17 +219,17 @@ class GolfTracker(TrackerBase):
 
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
                            scale: float, lost: bool, motion: ApparentMotion | None,
-                           moving: np.ndarray | None) -> tuple[LutSilhouette, GatedBlobs] | None:
+                           moving: Callable[[], np.ndarray | None]) -> tuple[LutSilhouette, GatedBlobs] | None:
         """Neither LUT saw the ball near the prediction: the local-contrast silhouette (with the
         moving one when there is a pose), taken only when it finds a blob the validation gate
         measures (same gate, same confidence)."""
         cfg = self.config
         if not cfg.contrast.enabled:
             return None
-        masks = [contrast_silhouette(ycc, diameter, cfg.contrast, scale)]
-        if moving is not None:  # tried second and alone: joined, its pixels would reshape a contrast blob
-            masks.append(moving)
-        for mask in masks:
+        for make in (lambda: contrast_silhouette(ycc, diameter, cfg.contrast, scale), moving):
+            mask = make()  # the moving one second and alone: joined, its pixels would reshape a contrast blob
+            if mask is None:
+                continue
             other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
             gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
                                 motion=motion)
