@@ -66,11 +66,14 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     ys, xs = _arrow_grid(u.shape)
     us, vs = u[::ARROW_STRIDE, ::ARROW_STRIDE], v[::ARROW_STRIDE, ::ARROW_STRIDE]  # = u[ys, xs], v[ys, xs]
     keep = np.isfinite(us) & np.isfinite(vs)
-    if keep.any():
-        origins = np.stack([xs[keep] + x0, ys[keep] + y0], axis=1).astype(np.float32)
-        vectors = ARROW_SCALE * np.stack([us[keep], vs[keep]], axis=1).astype(np.float32)
-        moving = inter.moving[::ARROW_STRIDE, ::ARROW_STRIDE][keep]
-        colours = _ARROW_COLOURS[moving.view(np.uint8)]
+    n = int(np.count_nonzero(keep))
+    if n and isinstance(rec, FrameLogger):  # built at the flush for all frames at once (_Arrows)
+        frame_arrows = _Arrows(xs, ys, us.copy(), vs.copy(), inter.moving[::ARROW_STRIDE, ::ARROW_STRIDE].copy(), keep,
+                               x0, y0, n)
+        parts.draw(rec, f"{root}/flow_field", rr.Arrows2D, origins=frame_arrows.field("origins"),
+                   vectors=frame_arrows.field("vectors"), colors=frame_arrows.field("colors"))
+    elif n:
+        origins, vectors, colours = _arrows(xs, ys, us, vs, inter.moving[::ARROW_STRIDE, ::ARROW_STRIDE], keep, x0, y0)
         parts.draw(rec, f"{root}/flow_field", rr.Arrows2D, origins=origins, vectors=vectors, colors=colours)
     else:
         parts.clear(rec, f"{root}/flow_field")
@@ -92,6 +95,51 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
 
 
 _ARROW_COLOURS = np.array([[80, 200, 255], [255, 60, 60]], dtype=np.uint8)  # still, moving
+
+
+def _arrows(xs, ys, us, vs, moving, keep, x0, y0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Origins (image px), vectors and colours of the kept arrows: one frame's (2-D inputs) or many
+    frames' stacked on a first axis (``x0``, ``y0`` then arrays broadcast against it), the same
+    elementwise operations either way, frames in order."""
+    origins = np.stack([(xs + x0)[keep], (ys + y0)[keep]], axis=1).astype(np.float32)
+    vectors = ARROW_SCALE * np.stack([us[keep], vs[keep]], axis=1).astype(np.float32)
+    colours = _ARROW_COLOURS[moving[keep].view(np.uint8)]
+    return origins, vectors, colours
+
+
+class _Arrows:
+    """One frame's flow arrows as a deferred field (``parts.Ellipses``' pattern): the FrameLogger
+    concatenates a path's frames at the flush and ``build_all`` computes the field for all of them
+    with :func:`_arrows` on the stacked windows (~20 µs a frame less; the same arrays)."""
+
+    __slots__ = ("xs", "ys", "us", "vs", "moving", "keep", "x0", "y0", "n", "name")
+
+    def __init__(self, xs, ys, us, vs, moving, keep, x0, y0, n, name=None) -> None:
+        self.xs, self.ys, self.us, self.vs, self.moving, self.keep = xs, ys, us, vs, moving, keep
+        self.x0, self.y0, self.n, self.name = x0, y0, n, name
+
+    def field(self, name: str) -> _Arrows:
+        return _Arrows(self.xs, self.ys, self.us, self.vs, self.moving, self.keep, self.x0, self.y0, self.n, name)
+
+    def __len__(self) -> int:
+        return self.n
+
+    @property
+    def nbytes(self) -> int:
+        """What the field's own array holds (the logger's flush threshold counts it, as before)."""
+        return self.n * (3 if self.name == "colors" else 8)
+
+    @staticmethod
+    def build_all(frames: list[_Arrows]) -> np.ndarray:
+        k = ("origins", "vectors", "colors").index(frames[0].name)
+        first = frames[0]
+        if any(f.xs is not first.xs for f in frames):  # the window changed size: frame by frame
+            return np.concatenate([_arrows(f.xs, f.ys, f.us, f.vs, f.moving, f.keep, f.x0, f.y0)[k] for f in frames])
+        x0 = np.array([f.x0 for f in frames])[:, None, None]
+        y0 = np.array([f.y0 for f in frames])[:, None, None]
+        stack = np.stack
+        return _arrows(first.xs, first.ys, stack([f.us for f in frames]), stack([f.vs for f in frames]),
+                       stack([f.moving for f in frames]), stack([f.keep for f in frames]), x0, y0)[k]
 
 
 @functools.lru_cache(maxsize=8)

@@ -398,7 +398,28 @@ def histogram_steps(logger: Logger, path: str, edges: np.ndarray, counts: Sequen
     strips[:, :, 0] = x
     for k, h in enumerate(counts):
         strips[k, :, 1] = -np.repeat(np.asarray(h), 2).astype(np.float64)
-    draw(logger, path, rr.LineStrips2D, strips=strips, colors=colors, labels=labels)
+    draw(logger, path, rr.LineStrips2D, strips=Stacked(strips) if isinstance(logger, FrameLogger) else strips,
+         colors=colors, labels=labels)
+
+
+class Stacked:
+    """A batch of same-length strips ``(n, k, dim)`` kept for the flush, where a path's frames are
+    concatenated into one array (``build_all``). It counts toward the logger's flush threshold as the
+    list of strips it replaces did (no ``nbytes``), so chunk boundaries stay where they were."""
+
+    __slots__ = ("array",)
+
+    def __init__(self, array: np.ndarray) -> None:
+        self.array = array
+
+    def __len__(self) -> int:
+        return len(self.array)
+
+    @staticmethod
+    def build_all(batches: list[Stacked]) -> np.ndarray:
+        if len({b.array.shape[1:] for b in batches}) > 1:
+            return [strip for b in batches for strip in b.array]  # lengths differ: strip by strip
+        return np.concatenate([b.array for b in batches])
 
 
 def histogram_bars(logger: Logger, path: str, counts: np.ndarray, *, edges: np.ndarray | None = None) -> None:
