@@ -11,8 +11,9 @@ RMSE per true group (per frame a Hungarian match within 1 m; with the share of t
 matched), the tracker's merge events against the true merge frame (groups-merging) and whether any
 two groups merged in groups-passing, with the margin by which they did not: per frame the merge
 gate's position and velocity distances of every pair of groups over their thresholds
-(d2p/gamma_position, d2v/gamma_velocity; a pair overlaps on a frame when both are below 1, and
-merges after merge.frames such frames in a row). Ground truth is the mean of the group's torso centres and the
+(d2p/gamma_position, d2v/gamma_velocity of the EKF velocities, and the same for the member points'
+measured mean velocities, merge.measured_velocity; a pair overlaps on a frame when all are below 1,
+and merges after merge.frames such frames in a row). Ground truth is the mean of the group's torso centres and the
 union of its members' boxes; the tracker's position is the EKF mean of its KLT observation points.
 
 The paper runs at 48 fps and so does this script by default (4 scenes x 202 frames, ~1 min of CPU).
@@ -45,7 +46,7 @@ from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.mot import hota_metrics, mot_metrics  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
 from trackreplay.replay.trajectory import state_row, trajectory_table  # noqa: E402
-from trackreplay.trackers.groups.merging import overlap_pairs  # noqa: E402
+from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap  # noqa: E402
 
 MERGE_EVENTS = ("merged into", "absorbed by")
 # The stairs rig (2.1 m high, 15° down) sees the group at 3-6 m: disparities up to 18 px, beyond the
@@ -94,20 +95,26 @@ def replay_with_gates(req: ReplayRequest) -> tuple[pl.DataFrame, pl.DataFrame, l
             extra.extend(group_rows(req.tracker, step))
             events.extend((step.frame.index, e) for e in getattr(step.intermediates, "events", ()))
             cfg = steps.tracker.config
-            g = step.intermediates.groups
+            it = step.intermediates
+            g = it.groups
             if len(g.ids) < 2:
                 continue
             floor = np.eye(3) * cfg.association.min_extent_m**2
             spread = 1.0 if cfg.merge.velocity_spread_in_gate else 0.0
             vcov = np.array([g.P[k][np.ix_([1, 3, 5], [1, 3, 5])] + spread * g.velocity_spread[k] / max(int(g.members[k]), 1)
                              + np.eye(3) * 1e-8 for k in range(len(g.ids))])
-            vel, gamma_v, pose = g.x[:, [1, 3, 5]], cfg.merge.gamma_velocity, steps.tracker.pose
-            if cfg.merge.ground_velocity and pose is not None:  # as the tracker: the ground plane's 2 dof
-                vel, vcov, gamma_v = pose.rotate(vel)[:, :2], pose.rotate_cov(vcov)[:, :2, :2], cfg.merge.gamma_velocity_ground
-            _, d2p, d2v = overlap_pairs(g.x[:, [0, 2, 4]], g.extent + floor, vel, vcov, cfg.merge.gamma_position, gamma_v)
+            # the point labels are group ids: as indices into the snapshot's groups for the measured velocities
+            index = {int(gid): k for k, gid in enumerate(g.ids.tolist())}
+            labels = np.array([index.get(int(gid), -1) for gid in it.labels.tolist()], np.int64)
+            measured = measured_velocities(it.points.velocity, labels, len(g.ids), cfg.association.min_points,
+                                           steps.tracker.contested)
+            gate = merge_overlap(g.x[:, [0, 2, 4]], g.extent + floor, g.x[:, [1, 3, 5]], vcov, measured, cfg.merge,
+                                 steps.tracker.pose)  # as the tracker's _merge
             for i, j in zip(*np.triu_indices(len(g.ids), 1)):
-                gates.append({"frame": step.frame.index, "pair": f"{g.ids[i]},{g.ids[j]}",
-                              "p": float(d2p[i, j] / cfg.merge.gamma_position), "v": float(d2v[i, j] / gamma_v)})
+                m = float(gate.measured[i, j])
+                gates.append({"frame": step.frame.index, "pair": f"{g.ids[i]},{g.ids[j]}", "p": float(gate.position[i, j]),
+                              "v": float(gate.velocity[i, j]), "m": m if np.isfinite(m) else None,
+                              "counts": bool(gate.overlap[i, j])})
         scaled = steps.tracker.config
     finally:
         steps.close()
@@ -118,27 +125,40 @@ def replay_with_gates(req: ReplayRequest) -> tuple[pl.DataFrame, pl.DataFrame, l
 
 
 def gate_margin(gates: list[dict], merge_frames: int) -> dict:
-    """How far the pairs of groups stayed from merging: the least velocity ratio on frames where the
-    positions overlapped, the least max(p, v) ratio (both < 1 = a frame counted towards a merge),
-    and the longest run of such frames per pair against ``merge_frames``."""
+    """How far the pairs of groups stayed from merging: the least EKF velocity ratio on frames where
+    the positions overlapped, the least max(p, v) ratio (both < 1 and the measured velocities too =
+    a frame counted towards a merge), the least measured (member-point) velocity ratio on frames
+    where position and EKF velocity both overlapped, the longest run of frames with position and EKF
+    velocity overlapping (what counted before merge.measured_velocity) and of counted frames per
+    pair against ``merge_frames``."""
     if not gates:
         return {"pairs": 0}
-    df = pl.DataFrame(gates).sort("pair", "frame")
+    df = pl.DataFrame(gates, schema={"frame": pl.Int64, "pair": pl.Utf8, "p": pl.Float64, "v": pl.Float64,
+                                     "m": pl.Float64, "counts": pl.Boolean}).sort("pair", "frame")
     close = df.filter(pl.col("p") < 1.0)
-    runs = {}
+    both_ekf = df.filter((pl.col("p") < 1.0) & (pl.col("v") < 1.0))
+    runs, runs_ekf = {}, {}
     for (pair,), part in df.partition_by("pair", as_dict=True).items():
-        both = ((part["p"] < 1.0) & (part["v"] < 1.0)).to_numpy()
-        frames = part["frame"].to_numpy()
-        best = run = 0
-        for k in range(len(both)):  # per frame of one pair (a few hundred), not per pixel
-            run = run + 1 if both[k] and (k == 0 or frames[k] == frames[k - 1] + 1) else int(both[k])
-            best = max(best, run)
-        runs[pair] = best
-    worst = df.with_columns(pl.max_horizontal("p", "v").alias("m")).sort("m").row(0, named=True)
+        runs_ekf[pair] = _longest_run(((part["p"] < 1.0) & (part["v"] < 1.0)).to_numpy(), part["frame"].to_numpy())
+        runs[pair] = _longest_run(part["counts"].to_numpy(), part["frame"].to_numpy())
+    worst = df.with_columns(pl.max_horizontal("p", "v").alias("mx")).sort("mx").row(0, named=True)
+    measured = both_ekf["m"].drop_nulls()
     return {"pairs": df["pair"].n_unique(), "position_overlap_frames": close.height,
             "min_velocity_ratio_while_positions_overlap": None if close.is_empty() else round(float(close["v"].min()), 3),
-            "min_max_ratio": round(float(worst["m"]), 3), "at_frame": worst["frame"], "pair": worst["pair"],
+            "min_max_ratio": round(float(worst["mx"]), 3), "at_frame": worst["frame"], "pair": worst["pair"],
+            "position_and_ekf_velocity_overlap_frames": both_ekf.height,
+            "min_measured_velocity_ratio_while_both_overlap": None if measured.is_empty() else round(float(measured.min()), 3),
+            "longest_position_and_ekf_velocity_run": runs_ekf,
             "longest_overlap_run": runs, "merge_frames": merge_frames}
+
+
+def _longest_run(flags: np.ndarray, frames: np.ndarray) -> int:
+    """The longest run of consecutive frames with ``flags`` set."""
+    best = run = 0
+    for k in range(len(flags)):  # per frame of one pair (a few hundred), not per pixel
+        run = run + 1 if flags[k] and (k == 0 or frames[k] == frames[k - 1] + 1) else int(flags[k])
+        best = max(best, run)
+    return best
 
 
 def _hota(s) -> dict:

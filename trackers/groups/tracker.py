@@ -14,7 +14,8 @@ Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
    the paper states no rule).
 6. §3.4 initial grouping of the unassigned points (:mod:`.grouping`).
 7. §3.5 merging of groups whose position and velocity regions overlap (:mod:`.merging`; eqs. 14–15
-   by :func:`trackreplay.trackers.filters.gaussians.merge_gaussians`); the merged group gets a new id.
+   by :func:`trackreplay.trackers.filters.gaussians.merge_gaussians`) and, ours, whose member points'
+   own velocities agree across the line of sight (``merge.measured_velocity``); the merged group gets a new id.
 
 Outputs per live group: X Y Z the EKF position (metres) in the world frame (Z up) when the log
 carries the rig's pose (``/stereo/pose``, ``position_frame == "world"``), else in the left camera's
@@ -46,7 +47,7 @@ from trackreplay.trackers.groups.ekf import POS, VEL, GroupEkf, state_from
 from trackreplay.trackers.groups.features import KltFeatures, ObservationPoints
 from trackreplay.trackers.groups.grouping import initial_groups
 from trackreplay.trackers.groups.intermediates import GroupsIntermediates, GroupSnapshot
-from trackreplay.trackers.groups.merging import merge_sets, overlap_pairs
+from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap, merge_sets
 
 NO_STEREO = "the log has no stereo pair with calibration (/stereo/{left,right}/image and calibration): groups tracker idle"
 
@@ -101,6 +102,7 @@ class GroupTracker(TrackerBase):
         self.groups: list[Group] = []
         self.next_id = 1
         self.pair_frames: dict[tuple[int, int], int] = {}
+        self.contested = np.zeros(0, bool)  # this frame's points gated by two or more groups (§3.3)
         self.prev_t: int | None = None
         self.intermediates = GroupsIntermediates.idle("idle", (1, 1))
 
@@ -143,7 +145,7 @@ class GroupTracker(TrackerBase):
         labels = self._associate_and_update(points, rig)  # §3.3
         labels, ended, events = self._delete(labels)
         labels = self._start_groups(points, labels, rig, events)  # §3.4
-        labels, merged = self._merge(labels, events)  # §3.5
+        labels, merged = self._merge(labels, events, points)  # §3.5
         ended = np.array(sorted(ended + merged), np.int64)
         self._boxes(stereo.disparity, rig)
 
@@ -167,6 +169,7 @@ class GroupTracker(TrackerBase):
     def _associate_and_update(self, points: ObservationPoints, rig: StereoRig) -> np.ndarray:
         acfg = self.config.association
         floor = np.eye(3) * acfg.min_extent_m**2
+        self.contested = np.zeros(len(points), bool)
         if not self.groups:
             return np.full(len(points), -1, np.int64)
         centres = np.array([g.position for g in self.groups])
@@ -174,6 +177,7 @@ class GroupTracker(TrackerBase):
         vmeans = np.array([g.velocity for g in self.groups])
         vcovs = np.array([g.velocity_spread + g.ekf.P[np.ix_(VEL, VEL)] + np.eye(3) * 1e-6 for g in self.groups])
         assoc = associate(points.xyz, points.velocity, centres, gate, vmeans, vcovs, acfg.gamma, acfg.k_p, acfg.k_v)
+        self.contested = assoc.contested
         a = acfg.alpha_s
         for j, g in enumerate(self.groups):
             idx = np.flatnonzero(assoc.labels == j)
@@ -215,7 +219,7 @@ class GroupTracker(TrackerBase):
             events.append(f"group {g.gid} started with {len(idx)} points")
         return labels
 
-    def _merge(self, labels: np.ndarray, events: list[str]) -> tuple[np.ndarray, list[int]]:
+    def _merge(self, labels: np.ndarray, events: list[str], points: ObservationPoints) -> tuple[np.ndarray, list[int]]:
         mcfg, floor = self.config.merge, np.eye(3) * self.config.association.min_extent_m**2
         if len(self.groups) < 2:
             self.pair_frames = {}
@@ -226,11 +230,9 @@ class GroupTracker(TrackerBase):
         spread = 1.0 if mcfg.velocity_spread_in_gate else 0.0
         vcov = np.array([g.ekf.P[np.ix_(VEL, VEL)] + spread * g.velocity_spread / max(g.members, 1) + np.eye(3) * 1e-8
                          for g in self.groups])
-        gamma_v = mcfg.gamma_velocity
-        if mcfg.ground_velocity and self.pose is not None:  # the ground plane's 2 dof of the velocity
-            vel, vcov = self.pose.rotate(vel)[:, :2], self.pose.rotate_cov(vcov)[:, :2, :2]
-            gamma_v = mcfg.gamma_velocity_ground
-        both, _, _ = overlap_pairs(centres, extents, vel, vcov, mcfg.gamma_position, gamma_v)
+        measured = measured_velocities(points.velocity, labels, len(self.groups), self.config.association.min_points,
+                                       self.contested)
+        both = merge_overlap(centres, extents, vel, vcov, measured, mcfg, self.pose).overlap
         ids = [g.gid for g in self.groups]
         counts: dict[tuple[int, int], int] = {}
         ready = np.zeros_like(both)

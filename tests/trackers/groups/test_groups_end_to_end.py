@@ -169,11 +169,15 @@ def test_the_same_defaults_at_24_fps_detect_the_merge(tmp_path):
     assert merges and true_frame <= merges[0] <= true_frame + 12, (true_frame, events)
 
 
-@pytest.mark.xfail(strict=True, reason="known (docs/groups.md): at 24 fps the faster group's velocity estimate is "
-                   "pulled towards the slower one's while they overlap (its points go to the bigger group), and on this "
-                   "clip the two merge at frame 53; the full scene at 24 fps and every 48 fps case do not merge")
-def test_passing_groups_at_24_fps_do_not_merge_on_a_clip_from_1s(tmp_path):
+@pytest.mark.parametrize("scene_seed", [0, 5])
+def test_passing_groups_at_24_fps_do_not_merge_on_a_clip_from_1s(tmp_path, scene_seed):
+    """While the fast group passes behind the slow one its EKF velocity drifts towards the slow
+    group's (the mean of its points moves slower; seed 0: 1.85 -> 1.56 m/s, truth 1.9) and the EKF
+    velocity gate held for the 4-frame hold: merged at frame 53 (seed 0) and 59 (seed 5) with the
+    EKF test alone. The member points' own velocities across the line of sight keep them apart
+    (merge.measured_velocity)."""
     passing = tmp_path / "passing24.mcap"
-    write_group_scene(passing, GroupSceneConfig(scene="groups-passing", fps=24.0, start_s=1.0, duration=3.0, encoding="jpeg"))
+    write_group_scene(passing, GroupSceneConfig(scene="groups-passing", seed=scene_seed, fps=24.0, start_s=1.0, duration=3.0,
+                                                encoding="jpeg"))
     _, _, events = replay_groups(ReplayRequest(log=passing, tracker="groups", seed=0))
     assert not [e for _, e in events if "merged into" in e or "absorbed" in e], events

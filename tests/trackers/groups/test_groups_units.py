@@ -75,6 +75,48 @@ def test_merge_needs_position_and_velocity_overlap():
     assert [s.tolist() for s in merge_sets(both)] == [[0, 2]]
 
 
+def test_merge_needs_the_member_points_measured_velocities_to_agree_too():
+    from trackreplay.trackers.groups.config import MergeConfig
+    from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap
+
+    rng = np.random.default_rng(0)
+    centres = np.array([[0.0, 0.0, 8.0], [0.3, 0.0, 8.2]])
+    extents = np.array([np.eye(3) * 0.1] * 2)
+    # the EKF velocities agree (one drifted towards the other's), sigma 0.003 m/frame each
+    vel = np.array([[0.030, 0, 0], [0.031, 0, 0]])
+    vcov = np.array([np.eye(3) * 0.003**2] * 2)
+    # the points' own velocities: 0.02 m/frame (1 m/s at 48 fps) apart, 30 points each, spread 0.01
+    lam = np.concatenate([rng.normal([0.02, 0, 0], 0.01, (30, 3)), rng.normal([0.04, 0, 0], 0.01, (30, 3))])
+    labels = np.repeat([0, 1], 30)
+    cfg = MergeConfig(ground_velocity=False)
+    means, covs = measured_velocities(lam, labels, 2, 2)
+    assert np.allclose(covs[0], np.cov(lam[:30].T) / 30)
+    gate = merge_overlap(centres, extents, vel, vcov, (means, covs), cfg)
+    assert gate.position[0, 1] < 1 and gate.velocity[0, 1] < 1  # the EKF test alone would count the frame
+    assert gate.measured[0, 1] > 1 and not gate.overlap[0, 1]
+    # the same points moving alike: the frame counts
+    same = merge_overlap(centres, extents, vel, vcov, measured_velocities(lam - np.where(labels[:, None] == 1, [0.02, 0, 0], 0.0),
+                                                                          labels, 2, 2), cfg)
+    assert same.measured[0, 1] < 1 and same.overlap[0, 1]
+    # a group with fewer than min_points points has no measured velocity: the EKF test alone
+    few = merge_overlap(centres, extents, vel, vcov, measured_velocities(lam, np.where(np.arange(60) < 59, 0, 1), 2, 2), cfg)
+    assert np.isnan(few.measured[0, 1]) and few.overlap[0, 1]
+    # along the line of sight (disparity slopes, errors shared by a surface's points) they are not tested
+    deep = lam + np.where(labels[:, None] == 1, [-0.02, 0, 0.05], 0.0)  # the same across, 2.4 m/s apart in depth
+    along = merge_overlap(centres, extents, vel, vcov, measured_velocities(deep, labels, 2, 2), cfg)
+    assert along.measured[0, 1] < 1 and along.overlap[0, 1]
+    # points gated by both groups are left out of a group's mean when it has enough of its own
+    contested = np.zeros(60, bool)
+    contested[30:45] = True  # half of group 1's points, moved to group 0's velocity: contested, not counted
+    mixed = np.where((np.arange(60) >= 30)[:, None] & contested[:, None], lam - [0.02, 0, 0], lam)
+    means_c, _ = measured_velocities(mixed, labels, 2, 2, contested)
+    assert np.allclose(means_c[1], lam[45:].mean(axis=0))
+    assert not merge_overlap(centres, extents, vel, vcov, measured_velocities(mixed, labels, 2, 2, contested), cfg).overlap[0, 1]
+    # switched off: the EKF test alone
+    assert merge_overlap(centres, extents, vel, vcov, (means, covs), MergeConfig(ground_velocity=False,
+                                                                                 measured_velocity=False)).overlap[0, 1]
+
+
 def _textured_pair(rng, shift_bg=4, shift_fg=11):
     h, w = 240, 320
     bg = rng.integers(0, 255, (h, w)).astype(np.uint8)
