@@ -95,9 +95,14 @@ class ReinitPolicy:
 
     def centre_search(self, camera: PtzCamera | None, width: int, height: int) -> bool:
         """Whether a lost ball is searched for mid-picture (``lost``: "centre", or "auto" when the
-        camera followed the ball: a pose, or the last measurements all in the central half)."""
+        camera follows the ball, :meth:`follows`)."""
         if self.cfg.lost != "auto":
             return self.cfg.lost == "centre"
+        return self.follows(camera, width, height)
+
+    def follows(self, camera: PtzCamera | None, width: int, height: int) -> bool:
+        """Whether an operator's camera follows the ball: a pose (a PTZ head), or the last
+        measurements all in the central half of the picture."""
         if camera is not None:
             return True
         recent = np.array(self.history, float).reshape(-1, 3)[-4:, 1:]

@@ -77,6 +77,8 @@ class GolfTracker(TrackerBase):
         self._prev_image: np.ndarray | None = None
         self._last_measured: tuple[int, float, float] | None = None  # frame, x, y
         self.intermediates = GolfIntermediates.idle("")
+        self._moments_memo: list = [None, None, {}]  # particles, weights, {first component: (mean, spread)}
+        self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
 
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
@@ -107,8 +109,7 @@ class GolfTracker(TrackerBase):
         if camera is not None and prev_camera is not None and reinit.kind != "start":
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
         diameter = self.targets.diameter
-        search = search_region(self.pf.weights @ self.pf.particles[:, :2], self.pf.spread(slice(0, 2)), diameter,
-                               width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
+        search = search_region(*self._moments(0), diameter, width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
         sil, ycc = lut_silhouette(frame.image, search.box, self.luts, self.lut_name)  # §2.1 I_c
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames
@@ -118,8 +119,9 @@ class GolfTracker(TrackerBase):
             sil = dataclasses.replace(sil, mask=sil.mask | mask)
         gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
                             motion=motion)  # §2.1
-        found, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
-                                                  diameter=diameter, size=(width, height), scale=scale, lost=lost)
+        seen_gated = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
+                                                 diameter=diameter, size=(width, height), scale=scale, lost=lost)
+        found = seen_gated[0]
         if not lost and (found is None or found.verdict != "measured"):
             # The background changed under the ball faster than the luminance switch (tree line, horizon):
             # the ball may pass the other LUT; take it only if that finds the ball in the gate.
@@ -127,18 +129,18 @@ class GolfTracker(TrackerBase):
                 other = LutSilhouette(name, sil.lut_scores, silhouette(ycc, self.luts.lut(name)), sil.offset)
                 alt = select_ball(other.mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale,
                                   motion=motion)
-                seen_alt, _, _ = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
-                                                             diameter=diameter, size=(width, height), scale=scale, lost=lost)
-                if seen_alt is not None and seen_alt.verdict == "measured":
-                    sil, gated, self.lut_name = other, alt, name
+                seen_alt = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
+                                                       diameter=diameter, size=(width, height), scale=scale, lost=lost)
+                if seen_alt[0] is not None and seen_alt[0].verdict == "measured":
+                    sil, gated, self.lut_name, seen_gated = other, alt, name, seen_alt
                     break
             else:
-                found = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion, moving)
-                if found is not None:
-                    sil, gated = found
+                fallback = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion, moving)
+                if fallback is not None:
+                    sil, gated, seen_gated = fallback
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
                                         diameter=diameter, size=(width, height), scale=scale, lost=lost,
-                                        entry_only=not self.reinit.centre_search(camera, width, height))
+                                        entry_only=not self.reinit.centre_search(camera, width, height), seen=seen_gated)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
@@ -153,11 +155,11 @@ class GolfTracker(TrackerBase):
             self._last_measured = None
         else:
             observed = gated.blobs.centroid[check.in_gate]
-        gated = dataclasses.replace(gated, selected=check.candidate if seen else -1)
+        gated = GatedBlobs(gated.blobs, gated.reason, check.candidate if seen else -1, gated.targets, gated.widen, gated.reasons)
         if check.verdict == "measured" and cfg.particles.detection_share > 0:
             self._inject(frame.index, gated.blobs.centroid[check.candidate], scale)
         self.pf.weigh(likelihood(observed, cfg.particles.sigma_px * scale, cfg.particles.alpha / scale))  # eq. (2)
-        estimate = self.pf.estimate()  # eq. (3)
+        estimate = self._estimate()  # eq. (3)
 
         if seen:
             x, y, w, h = self._measured(frame, camera, gated, ycc, sil, check.confidence)
@@ -191,16 +193,41 @@ class GolfTracker(TrackerBase):
     def _apparent_motion(self, position: np.ndarray, camera: PtzCamera | None, compensated: bool) -> ApparentMotion:
         """The samples' mean velocity as the image sees it (with the camera's own motion when the
         samples are compensated) and its spread: how long the ball's streak may be this frame."""
-        velocity = self.pf.weights @ self.pf.particles[:, 2:4]
+        velocity, spread = self._moments(2)
         if compensated:
             velocity = np.array(with_camera_motion(tuple(velocity), tuple(position), pose_homography(self._prev[0], camera)))
-        return ApparentMotion(velocity, float(np.max(self.pf.spread(slice(2, 4)))))
+        return ApparentMotion(velocity, float(np.max(spread)))
+
+    def _moments(self, first: int) -> tuple[np.ndarray, np.ndarray]:
+        """The samples' weighted mean and spread of components ``first``, ``first + 1`` (positions: 0,
+        velocities: 2), as ``weights @ particles[:, first:first + 2]`` and ``ParticleFilter.spread``
+        compute them, once per set of samples (the search region, the apparent motion and the
+        injection all ask)."""
+        pf = self.pf
+        particles, weights = pf.particles, pf.weights
+        memo = self._moments_memo
+        if memo[0] is not particles or memo[1] is not weights:
+            memo = self._moments_memo = [particles, weights, {}]
+        out = memo[2].get(first)
+        if out is None:
+            p = particles[:, first:first + 2]
+            mean = weights @ p
+            out = memo[2][first] = (mean, np.sqrt(np.maximum(weights @ (p - mean) ** 2, 0.0)))
+        return out
+
+    def _estimate(self) -> np.ndarray:
+        """``ParticleFilter.estimate`` (eq. (3)), once per set of samples (a copy: the caller may keep it)."""
+        pf = self.pf
+        memo = self._estimate_memo
+        if memo[0] is not pf.particles or memo[1] is not pf.weights:
+            memo = self._estimate_memo = (pf.particles, pf.weights, pf.estimate())
+        return memo[2].copy()
 
     def _inject(self, index: int, point: np.ndarray, scale: float) -> None:
         """Importance samples around this frame's measured blob, moving as it moved since the last measured frame."""
         cfg = self.config.particles
         last = self._last_measured
-        velocity = point - np.array(last[1:]) if last is not None and last[0] == index - 1 else self.pf.estimate()[2:]
+        velocity = point - np.array(last[1:]) if last is not None and last[0] == index - 1 else self._estimate()[2:]
         # As spread out as the cloud itself: the samples move to the blob without the cloud
         # narrowing (a ball at rest must still be caught when it is struck).
         sigma = np.maximum(self.pf.spread(), spread_sigma(cfg.noise_pos_px * scale, cfg.noise_vel_px * scale))
@@ -219,7 +246,7 @@ class GolfTracker(TrackerBase):
 
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
                            scale: float, lost: bool, motion: ApparentMotion | None,
-                           moving: Callable[[], np.ndarray | None]) -> tuple[LutSilhouette, GatedBlobs] | None:
+                           moving: Callable[[], np.ndarray | None]) -> tuple[LutSilhouette, GatedBlobs, tuple] | None:
         """Neither LUT saw the ball near the prediction: the local-contrast silhouette (with the
         moving one when there is a pose), taken only when it finds a blob the validation gate
         measures (same gate, same confidence)."""
@@ -233,10 +260,10 @@ class GolfTracker(TrackerBase):
             other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
             gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
                                 motion=motion)
-            seen, _, _ = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
-                                                     diameter=diameter, size=size, scale=scale, lost=lost)
-            if seen is not None and seen.verdict == "measured":
-                return other, gated
+            seen = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
+                                               diameter=diameter, size=size, scale=scale, lost=lost)
+            if seen[0] is not None and seen[0].verdict == "measured":
+                return other, gated, seen
         return None
 
     def _start(self, frame: Frame, region: InitRegion, scale: float) -> Reinit:
@@ -273,7 +300,7 @@ class GolfTracker(TrackerBase):
         landing = self.ekf.advance(dt)
         height, width = frame.image.shape[:2]
         reinit = self.reinit.choose(index=frame.index, size=(width, height), scale=scale, misses=self.misses,
-                                    landing=landing, camera=camera, ekf=self.ekf, estimate=self.pf.estimate()[:2])
+                                    landing=landing, camera=camera, ekf=self.ekf, estimate=self._estimate()[:2])
         if reinit.kind:
             self.pf.initialise(state(reinit.point), spread_sigma(reinit.sigma, cfg.reinit.velocity_sigma_px * scale))
             return reinit
@@ -282,7 +309,7 @@ class GolfTracker(TrackerBase):
             self.pf.particles = warp(self.pf.particles, pose_homography(prev_camera, camera))
         if self.misses == 1 and self.reinit.at_rest(frame.index - 1, cfg.particles.rest_frames, cfg.particles.rest_px * scale):
             self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
-        followed = self.reinit.centre_search(camera, width, height)
+        followed = self.reinit.follows(camera, width, height)
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 
