@@ -150,15 +150,20 @@ class Validator:
         return Validation(verdict, confidence, fit, motion, radius, k, np.zeros((0, 3)), in_gate), in_gate, outside
 
     def validate(self, *, index: int, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
-                 size: tuple[int, int], scale: float, lost: bool, entry_only: bool = False) -> Validation:
+                 size: tuple[int, int], scale: float, lost: bool, entry_only: bool = False,
+                 seen: tuple[Validation | None, np.ndarray, bool] | None = None) -> Validation:
         """The frame's verdict. ``entry_only``: the camera does not follow the ball, so once the
         prediction has left the picture a new tentative track may only start near the border (a
-        ball comes back into a fixed view through its edge, not out of a white cap mid-picture)."""
+        ball comes back into a fixed view through its edge, not out of a white cap mid-picture).
+        ``seen``: what :meth:`seen_in_gate` already answered for these same arguments (it changes
+        nothing, so the answer is the same; None: asked here)."""
         cfg = self.cfg
         _, radius = self.gate(spread, diameter, scale)
         ok = gated.accepted
-        found, in_gate, outside = self.seen_in_gate(gated=gated, predicted=predicted, spread=spread, diameter=diameter,
-                                                    size=size, scale=scale, lost=lost)
+        if seen is None:
+            seen = self.seen_in_gate(gated=gated, predicted=predicted, spread=spread, diameter=diameter, size=size,
+                                     scale=scale, lost=lost)
+        found, in_gate, outside = seen
         if found is not None:
             if found.verdict == "measured":
                 self.reset()
