@@ -59,7 +59,7 @@ class Blobs:
 def pixel_covariance(labels: np.ndarray, label: int, box: np.ndarray) -> tuple[float, float, float]:
     """``(sxx, syy, sxy)`` of the pixels of ``label`` inside ``box`` (x0, y0, w, h of the crop), each
     pixel a unit square (hence the 1/12 on the diagonal: a single pixel is not a point)."""
-    x0, y0, w, h = (int(v) for v in box)
+    x0, y0, w, h = (int(v) for v in np.asarray(box).tolist())
     m = cv2.moments((labels[y0:y0 + h, x0:x0 + w] == label).view(np.uint8), binaryImage=True)
     return m["mu20"] / m["m00"] + 1 / 12, m["mu02"] / m["m00"] + 1 / 12, m["mu11"] / m["m00"]
 
@@ -68,8 +68,10 @@ def chain_length(points: np.ndarray) -> float:
     """Kulpa's length estimate of a closed 8-connected contour given as (n, 2) points."""
     if len(points) < 2:
         return 0.0
-    steps = np.abs(np.diff(np.vstack([points, points[:1]]), axis=0))
-    diagonal = int(np.count_nonzero((steps[:, 0] > 0) & (steps[:, 1] > 0)))
+    steps = points[1:] - points[:-1]  # and the closing step, last -> first, below
+    diagonal = int(np.count_nonzero((steps[:, 0] != 0) & (steps[:, 1] != 0)))
+    close = points[0] - points[-1]
+    diagonal += int(close[0] != 0 and close[1] != 0)
     return 0.948 * (len(points) - diagonal) + 1.343 * diagonal
 
 
@@ -87,7 +89,7 @@ def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_are
     if n <= 1:
         return Blobs.empty()
     stats, centroids = stats[1:], centroids[1:]
-    centre = np.stack([centroids[:, 0] + offset[0], centroids[:, 1] + offset[1]], axis=1)
+    centre = centroids + np.array([offset[0], offset[1]], np.float64)  # (x, y) + offset, column by column
     area = stats[:, cv2.CC_STAT_AREA].astype(np.float64)
     bbox = stats[:, :4].astype(np.int64) + np.array([offset[0], offset[1], 0, 0], np.int64)
     circularity = np.full(n - 1, np.nan)

@@ -59,8 +59,16 @@ def disc_circularity(area: np.ndarray) -> np.ndarray:
 
 
 def roundness(blobs: Blobs) -> np.ndarray:
-    """(K,) circularity relative to a disc of the same area (about 1 for a disc; NaN where not measured)."""
-    return blobs.circularity / disc_circularity(blobs.area)
+    """(K,) circularity relative to a disc of the same area (about 1 for a disc; NaN where not measured).
+
+    Kept on the (frozen) ``blobs`` after the first call, read-only: the gate, the validator and
+    the targets all ask for the same blobs' roundness."""
+    value = blobs.__dict__.get("_roundness")
+    if value is None:
+        value = blobs.circularity / disc_circularity(blobs.area)
+        value.flags.writeable = False
+        object.__setattr__(blobs, "_roundness", value)
+    return value
 
 
 REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess", "elongated")
@@ -81,7 +89,8 @@ def streak_excess(blobs: Blobs, motion: ApparentMotion, cfg: BlobConfig, scale: 
     smear into: the square root of the largest generalised eigenvalue of ``C`` against the allowed
     covariance ``A`` (1 = exactly as long as allowed; NaN where the shape was not measured)."""
     cov = blobs.covariance
-    minor = blobs.axes[:, 1]
+    c11, c22, c12 = cov[:, 0], cov[:, 1], cov[:, 2]
+    minor = 0.5 * (c11 + c22) - np.hypot(0.5 * (c11 - c22), c12)  # blobs.axes[:, 1], without the major axis
     speed = float(np.hypot(*motion.velocity))
     u = np.asarray(motion.velocity, float) / speed if speed > 0 else np.zeros(2)
     unsure = cfg.streak_sigmas * motion.sigma
@@ -90,7 +99,6 @@ def streak_excess(blobs: Blobs, motion: ApparentMotion, cfg: BlobConfig, scale: 
     iso = minor + slack + unsure * unsure / 12.0  # an unknown component may point anywhere
     extra = (along * along - unsure * unsure) / 12.0
     a11, a22, a12 = iso + extra * u[0] * u[0], iso + extra * u[1] * u[1], extra * u[0] * u[1]
-    c11, c22, c12 = cov[:, 0], cov[:, 1], cov[:, 2]
     det_a = a11 * a22 - a12 * a12
     b = a11 * c22 + a22 * c11 - 2.0 * a12 * c12  # det(C - rA) = det_a r² - b r + det_c
     det_c = c11 * c22 - c12 * c12

@@ -45,21 +45,34 @@ def _accel(v: np.ndarray, g: float, k: float) -> np.ndarray:
     return np.array([0.0, 0.0, -g]) - k * speed * v
 
 
+EYE3 = np.eye(3)
+EYE3.flags.writeable = False
+
+
 def _accel_jacobian(v: np.ndarray, k: float) -> np.ndarray:
     """d(-k |v| v)/dv = -k (|v| I + v v^T / |v|)."""
     speed = math.sqrt(float(v @ v))
     if speed < 1e-9 or k == 0.0:
         return np.zeros((3, 3))
-    return -k * (speed * np.eye(3) + np.outer(v, v) / speed)
+    return -k * (speed * EYE3 + v[:, None] * v[None, :] / speed)  # np.outer(v, v) is that product
 
 
 def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
-    """``f(x)``: one Heun (RK2) step of the state mean."""
-    p, v = x[:3], x[3:]
-    a1 = _accel(v, g, k)
-    v1 = v + dt * a1
-    a2 = _accel(v1, g, k)
-    return np.concatenate([p + 0.5 * dt * (v + v1), v + 0.5 * dt * (a1 + a2)])
+    """``f(x)``: one Heun (RK2) step of the state mean.
+
+    Component by component in Python floats: the same IEEE operations, in the same order, as the
+    vector form ``a = [0, 0, -g] - (k |v|) v``, ``v1 = v + dt a1``, ``p + (0.5 dt)(v + v1)``,
+    ``v + (0.5 dt)(a1 + a2)``; the speeds ``|v|`` are numpy's dot products as before."""
+    X, Y, Z, vx, vy, vz = x.tolist()
+    ks = k * math.sqrt(float(x[3:] @ x[3:]))
+    ax, ay, az = 0.0 - ks * vx, 0.0 - ks * vy, -g - ks * vz
+    v1 = np.array([vx + dt * ax, vy + dt * ay, vz + dt * az])
+    ux, uy, uz = v1.tolist()
+    ks = k * math.sqrt(float(v1 @ v1))
+    bx, by, bz = 0.0 - ks * ux, 0.0 - ks * uy, -g - ks * uz
+    half = 0.5 * dt
+    return np.array([X + half * (vx + ux), Y + half * (vy + uy), Z + half * (vz + uz),
+                     vx + half * (ax + bx), vy + half * (ay + by), vz + half * (az + bz)])
 
 
 def predict_landing(x: np.ndarray, contact_z: float, g: float, k: float, horizon: float, step: float) -> tuple[float, np.ndarray] | None:
@@ -67,22 +80,25 @@ def predict_landing(x: np.ndarray, contact_z: float, g: float, k: float, horizon
 
     Pure-Python Heun steps (faster than numpy for a 6-vector), linear interpolation in the last.
     """
-    X, Y, Z, vx, vy, vz = (float(c) for c in x)
+    X, Y, Z, vx, vy, vz = x.tolist()
     if Z <= contact_z:
         return None
     t = 0.0
+    # The constant factors hoisted (the same roundings: ``-k * s * vx`` is ``(-k * s) * vx``,
+    # ``-g - k * s * vz`` is ``-g + (-k * s) * vz`` exactly, ``0.5 * step * w`` is ``(0.5 * step) * w``).
+    sqrt, nk, ng, half = math.sqrt, -k, -g, 0.5 * step
     while t < horizon:
-        s = math.sqrt(vx * vx + vy * vy + vz * vz)
-        ax, ay, az = -k * s * vx, -k * s * vy, -g - k * s * vz
+        ks = nk * sqrt(vx * vx + vy * vy + vz * vz)
+        ax, ay, az = ks * vx, ks * vy, ng + ks * vz
         ux, uy, uz = vx + step * ax, vy + step * ay, vz + step * az
-        s2 = math.sqrt(ux * ux + uy * uy + uz * uz)
-        bx, by, bz = -k * s2 * ux, -k * s2 * uy, -g - k * s2 * uz
-        nX, nY, nZ = X + 0.5 * step * (vx + ux), Y + 0.5 * step * (vy + uy), Z + 0.5 * step * (vz + uz)
+        ks = nk * sqrt(ux * ux + uy * uy + uz * uz)
+        nZ = Z + half * (vz + uz)
         if nZ <= contact_z:
+            nX, nY = X + half * (vx + ux), Y + half * (vy + uy)
             f = (Z - contact_z) / (Z - nZ) if Z != nZ else 1.0
             return t + f * step, np.array([X + f * (nX - X), Y + f * (nY - Y), contact_z])
-        X, Y, Z = nX, nY, nZ
-        vx, vy, vz = vx + 0.5 * step * (ax + bx), vy + 0.5 * step * (ay + by), vz + 0.5 * step * (az + bz)
+        X, Y, Z = X + half * (vx + ux), Y + half * (vy + uy), nZ
+        vx, vy, vz = vx + half * (ax + ks * ux), vy + half * (ay + ks * uy), vz + half * (az + (ng + ks * uz))
         t += step
     return None
 
@@ -90,13 +106,14 @@ def predict_landing(x: np.ndarray, contact_z: float, g: float, k: float, horizon
 def measurement_jacobian(camera: PtzCamera, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``h(x)`` = (u, v, r) and its 3 x 6 Jacobian ``H`` at world position ``p``."""
     k = camera.intrinsics
+    fx, fy = float(k.fx), float(k.fy)
     Rt = camera.R.T
     rel = p - camera.position
-    a, b, c = Rt @ rel
+    a, b, c = (Rt @ rel).tolist()  # Python floats: the same IEEE arithmetic as numpy's scalars
     c = max(c, 1e-6)
-    r = float(np.linalg.norm(rel))
-    h = np.array([k.fx * a / c + k.cx, k.fy * b / c + k.cy, r])
-    d_uv = np.array([[k.fx / c, 0.0, -k.fx * a / (c * c)], [0.0, k.fy / c, -k.fy * b / (c * c)]]) @ Rt
+    r = math.sqrt(float(rel.dot(rel)))  # np.linalg.norm of a vector
+    h = np.array([fx * a / c + k.cx, fy * b / c + k.cy, r])
+    d_uv = np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt
     H = np.zeros((3, 6))
     H[:2, :3] = d_uv
     H[2, :3] = rel / max(r, 1e-9)
@@ -117,6 +134,7 @@ class BallisticEkf:
         self.armed = False  # set once the ball has been high enough for a landing to mean something
         self.rejections = 0
         self.last_nis = math.nan
+        self._substep: tuple = (None, None, None)  # substep h, its Q and its F without the drag term
 
     @property
     def x(self) -> np.ndarray | None:
@@ -159,15 +177,20 @@ class BallisticEkf:
             return
         steps = max(1, int(math.ceil(dt / MAX_SUBSTEP_S)))
         h = dt / steps
-        G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
-        self.kf.Q = cfg.accel_noise**2 * G @ G.T
-        for _ in range(steps):
+        if self._substep[0] != h:  # the frame interval: the same every frame of a steady log
+            G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
             F = np.eye(6)
             F[:3, 3:] = h * np.eye(3)
-            F[3:, 3:] += h * _accel_jacobian(self.kf.x[3:], cfg.drag_k)
-            self.kf.F = F
-            self.kf.predict(u=h)
-        self.kf.P = 0.5 * (self.kf.P + self.kf.P.T)
+            self._substep = (h, cfg.accel_noise**2 * G @ G.T, F)
+        _, Q, F0 = self._substep
+        kf = self.kf
+        kf.Q = Q.copy()
+        for _ in range(steps):
+            F = F0.copy()
+            F[3:, 3:] += h * _accel_jacobian(kf.x[3:], cfg.drag_k)
+            kf.F = F
+            kf.predict(u=h)
+        kf.P = 0.5 * (kf.P + kf.P.T)
 
     def ground_contact(self, previous: np.ndarray) -> GroundContact | None:
         """The contact point if the state went from above the contact height to at/below it."""

@@ -132,6 +132,7 @@ class GolfLuts:
         self._count: dict[str, int] = {}
         self.consumed: set = set()  # keys of regions already added
         self._labels: np.ndarray | None = None  # luminance -> LUT index, rebuilt when the LUTs change
+        self._label_levels: list[tuple[int, np.ndarray]] = []  # per built LUT: its index and the luminances labelled so
         self._learned: dict[str, tuple[int, float]] = {}  # per LUT: boxes learned from the track, last ball area
 
     @property
@@ -166,12 +167,17 @@ class GolfLuts:
         mark) when that LUT does not exist yet or the ball's area changed by ``learn_area_factor``
         since it last learned from the track (zoom), at most ``learn_max`` times per LUT.
         Returns the LUT name learned into, or "" (nothing learned)."""
-        cfg = self.config
         label = region.label.lower()
-        name = "sky" if "sky" in label else "ground" if ("ground" in label or "grass" in label) else (
-            "sky" if sky_score(context_ycc) > SKY_SCORE_THRESHOLD else "ground")
+        if "sky" in label:
+            name = "sky"
+        elif "ground" in label or "grass" in label:
+            name = "ground"
+        elif all(self._settled(n, area) for n in LUT_NAMES):  # nothing to learn whichever it is over
+            return ""
+        else:
+            name = "sky" if sky_score(context_ycc) > SKY_SCORE_THRESHOLD else "ground"
         count, last = self._learned.get(name, (0, 0.0))
-        if name in self.luts and (count >= cfg.learn_max or (last > 0 and abs(np.log(max(area, 1e-6) / last)) < np.log(cfg.learn_area_factor))):
+        if self._settled(name, area):
             return ""
         if name in self.luts and last == 0.0:  # built from marks only: remember the area, learn on a zoom change
             self._learned[name] = (count, max(area, 1e-6))
@@ -181,6 +187,13 @@ class GolfLuts:
             return ""
         self._learned[name] = (count + 1, max(area, 1e-6))
         return name
+
+    def _settled(self, name: str, area: float) -> bool:
+        """LUT ``name`` exists and learns nothing from a ball of ``area`` px: it learned ``learn_max``
+        boxes from the track, or the ball's area is within ``learn_area_factor`` of the last one."""
+        cfg = self.config
+        count, last = self._learned.get(name, (0, 0.0))
+        return name in self.luts and (count >= cfg.learn_max or (last > 0 and abs(np.log(max(area, 1e-6) / last)) < np.log(cfg.learn_area_factor)))
 
     def add(self, image: np.ndarray, regions: Sequence[InitRegion]) -> list[RegionSamples]:
         """Add the marked boxes of one image and rebuild the LUTs they touch."""
@@ -243,19 +256,28 @@ class GolfLuts:
             return "", scores
         if self._labels is None:
             self._labels = self.luminance_labels()
+            self._label_levels = [(i, np.flatnonzero(self._labels == i)) for i, name in enumerate(LUT_NAMES) if name in self.luts]
         flat = np.asarray(y, dtype=np.uint8).ravel()
         counts = np.bincount(flat, minlength=256).astype(np.float64)
         total = max(counts.sum(), 1.0)
-        for i, name in enumerate(LUT_NAMES):
-            if name in self.luts:
-                scores[i] = float(counts[self._labels == i].sum() / total)
+        for i, levels in self._label_levels:
+            scores[i] = float(counts[levels].sum() / total)
         if not flat.size:
             return (current if current in self.luts else self.names[0]), scores
-        best = LUT_NAMES[int(np.nanargmax(scores))]
+        best = LUT_NAMES[_nanargmax(scores)]
         if current in self.luts and best != current:
             if scores[LUT_NAMES.index(best)] < scores[LUT_NAMES.index(current)] + self.config.switch_margin:
                 best = current
         return best, scores
+
+
+def _nanargmax(values: np.ndarray) -> int:
+    """``np.nanargmax`` of a short vector with at least one number (the first of equal maxima)."""
+    best, top = -1, 0.0
+    for i, v in enumerate(values.tolist()):
+        if v == v and (best < 0 or v > top):
+            best, top = i, v
+    return best
 
 
 def build_luts(images_and_regions: Iterable[tuple[np.ndarray, Sequence[InitRegion]]], config: LutConfig | None = None,

@@ -107,7 +107,8 @@ def likelihood(candidates: np.ndarray, sigma: float, alpha: float) -> Likelihood
     def weigh(particles: np.ndarray) -> np.ndarray:
         out = np.full(len(particles), alpha, dtype=np.float64)
         if len(candidates):
-            d2 = ((particles[:, None, :2] - candidates[None, :, :]) ** 2).sum(axis=2)
+            # d² = dx² + dy² (what summing the last axis of the squared differences adds, without the reduction)
+            d2 = (particles[:, 0:1] - candidates[None, :, 0]) ** 2 + (particles[:, 1:2] - candidates[None, :, 1]) ** 2
             out += np.exp(-d2 / (2.0 * sigma * sigma)).sum(axis=1) / (SQRT_2PI * sigma)
         return out
 

@@ -61,16 +61,25 @@ def photometric_area(y: np.ndarray, cx: float, cy: float, radius: float, ball_lu
     if x1 <= x0 or y1 <= y0:
         return float("nan")
     win = y[y0:y1, x0:x1].astype(np.float64)
-    ys, xs = np.mgrid[y0:y1, x0:x1]
-    d2 = (xs - cx) ** 2 + (ys - cy) ** 2
+    d2 = (np.arange(x0, x1) - cx)[None, :] ** 2 + (np.arange(y0, y1) - cy)[:, None] ** 2  # as np.mgrid's, broadcast
     inner, ring = d2 <= radius * radius, (d2 > radius * radius) & (d2 <= r_out * r_out)
     if not ring.any() or not inner.any():
         return float("nan")
-    bg = float(np.median(win[ring]))
+    bg = _median(win[ring])
     contrast = ball_luminance - bg
     if contrast < 10.0:
         return float("nan")
     return float(np.maximum(win[inner] - bg, 0.0).sum() / contrast)
+
+
+def _median(values: np.ndarray) -> float:
+    """``float(np.median(values))`` of a 1-D float64 array without NaN: the middle of the sorted
+    values, or the mean of the middle two (their sum halved, as ``np.mean`` of two)."""
+    s = np.sort(values)
+    n = len(s)
+    if n % 2:
+        return float(s[n // 2])
+    return float((s[n // 2 - 1] + s[n // 2]) / 2.0)
 
 
 def ground_range(camera: PtzCamera, pixel: np.ndarray, centre_height_m: float) -> float | None:

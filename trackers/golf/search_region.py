@@ -9,6 +9,7 @@ clamped to ``[min_px, max_px]`` (scaled with the frame) and to the frame, and ke
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,12 +33,27 @@ class SearchRegion:
 def search_region(centre: np.ndarray, spread: np.ndarray, diameter: float, width: int, height: int, scale: float,
                   cfg: SearchConfig) -> SearchRegion:
     """``I_s`` around ``centre`` from the particle ``spread`` and the ball ``diameter`` (px)."""
-    size = np.clip(2.0 * (cfg.sigmas * spread + diameter), cfg.min_px * scale, cfg.max_px * scale)
-    size = np.minimum(size, [width, height])
-    x0 = float(np.clip(centre[0] - size[0] / 2, 0, width - size[0]))
-    y0 = float(np.clip(centre[1] - size[1] / 2, 0, height - size[1]))
-    box = np.array([np.floor(x0), np.floor(y0), np.ceil(size[0]), np.ceil(size[1])])
+    # np.clip / np.minimum / np.floor / np.ceil on two numbers, as Python floats (the same values, NaN included)
+    lo, hi = cfg.min_px * scale, cfg.max_px * scale
+    sx, sy = (2.0 * (cfg.sigmas * spread + diameter)).tolist()
+    sx, sy = _clip(_clip(sx, lo, hi), -math.inf, width), _clip(_clip(sy, lo, hi), -math.inf, height)
+    cx, cy = float(centre[0]), float(centre[1])
+    x0, y0 = _clip(cx - sx / 2, 0, width - sx), _clip(cy - sy / 2, 0, height - sy)
+    box = np.array([_floor(x0), _floor(y0), _ceil(sx), _ceil(sy)])
     return SearchRegion(box, np.asarray(centre, dtype=np.float64), spread)
+
+
+def _clip(v: float, lo: float, hi: float) -> float:
+    """``np.clip`` of one number: ``min(max(v, lo), hi)``, NaN kept."""
+    return v if v != v else min(max(v, lo), hi)
+
+
+def _floor(v: float) -> float:
+    return float(math.floor(v)) if math.isfinite(v) else v
+
+
+def _ceil(v: float) -> float:
+    return float(math.ceil(v)) if math.isfinite(v) else v
 
 
 def filling_sigma(size_px: float, cfg: SearchConfig) -> float:
