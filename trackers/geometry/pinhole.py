@@ -37,9 +37,15 @@ class Intrinsics:
         cam = np.atleast_2d(np.asarray(points, dtype=np.float64))
         ahead = cam[:, 2] > 1e-9
         z = np.where(ahead, cam[:, 2], 1.0)
-        K = self.K
-        uv = (cam[:, :2] / z[:, None]) * [K[0, 0], K[1, 1]] + [K[0, 2], K[1, 2]]
+        focal, centre = self._focal_centre
+        uv = (cam[:, :2] / z[:, None]) * focal + centre
         return np.where(ahead[:, None], uv, np.nan)
+
+    @cached_property
+    def _focal_centre(self) -> tuple[np.ndarray, np.ndarray]:
+        """``[fx, fy]`` and ``[cx, cy]`` as read from ``K`` (what :meth:`project` scales and shifts by)."""
+        K = self.K
+        return np.array([K[0, 0], K[1, 1]]), np.array([K[0, 2], K[1, 2]])
 
     def back_project(self, pixels: np.ndarray) -> np.ndarray:
         """``(N, 3)`` camera-frame rays ``K⁻¹ [u v 1]ᵀ`` (z = 1, not normalised) through ``(N, 2)`` pixels."""

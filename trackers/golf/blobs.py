@@ -90,17 +90,38 @@ def streak_excess(blobs: Blobs, motion: ApparentMotion, cfg: BlobConfig, scale: 
     covariance ``A`` (1 = exactly as long as allowed; NaN where the shape was not measured)."""
     cov = blobs.covariance
     c11, c22, c12 = cov[:, 0], cov[:, 1], cov[:, 2]
-    minor = 0.5 * (c11 + c22) - np.hypot(0.5 * (c11 - c22), c12)  # blobs.axes[:, 1], without the major axis
+    half = np.hypot(0.5 * (c11 - c22), c12)  # blobs.axes: the minor axis is their mean less this
     speed = float(np.hypot(*motion.velocity))
     u = np.asarray(motion.velocity, float) / speed if speed > 0 else np.zeros(2)
     unsure = cfg.streak_sigmas * motion.sigma
     along = speed + unsure
     slack = (cfg.streak_slack_px * scale) ** 2
-    iso = minor + slack + unsure * unsure / 12.0  # an unknown component may point anywhere
     extra = (along * along - unsure * unsure) / 12.0
-    a11, a22, a12 = iso + extra * u[0] * u[0], iso + extra * u[1] * u[1], extra * u[0] * u[1]
+    ux, uy = float(u[0]), float(u[1])
+    da11, da22, a12 = extra * ux * ux, extra * uy * uy, extra * ux * uy
+    spare = unsure * unsure / 12.0  # an unknown component may point anywhere
+    out = []
+    # Blob by blob in Python floats: the same IEEE operations in the same order as the vector form
+    # (a few blobs: numpy's per-call cost was most of it); np.hypot stays numpy's.
+    for s11, s22, s12, h in zip(c11.tolist(), c22.tolist(), c12.tolist(), half.tolist()):
+        iso = 0.5 * (s11 + s22) - h + slack + spare
+        a11, a22 = iso + da11, iso + da22
+        det_a = a11 * a22 - a12 * a12
+        if det_a == 0.0:  # numpy's division by zero (inf, NaN) rather than Python's exception
+            return _streak_excess_vector(c11, c22, c12, half, slack, spare, da11, da22, a12)
+        b = a11 * s22 + a22 * s11 - 2.0 * a12 * s12  # det(C - rA) = det_a r² - b r + det_c
+        det_c = s11 * s22 - s12 * s12
+        root = math.sqrt(max(b * b - 4.0 * det_a * det_c, 0.0))  # max keeps a NaN, as np.maximum
+        out.append((b + root) / (2.0 * det_a))
+    return np.sqrt(np.array(out, dtype=np.float64).reshape(-1))
+
+
+def _streak_excess_vector(c11, c22, c12, half, slack, spare, da11, da22, a12) -> np.ndarray:
+    """:func:`streak_excess`'s vector form (a degenerate allowed covariance: numpy's inf and NaN)."""
+    iso = 0.5 * (c11 + c22) - half + slack + spare
+    a11, a22 = iso + da11, iso + da22
     det_a = a11 * a22 - a12 * a12
-    b = a11 * c22 + a22 * c11 - 2.0 * a12 * c12  # det(C - rA) = det_a r² - b r + det_c
+    b = a11 * c22 + a22 * c11 - 2.0 * a12 * c12
     det_c = c11 * c22 - c12 * c12
     root = np.sqrt(np.maximum(b * b - 4.0 * det_a * det_c, 0.0))
     return np.sqrt((b + root) / (2.0 * det_a))
