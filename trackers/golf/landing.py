@@ -132,6 +132,7 @@ class BallisticEkf:
         self.kf = MotionModelEkf(6, 3, lambda x, dt: propagate(x, dt, config.gravity, config.drag_k))
         self.initialised = False
         self.armed = False  # set once the ball has been high enough for a landing to mean something
+        self.landed = False  # set when the flight's landing fired: from then on the ball may be rolling
         self.rejections = 0
         self.last_nis = math.nan
         self._substep: tuple = (None, None, None)  # substep h, its Q and its F without the drag term
@@ -163,6 +164,7 @@ class BallisticEkf:
         """Back to "not started": the next measurement initialises the filter again."""
         self.initialised = False
         self.armed = False
+        self.landed = False
         self.rejections = 0
 
     def predict(self, dt: float) -> None:
@@ -218,8 +220,11 @@ class BallisticEkf:
             self.kf.P[3:, 3:] += np.diag([4.0, 4.0, 4.0]) ** 2  # the bounce is poorly known
 
     def on_ground(self, max_vz: float) -> bool:
-        """The filter has the ball rolling or resting: at the contact height, hardly moving up or down."""
-        return self.initialised and self.kf.x[2] <= self.contact_z + 1e-6 and abs(float(self.kf.x[5])) < max_vz
+        """The filter has the ball rolling or resting after its landing: at the contact height, hardly
+        moving up or down. (Before the landing a state at the contact height is a range error, not a
+        ball on the ground.)"""
+        return (self.initialised and self.landed and self.kf.x[2] <= self.contact_z + 1e-6
+                and abs(float(self.kf.x[5])) < max_vz)
 
     def advance(self, dt: float) -> np.ndarray | None:
         """Predict by ``dt``; the ground contact point when this is the flight's landing (§2.3).
@@ -240,10 +245,14 @@ class BallisticEkf:
         self.bounce(contact)
         if landing is not None:
             self.armed = False
+            self.landed = True
         return landing
 
-    def update(self, camera: PtzCamera, uv: np.ndarray, range_m: float, rel_sigma: float) -> bool:
+    def update(self, camera: PtzCamera, uv: np.ndarray, range_m: float, rel_sigma: float, may_restart: bool = True) -> bool:
         """EKF update with ``z = (u, v, r)``; returns False when the measurement was gated out.
+
+        With ``may_restart`` False a gated-out measurement is only a question asked (it neither counts
+        towards the restart after ``MAX_REJECTIONS`` nor restarts the filter).
 
         ``rel_sigma`` is the range's relative uncertainty (see :func:`range.range_rel_sigma`); it
         scales the *predicted* range.
@@ -257,6 +266,8 @@ class BallisticEkf:
         R = np.diag([self.config.pixel_sigma**2, self.config.pixel_sigma**2, sigma_r**2])
         self.last_nis = innovation(self.kf.P, H, R, z, h).nis
         if self.last_nis > NIS_GATE:
+            if not may_restart:
+                return False
             self.rejections += 1
             if self.rejections >= MAX_REJECTIONS:
                 self.initialise(camera, uv, range_m, rel_sigma)

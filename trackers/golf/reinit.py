@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.geometry.homography import apply_homography
+from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography
 from trackreplay.trackers.golf.config import ReinitConfig, SearchConfig
 from trackreplay.trackers.golf.landing import BallisticEkf
 from trackreplay.trackers.golf.search_region import filling_sigma
@@ -85,26 +86,30 @@ class ReinitPolicy:
         self.history.append((index, x, y))
         self.parabola_used = False
 
-    def at_rest(self, index: int, frames: int, tolerance_px: float) -> bool:
-        """The last ``frames`` measurements were on consecutive frames up to ``index`` - 1 and
-        all within ``tolerance_px`` of their mean: the ball was lying still when last seen."""
+    def at_rest(self, frames: int, tolerance_px: float) -> bool:
+        """The last ``frames`` measurements were on consecutive frames and all within
+        ``tolerance_px`` of their mean: the ball was lying still when last seen."""
         recent = np.array(self.history, float).reshape(-1, 3)[-frames:]
-        if len(recent) < frames or recent[-1, 0] != index - 1 or recent[-1, 0] - recent[0, 0] != frames - 1:
+        if len(recent) < frames or recent[-1, 0] - recent[0, 0] != frames - 1:
             return False
         return bool(np.all(np.hypot(*(recent[:, 1:] - recent[:, 1:].mean(axis=0)).T) <= tolerance_px))
 
-    def centre_search(self, camera: PtzCamera | None, width: int, height: int) -> bool:
+    def centre_search(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int) -> bool:
         """Whether a lost ball is searched for mid-picture (``lost``: "centre", or "auto" when the
         camera follows the ball, :meth:`follows`)."""
         if self.cfg.lost != "auto":
             return self.cfg.lost == "centre"
-        return self.follows(camera, width, height)
+        return self.follows(camera, previous, width, height)
 
-    def follows(self, camera: PtzCamera | None, width: int, height: int) -> bool:
-        """Whether an operator's camera follows the ball: a pose (a PTZ head), or the last
-        measurements all in the central half of the picture."""
-        if camera is not None:
-            return True
+    def follows(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int) -> bool:
+        """Whether an operator's camera follows the ball: its pose (``previous`` -> ``camera``) moved
+        the picture's centre by more than half a pixel, or the last measurements were all in the
+        central half of the picture."""
+        if camera is not None and previous is not None:
+            centre = np.array([[(width - 1) / 2.0, (height - 1) / 2.0]])
+            moved = apply_homography(pose_homography(previous, camera), centre)[0] - centre[0]
+            if float(np.hypot(*moved)) > 0.5:
+                return True
         recent = np.array(self.history, float).reshape(-1, 3)[-4:, 1:]
         if not len(recent):
             return False
@@ -112,7 +117,7 @@ class ReinitPolicy:
         return bool(np.all(np.abs(recent - centre) <= 0.25 * np.array([width, height])))
 
     def choose(self, *, index: int, size: tuple[int, int], scale: float, misses: int, landing: np.ndarray | None,
-               camera: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
+               camera: PtzCamera | None, previous: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
         """The re-initialisation for frame ``index`` of ``size`` (w, h) px, or ``Reinit.none()``.
 
         ``landing`` is the EKF's ground contact this frame (None: none), ``estimate`` the
@@ -134,7 +139,7 @@ class ReinitPolicy:
                 centre, half = found
                 self.parabola_used = True
                 return Reinit("image_parabola", centre, np.maximum(half, cfg.min_sigma_px * scale))
-        if misses > self.lost_after and self.centre_search(camera, width, height):
+        if misses > self.lost_after and self.centre_search(camera, previous, width, height):
             centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
             sigma = filling_sigma(min(self.search.max_px * scale, width, height), self.search)
             return Reinit("lost_centre", centre, np.full(2, sigma))

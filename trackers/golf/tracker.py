@@ -140,7 +140,8 @@ class GolfTracker(TrackerBase):
                     sil, gated, seen_gated = fallback
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
                                         diameter=diameter, size=(width, height), scale=scale, lost=lost,
-                                        entry_only=not self.reinit.centre_search(camera, width, height), seen=seen_gated)
+                                        entry_only=not self.reinit.centre_search(camera, prev_camera, width, height),
+                                        seen=seen_gated)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
@@ -236,10 +237,12 @@ class GolfTracker(TrackerBase):
     def _moving(self, frame: Frame, ycc: np.ndarray, offset: np.ndarray, diameter: float, scale: float) -> np.ndarray | None:
         """The moving-against-the-world silhouette over the crop (None: no pose for this frame and
         the one before it, or not the frame right after it)."""
-        prev_camera, prev_index, _ = self._prev
+        prev_camera, prev_index, prev_t_ns = self._prev
         if (not self.config.contrast.moving or frame.camera is None or prev_camera is None or self._prev_image is None
                 or prev_index != frame.index - 1 or ycc.size == 0):
             return None
+        if prev_t_ns is not None and not 0 < frame.t_ns - prev_t_ns <= self.config.ekf.max_gap_s * 1e9:
+            return None  # a time gap: the frame before is no picture of where the world was a frame ago
         before = previous_in_pose(self._prev_image, pose_homography(prev_camera, frame.camera), (int(offset[0]), int(offset[1])),
                                   ycc.shape[:2])
         return moving_silhouette(ycc, before, diameter, self.config.contrast, scale)
@@ -300,16 +303,16 @@ class GolfTracker(TrackerBase):
         landing = self.ekf.advance(dt)
         height, width = frame.image.shape[:2]
         reinit = self.reinit.choose(index=frame.index, size=(width, height), scale=scale, misses=self.misses,
-                                    landing=landing, camera=camera, ekf=self.ekf, estimate=self._estimate()[:2])
+                                    landing=landing, camera=camera, previous=prev_camera, ekf=self.ekf, estimate=self._estimate()[:2])
         if reinit.kind:
             self.pf.initialise(state(reinit.point), spread_sigma(reinit.sigma, cfg.reinit.velocity_sigma_px * scale))
             return reinit
         self.pf.resample()
         if compensated:
             self.pf.particles = warp(self.pf.particles, pose_homography(prev_camera, camera))
-        if self.misses == 1 and self.reinit.at_rest(frame.index - 1, cfg.particles.rest_frames, cfg.particles.rest_px * scale):
+        if self.misses == 1 and self.reinit.at_rest(cfg.particles.rest_frames, cfg.particles.rest_px * scale):
             self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
-        followed = self.reinit.follows(camera, width, height)
+        followed = self.reinit.follows(camera, prev_camera, width, height)
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 
@@ -330,8 +333,9 @@ class GolfTracker(TrackerBase):
         if camera is not None:
             pixel = np.array([x, y])
             ground = self.range.on_ground(camera, pixel) if self.ekf.on_ground(self.config.range.ground_vz) else None
-            if ground is None:
+            # Rolling after the landing: ranged where the line of sight meets the ground, unless the
+            # filter gates that out (the ball hopped); then, and in flight, ranged from its area.
+            if ground is None or not self.ekf.update(camera, pixel, *ground, may_restart=False):
                 area = self.range.area(ycc[..., 0], blobs.centroid[k] - offset, blobs.size[k], float(blobs.area[k]))
-                ground = self.range.measure(area, camera)
-            self.ekf.update(camera, pixel, *ground)
+                self.ekf.update(camera, pixel, *self.range.measure(area, camera))
         return x, y, w, h

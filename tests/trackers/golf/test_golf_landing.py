@@ -7,7 +7,7 @@ from trackreplay.recorder.synth.golf.flight import BallModel, Launch, simulate_s
 from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
 from trackreplay.trackers.golf.config import EkfConfig, RangeConfig
-from trackreplay.trackers.golf.landing import BallisticEkf, EkfState, measurement_jacobian, predict_landing
+from trackreplay.trackers.golf.landing import MAX_REJECTIONS, BallisticEkf, EkfState, measurement_jacobian, predict_landing
 from trackreplay.trackers.golf.range import RangeFromArea, range_from_area, range_rel_sigma
 from trackreplay.trackers.golf.reinit import image_parabola_landing
 
@@ -174,8 +174,46 @@ def test_the_filter_knows_when_the_ball_rolls():
     ekf.update(cam, cam.project_points(rolling.reshape(1, 3))[0], np.linalg.norm(rolling - cam.position), 0.05)
     ekf.kf.x[3:] = [8.0, 0.0, 0.0]
     ekf.kf.x[2] = D / 2
+    assert not ekf.on_ground(0.5)  # before a landing, a state at the contact height is a range error
+    ekf.kf.x[2], ekf.kf.x[3:] = 0.3, [8.0, 0.0, -6.0]  # coming down after a flight that was high enough
+    ekf.armed = True
+    assert [ekf.advance(1 / FPS) is not None for _ in range(4)].count(True) == 1 and ekf.landed
+    ekf.kf.x[3:] = [8.0, 0.0, 0.0]
+    ekf.kf.x[2] = D / 2
     assert ekf.on_ground(0.5)
     ekf.kf.x[5] = 3.0  # bouncing up again
     assert not ekf.on_ground(0.5)
     ekf.kf.x[2], ekf.kf.x[5] = 1.0, 0.0  # in the air
     assert not ekf.on_ground(0.5)
+
+
+def test_a_question_to_the_filter_does_not_restart_it():
+    # may_restart=False (the tracker asks whether a ground range fits): a gated-out answer is not
+    # counted towards the restart, and the state is left as it was.
+    ekf = BallisticEkf(EkfConfig(), D / 2)
+    point = np.array([80.0, 0.0, 10.0])
+    cam = follow(point)
+    uv = cam.project_points(point.reshape(1, 3))[0]
+    ekf.update(cam, uv, np.linalg.norm(point - cam.position), 0.02)
+    before = ekf.x.copy()
+    for _ in range(5):
+        assert not ekf.update(cam, uv, 3.0 * np.linalg.norm(point - cam.position), 0.01, may_restart=False)
+    assert ekf.rejections == 0 and np.array_equal(ekf.x, before)
+    for _ in range(MAX_REJECTIONS):  # the same wild range, as a measurement: the filter restarts there
+        ekf.update(cam, uv, 3.0 * np.linalg.norm(point - cam.position), 0.01)
+    assert np.linalg.norm(ekf.x[:3] - cam.position) == pytest.approx(3.0 * np.linalg.norm(point - cam.position), rel=1e-6)
+
+
+def test_the_landing_flag_is_cleared_only_when_the_filter_forgets():
+    ekf = BallisticEkf(EkfConfig(drag_k=0.0), D / 2)
+    cam = follow(np.array([40.0, 0.0, 3.0]))
+    ekf.update(cam, cam.project_points(np.array([[40.0, 0.0, 3.0]]))[0], 40.0, 0.05)
+    ekf.kf.x = np.array([40.0, 0.0, 0.2, 10.0, 0.0, -5.0])
+    ekf.armed = True
+    while ekf.advance(1 / FPS) is None:
+        pass
+    assert ekf.landed
+    ekf.initialise(cam, cam.project_points(np.array([[41.0, 0.0, D / 2]]))[0], 41.0, 0.05)  # a restart keeps it
+    assert ekf.landed
+    ekf.forget()
+    assert not ekf.landed

@@ -41,21 +41,35 @@ def test_ekf_landing_first_at_the_projected_contact():
     cam = camera_at(point)
     ekf = BallisticEkf(EkfConfig(), 0.02)
     ekf.update(cam, cam.project_points(point.reshape(1, 3))[0], 50.0, 0.05)
-    r = policy().choose(index=10, size=(1280, 720), scale=1.0, misses=9, landing=point, camera=cam, ekf=ekf,
-                        estimate=np.array([640.0, 300.0]))
+    r = policy().choose(index=10, size=(1280, 720), scale=1.0, misses=9, landing=point, camera=cam,
+                        previous=cam, ekf=ekf, estimate=np.array([640.0, 300.0]))
     assert r.kind == "ekf_landing" and r.point == pytest.approx([640.0, 360.0])
     assert (r.sigma >= 12.0).all() and r.sigma[1] >= 30.0 - 1e-9  # covers where the samples had the ball
     assert (r.sigma <= filling_sigma(480.0, SearchConfig())).all()
+    panned = camera_at(point + np.array([0.0, 3.0, 0.0]))  # the operator follows: the pose moved
     off = policy(landing=False).choose(index=10, size=(1280, 720), scale=1.0, misses=9, landing=point, camera=cam,
-                                       ekf=ekf, estimate=np.zeros(2))
+                                       previous=panned, ekf=ekf, estimate=np.zeros(2))
     assert off.kind == "lost_centre"  # no landing re-init: after 5 misses the lost policy applies
+
+
+def test_the_camera_follows_when_its_pose_moves_or_the_ball_stays_central():
+    point = np.array([50.0, 0.0, 0.02])
+    cam, panned = camera_at(point), camera_at(point + np.array([0.0, 3.0, 0.0]))
+    p = policy()
+    assert p.follows(cam, panned, 1280, 720)  # a PTZ head that moved
+    p.measured(0, 100.0, 100.0)  # a still head, the ball last seen near a corner: a fixed view
+    assert not p.follows(cam, cam, 1280, 720) and not p.follows(cam, None, 1280, 720)
+    assert not p.follows(None, None, 1280, 720)
+    for k in range(1, 5):  # a still head (or none) and the ball kept mid-picture: followed by hand
+        p.measured(k, 640.0 + k, 360.0)
+    assert p.follows(cam, cam, 1280, 720) and p.follows(None, None, 1280, 720)
 
 
 def test_image_parabola_once_per_loss_then_lost_centre():
     p = policy(lost="centre")
     for k in range(10):  # descending in the image
         p.measured(k, 100.0 + 5 * k, 300.0 - 20 * k + 2.5 * k * k)
-    args = dict(size=(1280, 720), scale=1.0, landing=None, camera=None, ekf=BallisticEkf(EkfConfig(), 0.02),
+    args = dict(size=(1280, 720), scale=1.0, landing=None, camera=None, previous=None, ekf=BallisticEkf(EkfConfig(), 0.02),
                 estimate=np.zeros(2))
     assert p.choose(index=10, misses=1, **args).kind == ""  # not yet: parabola_misses = 2
     r = p.choose(index=11, misses=2, **args)
@@ -102,7 +116,8 @@ def test_trail_ring_keeps_the_last_rows_oldest_first():
 
 
 def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
-    args = dict(size=(1280, 720), scale=1.0, landing=None, ekf=BallisticEkf(EkfConfig(), 0.02), estimate=np.zeros(2))
+    args = dict(size=(1280, 720), scale=1.0, landing=None, previous=None, ekf=BallisticEkf(EkfConfig(), 0.02),
+                estimate=np.zeros(2))
     crossing = policy()  # "auto": the ball crossed a fixed picture -> stay where it was predicted
     for k in range(6):
         crossing.measured(k, 100.0 + 50 * k, 650.0 - 60 * k)
