@@ -46,6 +46,7 @@ NO_PLANES = ("constant", "random_walk")
 ASPECTS = ("likelihood", "fixed")
 MOTIONS = ("random_walk", "constant_velocity")
 REFINES = ("none", "meanshift")
+TEMPLATE_MASKS = ("foreground", "kernel", "none")
 
 
 @dataclass(frozen=True)
@@ -77,10 +78,30 @@ class LikelihoodConfig:
     # as S^2 = 0.5 of colour); chosen on the synthetic scenes (20 lost AUC on colorpf-approach), checked
     # on otb_crossing: docs/colorpf.md. No effect without a background (there is no foreground then).
     foreground: float = 10.0
+    # Layout (template) cue (ours, colorpf.template): each particle's L is multiplied by
+    # exp(template * max(NCC, 0)), NCC the normalised cross-correlation (cv2.TM_CCOEFF_NORMED) of a grey
+    # template of the marked box against the frame at the particle's position with the previous
+    # estimate's size (one cv2.matchTemplate over the window of all particles). 0: off (the paper).
+    # template_side: the template and window are scaled so the template's longer side is at most this
+    # (px). template_rate: T <- (1 - a) T + a crop(estimate), under the adaptive reference's guard
+    # (reference.update_above against H_ref as built, a background-built reference that tells the
+    # target from the background); 0: the template stays the marked box's.
+    # Opt-in, not default: at weights 1-8 no setting lifted otb_crossing's AUC past 0.535 (from 0.516),
+    # and those that raised it most lowered colorpf-approach and put a `measured` row > 20 px off
+    # (docs/colorpf.md, "Issue 7: what was tried"). template_mask "kernel" did best there.
+    template: float = 0.0
+    template_side: int = 24
+    template_rate: float = 0.0
+    template_mask: str = "foreground"
 
     def __post_init__(self) -> None:
         if self.foreground < 0:
             raise ValueError("likelihood.foreground must be >= 0")
+        if self.template < 0 or self.template_side < 3 or not 0.0 <= self.template_rate <= 1.0:
+            raise ValueError("likelihood.template must be >= 0, template_side >= 3, 0 <= template_rate <= 1")
+        if self.template_mask not in TEMPLATE_MASKS:
+            raise ValueError(f"likelihood.template_mask must be one of {', '.join(TEMPLATE_MASKS)}, "
+                             f"not {self.template_mask!r}")
         if self.kernel not in KERNELS:
             raise ValueError(f"likelihood.kernel must be one of {', '.join(KERNELS)}, not {self.kernel!r}")
         if self.parts < 1:

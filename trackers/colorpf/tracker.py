@@ -48,6 +48,7 @@ from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, tr
 from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
                                                     subtract_and_mix)
 from trackreplay.trackers.colorpf.size import WeakPerspectiveSize, foot_points, ground_distance, horizon_side
+from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 
@@ -93,6 +94,7 @@ class ColorPfTracker(TrackerBase):
         self._s_mark: float | None = None
         self.background_image: np.ndarray | None = None  # eq. (7)'s background, once there is one
         self.adapted: np.ndarray | None = None  # reference.update_rate > 0: the adapted H_ref (None: as built)
+        self.template: TemplateModel | None = None  # likelihood.template > 0: the target's grey template
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self._pending: list[str] = []
         self.intermediates = ColorPfIntermediates.idle()
@@ -223,6 +225,17 @@ class ColorPfTracker(TrackerBase):
             contrast = foreground_contrast(image, background, self.pf.particles[:, :2], prev[2:4],
                                            cfg.reference.threshold, cfg.reference.open_px, gain)
             likelihood = likelihood * np.exp(cfg.likelihood.foreground * contrast)
+        if cfg.likelihood.template > 0:  # ours: the layout (template) cue
+            if self.template is None:  # the marked box, on the marked frame (this one)
+                assert self.mark is not None
+                corners = marked_box((self.mark.x, self.mark.y, self.mark.w, self.mark.h), *image.shape[1::-1])
+                self.template = TemplateModel(image, corners, cfg.likelihood.template_mask)
+            if mask is not None:  # eq. (7)'s foreground of the marked box, just made
+                self.template.set_foreground(mask)
+            if self.template.template is not None:
+                ncc = template_scores(image, self.template.template, self.pf.particles[:, :2], prev[2:4],
+                                      cfg.likelihood.template_side, self.template.weights)
+                likelihood = likelihood * np.exp(cfg.likelihood.template * np.maximum(ncc, 0.0))
         self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
         self.pf.weigh(lambda _: likelihood)
         estimate = self.pf.estimate()  # eq. (6)
@@ -259,6 +272,10 @@ class ColorPfTracker(TrackerBase):
         rate = cfg.reference.update_rate
         if rate > 0 and telling and not weigh_only and confidence >= cfg.reference.update_above and current.sum() > 0:
             self.adapted = (1.0 - rate) * working + rate * current  # Nummiaro et al.'s adaptive model
+        t_rate = cfg.likelihood.template_rate
+        if (self.template is not None and t_rate > 0 and telling and not weigh_only
+                and confidence >= cfg.reference.update_above):
+            self.template.blend(image, estimate, t_rate)
         if confidence >= cfg.measured_fraction:
             status, self.misses = "measured", 0
             if cfg.neighbour_check and background is not None and self.reference.p_square > 0 and not weigh_only:
