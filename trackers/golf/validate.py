@@ -102,6 +102,9 @@ class Tentative:
         return last + (last - np.array(self.rows[-2][1:])) if len(self.rows) > 1 else last
 
 
+SCENERY_PLACES = 4
+
+
 class Validator:
     """Decides per frame whether the ball was seen, with tentative tracks for jumps.
 
@@ -117,10 +120,12 @@ class Validator:
         self.blobs = blobs
         self.tracks: list[Tentative] = []
         self.best: Tentative | None = None  # the longest live track (shown; confirmed from)
+        self.scenery: set[int] = set()  # this frame's blobs on still tracks in a fixed view
 
     def reset(self) -> None:
         self.tracks = []
         self.best = None
+        self.scenery = set()
 
     def gate(self, spread: np.ndarray, diameter: float, scale: float) -> tuple[float, float]:
         """``(s, radius)``: the motion scale and the gate radius for this frame."""
@@ -207,6 +212,13 @@ class Validator:
     def _rows(self) -> np.ndarray:
         return np.array(self.best.rows if self.best is not None else [], float).reshape(-1, 3)
 
+    def _still(self, track: Tentative, min_move: float) -> bool:
+        """The track has two or more blobs and its last ``confirm_frames`` moved less than ``min_move`` px."""
+        if len(track.rows) < 2:
+            return False
+        rows = track.rows[-self.cfg.confirm_frames:]
+        return math.hypot(rows[-1][1] - rows[0][1], rows[-1][2] - rows[0][2]) < min_move
+
     def _fit(self, track: Tentative, scale: float, min_move: float = 0.0) -> float:
         if len(track.rows) < self.cfg.confirm_frames:
             return 0.0
@@ -255,10 +267,17 @@ class Validator:
         for k in starts[order]:
             kept.append((Tentative([(index, float(c[k, 0]), float(c[k, 1]))],
                                    [(float(gated.blobs.area[k]), float(rounds[k]))]), int(k)))
-        kept = kept[:cfg.max_tentative]
+        min_move = diameter if must_move else 0.0
+        # In a fixed view a track that stays put is scenery (a tee, a marker, a cap): never confirmed.
+        # (Still a rival in _ambiguous: a look-alike in view keeps a new track from confirmation.)
+        # Scenery has places of its own
+        # (up to SCENERY_PLACES x max_tentative), so it neither crowds out a ball's new track nor,
+        # dropped and restarted, comes back each frame as a new rival.
+        self.scenery = {k for track, k in kept if must_move and self._still(track, min_move)}
+        kept = ([tk for tk in kept if tk[1] not in self.scenery][:cfg.max_tentative]
+                + [tk for tk in kept if tk[1] in self.scenery][:SCENERY_PLACES * cfg.max_tentative])
         self.tracks = [t for t, _ in kept]
         self.best = self.tracks[0] if self.tracks else None
-        min_move = diameter if must_move else 0.0
         fits = [self._fit(track, scale, min_move) for track, _ in kept]
         ready = [j for j, fit in enumerate(fits) if fit >= cfg.confirm_fit]
         if ready:  # several could be confirmed: the one most like the ball last seen (its area)

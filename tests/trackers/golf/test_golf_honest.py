@@ -225,3 +225,33 @@ def test_a_fast_ball_back_in_view_is_confirmed(backdrop, draw_ball):
     for k in range(confirmed[0], 32):
         (s,), _ = out[k]
         assert s.status == "measured" and abs(s.x - 560.0) < 3 and abs(s.y - back[k - 22][1]) < 3
+
+
+def test_fixed_camera_many_still_white_things_do_not_crowd_out_the_ball(backdrop, draw_ball):
+    # A fixed view, the ball gone out of the top at frame 15; from frame 16 more still white discs than
+    # there are tentative-track places (markers, caps) sit where it left; at frame 24 the ball drops
+    # back in from the top beside them. Still tracks are scenery in a fixed view: they have places
+    # of their own, so the ball's new track is not crowded out and is confirmed.
+    path = [(640.0, 150.0 - 10 * k) for k in range(16)]
+    back = [(696.0, 0.0 + 12 * k) for k in range(16)]
+    positions = [p if p[1] > -5 else None for p in path] + [None] * 8 + back
+    still = [(590.0 + 21 * (j % 5), 30.0 + 22 * (j // 5)) for j in range(20)]
+
+    def with_still(image):  # white discs larger than the ball (no look-alikes: 3.4x its area; a look-alike makes it ambiguous)
+        for q in still:
+            image = draw_ball(image, q, 9.0)
+        return image
+
+    frames = [dataclasses.replace(f, image=with_still(f.image)) if f.index >= 16 else f
+              for f in sequence(backdrop, draw_ball, positions, [(0, path[0])])]
+    cfg = GolfConfig(validate=ValidateConfig(entry_margin_px=1e6))
+    tracker = GolfTracker(cfg, np.random.default_rng(0))
+    out = [(tracker.step(f), tracker.intermediates) for f in frames]
+    st = statuses(out)
+    assert "measured" not in st[16:24]
+    back_measured = [k for k in range(24, len(frames)) if st[k] == "measured"]
+    assert back_measured and back_measured[0] <= 28, st
+    for k in back_measured:
+        (s,), _ = out[k]
+        assert abs(s.x - 696.0) < 3 and abs(s.y - back[k - 24][1]) < 3
+    assert set(st[back_measured[0]:]) == {"measured"}
