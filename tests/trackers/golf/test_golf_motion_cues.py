@@ -1,10 +1,16 @@
 """Cues from motion (ours, on top of seed 000): the moving silhouette against a world-fixed
-background and the mixed-state stop (tentative tracks side by side: test_golf_honest)."""
+background, the mixed-state stop and the samples drawn around each measured blob (ICONDENSATION-like)
+(tentative tracks side by side: test_golf_honest)."""
+
+import dataclasses
 
 import cv2
 import numpy as np
 
+from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.golf import GolfConfig, GolfTracker
 from trackreplay.trackers.golf.config import ContrastConfig, ParticleConfig
 from trackreplay.trackers.golf.particles import motion
 from trackreplay.trackers.golf.silhouette import contrast_silhouette, moving_silhouette, previous_in_pose
@@ -53,3 +59,59 @@ def test_samples_stop_only_when_a_camera_follows_the_ball():
     assert np.allclose(fixed[:, 2:], [10.0, -5.0]) and np.allclose(fixed[:, :2], [110.0, 95.0])
     missed = motion(cfg, 1.0, damp=True, steps=1, followed=True)(particles, np.random.default_rng(0))
     assert not np.any(np.all(missed[:, 2:] == 0.0, axis=1))  # after a miss the damping slows them instead
+
+
+# --- the two cues in the tracker, end to end --------------------------------------------------
+
+NS = 33_333_333
+
+
+def marked_sequence(backdrop, draw_ball, positions):
+    """Frames with a 5 px ball at ``positions[k]``, marked on the first frame only (no camera pose)."""
+    base = backdrop()
+    regions = (InitRegion(0, 0, *positions[0], 14, 14, "ball"),)
+    return [Frame(k, k * NS, draw_ball(base, p, 5.0), hints=regions if k == 0 else (), all_hints=regions)
+            for k, p in enumerate(positions)]
+
+
+def track(frames, **particles):
+    """The golf tracker's rows over ``frames`` with the default config, ``particles`` fields replaced."""
+    cfg = GolfConfig()
+    cfg = dataclasses.replace(cfg, particles=dataclasses.replace(cfg.particles, **particles))
+    tracker = GolfTracker(cfg, np.random.default_rng(0))
+    return [tracker.step(f)[0] for f in frames]
+
+
+def test_a_followed_ball_that_stops_in_the_picture_is_still_measured(backdrop, draw_ball):
+    # Hand-held view (no pose), the operator keeps the ball in the central half of the picture: it
+    # crosses it at 25 px a frame, then from frame 10 on sits still (the operator caught up, or the
+    # ball stopped). The mixed state's stopped samples are already where it is: every frame measured.
+    path = [(400.0 + 25 * k, 360.0) for k in range(10)] + [(625.0, 360.0)] * 10
+    frames = marked_sequence(backdrop, draw_ball, path)
+    rows = track(frames)
+    assert [s.status for s in rows] == ["measured"] * 20
+    for s, (x, y) in zip(rows, path):
+        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+    # Constant-velocity samples alone run on past it: predicted (then lost) as soon as it stops,
+    # and found again only by the re-confirmation of a lost ball.
+    moving_only = [s.status for s in track(frames, stop_share=0.0)]
+    assert moving_only[:10] == ["measured"] * 10
+    assert "measured" not in moving_only[10:15] and "lost" in moving_only[10:18], moving_only
+
+
+def test_a_ball_that_bounces_is_followed_by_the_samples_drawn_around_it(backdrop, draw_ball):
+    # Near the top-left corner (outside the central half: no camera following, no stopped samples) a
+    # ball falls 8 px a frame, and from frame 10 on rises as fast (a bounce: vertical velocity reversed).
+    # Samples drawn around each measured blob, moving as it just moved, turn the cloud within a frame.
+    path = [(100.0 + 6 * k, 40.0 + 8 * k) for k in range(10)]
+    path += [(100.0 + 6 * k, 112.0 - 8 * (k - 9)) for k in range(10, 20)]
+    frames = marked_sequence(backdrop, draw_ball, path)
+    rows = track(frames)
+    assert [s.status for s in rows] == ["measured"] * 20
+    for s, (x, y) in zip(rows, path):
+        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+    # Without them the weights alone cannot turn a cloud that has no sample moving up: one frame
+    # after the bounce the ball is off the prediction, and in a fixed view it is not taken back.
+    weights_only = [s.status for s in track(frames, detection_share=0.0)]
+    assert weights_only[:11] == ["measured"] * 11
+    assert "measured" not in weights_only[11:] and "lost" in weights_only[11:], weights_only
