@@ -169,20 +169,25 @@ class Validator:
             seen = self.seen_in_gate(gated=gated, predicted=predicted, spread=spread, diameter=diameter, size=size,
                                      scale=scale, lost=lost)
         found, in_gate, outside = seen
-        if found is not None:
-            if found.verdict == "measured":
-                self.reset()
-                return found
-            return dataclasses.replace(found, tentative=self._rows())
+        if found is not None and found.verdict == "measured":
+            self.reset()
+            return found
         verdict = "outside_image" if outside else "lost" if lost else "outside_gate" if ok.any() else "no_candidate"
         border = None
         if outside and entry_only:
             border = (size, cfg.entry_margin_px * scale + 2.0 * diameter)
+        # A blob seen only with low confidence (off the prediction: a bounce, a hop) starts or extends a
+        # tentative track like any other, so that seen on confirm_frames frames it is confirmed; while
+        # the ball's size is known (in the gate, not lost) only if its shape fits the ball's (min_fit).
         k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only)
+        if found is not None and k >= 0 and blob_fit(gated, k, self.blobs, scale) < cfg.min_fit:
+            k = -1
         if k >= 0 and fit >= cfg.confirm_fit:
             if self._ambiguous(gated, k, scale):
                 return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
             return Validation("confirmed", fit, fit, 0.0, radius, k, self._rows(), in_gate)
+        if found is not None:
+            return dataclasses.replace(found, tentative=self._rows())
         return Validation(verdict, 0.0, 0.0, 0.0, radius, k, self._rows(), in_gate)
 
     def _ambiguous(self, gated: GatedBlobs, k: int, scale: float) -> bool:

@@ -255,3 +255,22 @@ def test_fixed_camera_many_still_white_things_do_not_crowd_out_the_ball(backdrop
         (s,), _ = out[k]
         assert abs(s.x - 696.0) < 3 and abs(s.y - back[k - 24][1]) < 3
     assert set(st[back_measured[0]:]) == {"measured"}
+
+
+def test_a_bounce_off_the_prediction_is_confirmed_from_the_low_confidence_frames(backdrop, draw_ball):
+    # A fixed view; a ball falls 14 px a frame and bounces at frame 10 (vertical velocity reversed).
+    # After the bounce it is seen in the gate but far from the prediction: low confidence, not
+    # `measured`. Those sightings build a tentative track like any other, so three frames of it
+    # (the evidence a jump needs) confirm the ball, and it is followed from there.
+    path = [(100.0 + 6 * k, 40.0 + 14 * k) for k in range(10)]
+    path += [(100.0 + 6 * k, 166.0 - 14 * (k - 9)) for k in range(10, 20)]
+    frames = sequence(backdrop, draw_ball, path, [(0, path[0])])
+    results = run(frames)
+    st = statuses(results)
+    assert st[:10] == ["measured"] * 10
+    assert "measured" not in st[10:12]  # a jump off the motion model is not taken on one frame's word
+    confirmed = [k for k in range(10, 20) if results[k][1].validation.verdict == "confirmed"]
+    assert confirmed and confirmed[0] <= 14, st
+    for k in range(confirmed[0], 20):
+        (s,), _ = results[k]
+        assert s.status == "measured" and abs(s.x - path[k][0]) < 3 and abs(s.y - path[k][1]) < 3
