@@ -12,13 +12,18 @@ def _bgr(image: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(image)
 
 
+def to_ycrcb(image: np.ndarray) -> np.ndarray:
+    """(..., 3) uint8 in OpenCV's (Y, Cr, Cb) order, interleaved (C-ordered)."""
+    return cv2.cvtColor(_bgr(image), cv2.COLOR_BGR2YCrCb)
+
+
 def to_ycbcr(image: np.ndarray) -> np.ndarray:
     """(..., 3) uint8 in (Y, Cb, Cr) order (OpenCV gives Y, Cr, Cb).
 
     The channels are picked as planes (``(3, h, w)`` memory seen as ``(h, w, 3)``): the values and
     the memory layout of ``ycrcb[..., [0, 2, 1]]``, which numpy builds the same way, at a third of
     its cost on a large crop."""
-    return cv2.cvtColor(_bgr(image), cv2.COLOR_BGR2YCrCb).transpose(2, 0, 1)[_YCBCR_PLANES].transpose(1, 2, 0)
+    return to_ycrcb(image).transpose(2, 0, 1)[_YCBCR_PLANES].transpose(1, 2, 0)
 
 
 _YCBCR_PLANES = np.array([0, 2, 1])  # Y, Cb, Cr out of OpenCV's Y, Cr, Cb

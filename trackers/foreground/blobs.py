@@ -14,6 +14,7 @@ The others keep a NaN circularity.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
@@ -60,14 +61,32 @@ def pixel_covariance(labels: np.ndarray, label: int, box: np.ndarray) -> tuple[f
     """``(sxx, syy, sxy)`` of the pixels of ``label`` inside ``box`` (x0, y0, w, h of the crop), each
     pixel a unit square (hence the 1/12 on the diagonal: a single pixel is not a point)."""
     x0, y0, w, h = (int(v) for v in np.asarray(box).tolist())
-    m = cv2.moments((labels[y0:y0 + h, x0:x0 + w] == label).view(np.uint8), binaryImage=True)
+    return _window_covariance((labels[y0:y0 + h, x0:x0 + w] == label).view(np.uint8))
+
+
+def _window_covariance(window: np.ndarray) -> tuple[float, float, float]:
+    """:func:`pixel_covariance` of the set pixels of a binary uint8 window."""
+    m = cv2.moments(window, binaryImage=True)
     return m["mu20"] / m["m00"] + 1 / 12, m["mu02"] / m["m00"] + 1 / 12, m["mu11"] / m["m00"]
+
+
+SHORT_CONTOUR = 48  # points: up to this many, a Python loop beats numpy's calls
 
 
 def chain_length(points: np.ndarray) -> float:
     """Kulpa's length estimate of a closed 8-connected contour given as (n, 2) points."""
-    if len(points) < 2:
+    n = len(points)
+    if n < 2:
         return 0.0
+    if n <= SHORT_CONTOUR:  # step by step in Python (the same count): numpy's per-call cost was most of it
+        pts = points.tolist()
+        diagonal = 0
+        px, py = pts[-1]  # the closing step, last -> first, comes first
+        for x, y in pts:
+            if x != px and y != py:
+                diagonal += 1
+            px, py = x, y
+        return 0.948 * (n - diagonal) + 1.343 * diagonal
     steps = points[1:] - points[:-1]  # and the closing step, last -> first, below
     diagonal = int(np.count_nonzero((steps[:, 0] != 0) & (steps[:, 1] != 0)))
     close = points[0] - points[-1]
@@ -98,24 +117,36 @@ def measure_blobs(mask: np.ndarray, offset: tuple[int, int] = (0, 0), *, min_are
         target = np.zeros(2) if near is None else near
         d2 = (centre[big, 0] - target[0]) ** 2 + (centre[big, 1] - target[1]) ** 2
         big = np.sort(big[np.argsort(d2, kind="stable")][:max_measured])
-    if big.size:
-        if big.size == n - 1:
+    big = big.tolist()
+    if big:
+        if len(big) == n - 1:
             measured = mask
         else:
             keep = np.zeros(n, np.uint8)
-            keep[big + 1] = 1
+            keep[np.array(big) + 1] = 1
             measured = keep[labels]
         contours, _ = cv2.findContours(measured, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-        perimeter = np.full(n - 1, np.nan)
+        perimeter = {}
         for contour in contours:  # one contour per measured blob (a loop over blobs, not pixels)
             px, py = contour[0, 0]
-            label = labels[py, px] - 1
+            label = int(labels[py, px]) - 1
             if label >= 0:
-                perimeter[label] = chain_length(contour[:, 0, :]) + np.pi
-        circularity[big] = 4.0 * np.pi * area[big] / perimeter[big] ** 2
+                perimeter[label] = chain_length(contour[:, 0, :]) + math.pi
+        # Blob by blob in Python floats, as 4.0 * np.pi * area[big] / perimeter[big] ** 2 computes
+        # each (NaN for a blob without its contour).
+        areas = area.tolist()
+        for k in big:
+            p = perimeter.get(k, math.nan)
+            circularity[k] = 4.0 * math.pi * areas[k] / (p * p)
     covariance = np.full((n - 1, 3), np.nan)
-    for k in big if moments else ():  # the measured blobs only (a few), each within its own box
-        covariance[k] = pixel_covariance(labels, k + 1, stats[k, :4])
+    if moments and big:  # the measured blobs only (a few), each within its own box
+        boxes = stats[:, :4].tolist()
+        for k in big:
+            x0, y0, w, h = boxes[k]
+            # One blob: its label's pixels are the mask's (a binary image's moments see only which
+            # pixels are set), without comparing the labels.
+            window = mask[y0:y0 + h, x0:x0 + w] if n == 2 else (labels[y0:y0 + h, x0:x0 + w] == k + 1).view(np.uint8)
+            covariance[k] = _window_covariance(window)
     return Blobs(centre, area, circularity, bbox, covariance)
 
 

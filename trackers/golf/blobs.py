@@ -213,27 +213,37 @@ def gate(blobs: Blobs, targets: BlobTargets, cfg: BlobConfig, scale: float, *, w
     roundness passes when ``roundness >= target - circularity_tolerance`` (shape does not change with zoom);
     with a ``motion``, ``elongated`` when :func:`streak_excess` exceeds ``1 + streak_tolerance``.
     """
-    reason = np.full(len(blobs), OK, np.int64)
     if not len(blobs):
-        return reason
-    tiny = blobs.area < cfg.min_area_px * scale * scale
-    reason[tiny] = TINY
-    reason[~tiny & ~blobs.measured] = EXCESS
-    live = reason == OK
+        return np.full(0, OK, np.int64)
+    # Blob by blob in Python floats (a few blobs: numpy's per-call cost was most of it): the same
+    # values and comparisons as the vector form; the logs stay numpy's, on the same arrays.
+    area = blobs.area
     slack = cfg.area_slack_px * scale * scale
-    lim = widen * np.log(cfg.area_tolerance)
-    ratio = np.log((blobs.area + slack) / (targets.area + slack))
-    small = live & (ratio < -lim)
-    large = live & (ratio > lim)
-    reason[small] = AREA_SMALL
-    reason[large] = AREA_LARGE
-    live &= ~(small | large)
-    round_enough = roundness(blobs) >= targets.circularity - shape_tolerance(blobs.area, cfg, scale)
-    reason[live & ~round_enough] = CIRCULARITY
-    if motion is not None:
-        live &= round_enough
-        reason[live & (streak_excess(blobs, motion, cfg, scale) > 1.0 + cfg.streak_tolerance)] = ELONGATED
-    return reason
+    lim = float(widen * np.log(cfg.area_tolerance))
+    ratio = np.log((area + slack) / (targets.area + slack)).tolist()
+    min_area, reliable, tolerance = cfg.min_area_px * scale * scale, cfg.shape_area_px, cfg.circularity_tolerance
+    circularity, target = targets.circularity, -lim
+    measured = blobs.circularity.tolist()
+    excess = None
+    reason = []
+    for i, (a, c, r, rnd) in enumerate(zip(area.tolist(), measured, ratio, roundness(blobs).tolist())):
+        if a < min_area:
+            reason.append(TINY)
+        elif not math.isfinite(c):
+            reason.append(EXCESS)
+        elif r > lim:  # before "small", as the vector form's later assignment won
+            reason.append(AREA_LARGE)
+        elif r < target:
+            reason.append(AREA_SMALL)
+        elif not rnd >= circularity - tolerance * max(1.0, math.sqrt(reliable / max(a, 1.0))):  # shape_tolerance
+            reason.append(CIRCULARITY)
+        elif motion is not None:
+            if excess is None:
+                excess = streak_excess(blobs, motion, cfg, scale).tolist()
+            reason.append(ELONGATED if excess[i] > 1.0 + cfg.streak_tolerance else OK)
+        else:
+            reason.append(OK)
+    return np.array(reason, np.int64)
 
 
 def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray, targets: BlobTargets, misses: int,

@@ -57,6 +57,26 @@ def _accel_jacobian(v: np.ndarray, k: float) -> np.ndarray:
     return -k * (speed * EYE3 + v[:, None] * v[None, :] / speed)  # np.outer(v, v) is that product
 
 
+def _substep_jacobian(v: np.ndarray, k: float, h: float, F0: np.ndarray) -> np.ndarray:
+    """``F0`` with ``h * _accel_jacobian(v, k)`` added to its velocity block, in Python floats: the
+    same IEEE operations in the same order as ``F[3:, 3:] += h * (-k * (|v| I + v vᵀ / |v|))``
+    (``|v| * 1`` is ``|v|``, ``|v| * 0`` is ``0.0``; ``F0`` itself when the Jacobian is zero, as
+    adding zeros to it gives)."""
+    speed = math.sqrt(float(v @ v))
+    if speed < 1e-9 or k == 0.0:
+        return F0
+    vx, vy, vz = v.tolist()
+    nk = -k
+    txy, txz, tyz = vx * vy / speed, vx * vz / speed, vy * vz / speed
+    oxy, oxz, oyz = 0.0 + h * (nk * (0.0 + txy)), 0.0 + h * (nk * (0.0 + txz)), 0.0 + h * (nk * (0.0 + tyz))
+    return np.array([[1.0, 0.0, 0.0, h, 0.0, 0.0],
+                     [0.0, 1.0, 0.0, 0.0, h, 0.0],
+                     [0.0, 0.0, 1.0, 0.0, 0.0, h],
+                     [0.0, 0.0, 0.0, 1.0 + h * (nk * (speed + vx * vx / speed)), oxy, oxz],
+                     [0.0, 0.0, 0.0, oxy, 1.0 + h * (nk * (speed + vy * vy / speed)), oyz],
+                     [0.0, 0.0, 0.0, oxz, oyz, 1.0 + h * (nk * (speed + vz * vz / speed))]])
+
+
 def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
     """``f(x)``: one Heun (RK2) step of the state mean.
 
@@ -183,14 +203,14 @@ class BallisticEkf:
             G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
             F = np.eye(6)
             F[:3, 3:] = h * np.eye(3)
-            self._substep = (h, cfg.accel_noise**2 * G @ G.T, F)
+            Q = cfg.accel_noise**2 * G @ G.T
+            Q.flags.writeable = F.flags.writeable = False  # shared by every substep (the EKF only reads them)
+            self._substep = (h, Q, F)
         _, Q, F0 = self._substep
         kf = self.kf
-        kf.Q = Q.copy()
+        kf.Q = Q
         for _ in range(steps):
-            F = F0.copy()
-            F[3:, 3:] += h * _accel_jacobian(kf.x[3:], cfg.drag_k)
-            kf.F = F
+            kf.F = _substep_jacobian(kf.x[3:], cfg.drag_k, h, F0)
             kf.predict(u=h)
         kf.P = 0.5 * (kf.P + kf.P.T)
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
 from trackreplay.trackers.appearance.histogram import colour_histogram
 from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut
 from trackreplay.trackers.geometry.box import centre_box, clip_box
@@ -73,22 +73,33 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
     ``min_context_px`` is the smallest context window (the smallest search region, frame pixels).
     """
     height, width = image.shape[:2]
-    ycc = to_ycbcr(image)
+    # The conversion is per pixel: each part is converted on its own (the box, the strided frame,
+    # the context window) rather than the whole frame, the same values; the masks at those sizes.
     x0, y0, x1, y1 = clip_box(*centre_box(region.x, region.y, region.w, region.h), width, height)
-    box = ycc[y0:y1, x0:x1]
+    box = _ycbcr(image[y0:y1, x0:x1])
     core = _ellipse_mask(y1 - y0, x1 - x0, region.x - x0, region.y - y0, cfg.core * region.w / 2, cfg.core * region.h / 2)
     ball = box[core]
 
     gw, gh = region.w * cfg.background_margin, region.h * cfg.background_margin
     gx0, gy0, gx1, gy1 = clip_box(*centre_box(region.x, region.y, gw, gh), width, height)
     s = max(1, cfg.background_stride)
-    keep = np.ones((height, width), bool)
-    keep[gy0:gy1, gx0:gx1] = False
-    background = ycc[::s, ::s][keep[::s, ::s]]
+    # Every s-th pixel outside the guard box, in raster order (what a full-size mask's [::s, ::s]
+    # picked): the rows above, the rows beside (left part, right part) and the rows below, copied as
+    # blocks of OpenCV's interleaved (Y, Cr, Cb) rather than gathered by a mask, then put in
+    # (Y, Cb, Cr) order; rows/columns i with i*s in the guard are ceil(g0/s)..ceil(g1/s)-1.
+    strided = to_ycrcb(image[::s, ::s])
+    r0, r1, c0, c1 = -(-gy0 // s), -(-gy1 // s), -(-gx0 // s), -(-gx1 // s)
+    beside = np.concatenate([strided[r0:r1, :c0], strided[r0:r1, c1:]], axis=1)
+    rows = np.concatenate([strided[:r0].reshape(-1, 3), beside.reshape(-1, 3), strided[r1:].reshape(-1, 3)])
+    background = np.empty_like(rows)
+    background[:, 0], background[:, 1], background[:, 2] = rows[:, 0], rows[:, 2], rows[:, 1]
 
     half = max(cfg.context * max(region.w, region.h), min_context_px) / 2
     cx0, cy0, cx1, cy1 = clip_box(*centre_box(region.x, region.y, 2 * half, 2 * half), width, height)
-    context = ycc[cy0:cy1, cx0:cx1][keep[cy0:cy1, cx0:cx1]]
+    around = _ycbcr(image[cy0:cy1, cx0:cx1])
+    keep = np.ones(around.shape[:2], bool)
+    keep[max(gy0 - cy0, 0):max(gy1 - cy0, 0), max(gx0 - cx0, 0):max(gx1 - cx0, 0)] = False
+    context = around[keep]
     score = sky_score(context)
     label = region.label.lower()
     if "sky" in label:
@@ -98,6 +109,13 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
     else:
         name = "sky" if score > SKY_SCORE_THRESHOLD else "ground"
     return RegionSamples(name, ball, background, context[:, 0].copy(), score)
+
+
+def _ycbcr(pixels: np.ndarray) -> np.ndarray:
+    """``to_ycbcr`` of a crop, ``(h, w, 3)`` zeros for an empty one (OpenCV converts no empty image)."""
+    if pixels.size == 0:
+        return np.zeros(pixels.shape[:2] + (3,), np.uint8)
+    return to_ycbcr(pixels)
 
 
 def region_key(region: InitRegion) -> tuple:
@@ -265,10 +283,12 @@ class GolfLuts:
             self._labels = self.luminance_labels()
             self._label_levels = [(i, np.flatnonzero(self._labels == i)) for i, name in enumerate(LUT_NAMES) if name in self.luts]
         flat = np.asarray(y, dtype=np.uint8).ravel()
-        counts = np.bincount(flat, minlength=256).astype(np.float64)
-        total = max(counts.sum(), 1.0)
-        for i, levels in self._label_levels:
-            scores[i] = float(counts[levels].sum() / total)
+        # The pixels per LUT counted through the labels at once: the same integers as the float sums
+        # of a luminance histogram over each LUT's levels (exact below 2^53), divided by the same total.
+        per_lut = np.bincount(self._labels[flat], minlength=len(LUT_NAMES)).tolist()
+        total = max(float(flat.size), 1.0)
+        for i, _ in self._label_levels:
+            scores[i] = float(per_lut[i] / total)
         if not flat.size:
             return (current if current in self.luts else self.names[0]), scores
         best = LUT_NAMES[_nanargmax(scores)]

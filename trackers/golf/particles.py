@@ -106,7 +106,11 @@ def likelihood(candidates: np.ndarray, sigma: float, alpha: float) -> Likelihood
 
     def weigh(particles: np.ndarray) -> np.ndarray:
         out = np.full(len(particles), alpha, dtype=np.float64)
-        if len(candidates):
+        if len(candidates) == 1:  # the usual single candidate: a sum over one column is that column
+            cx, cy = candidates[0]
+            d2 = (particles[:, 0] - cx) ** 2 + (particles[:, 1] - cy) ** 2
+            out += np.exp(-d2 / (2.0 * sigma * sigma)) / (SQRT_2PI * sigma)
+        elif len(candidates):
             # d² = dx² + dy² (what summing the last axis of the squared differences adds, without the reduction)
             d2 = (particles[:, 0:1] - candidates[None, :, 0]) ** 2 + (particles[:, 1:2] - candidates[None, :, 1]) ** 2
             out += np.exp(-d2 / (2.0 * sigma * sigma)).sum(axis=1) / (SQRT_2PI * sigma)

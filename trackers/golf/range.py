@@ -56,8 +56,9 @@ def photometric_area(y: np.ndarray, cx: float, cy: float, radius: float, ball_lu
     """
     r_out = radius + 3.0
     h, w = y.shape
-    x0, x1 = max(0, int(np.floor(cx - r_out))), min(w, int(np.ceil(cx + r_out)) + 1)
-    y0, y1 = max(0, int(np.floor(cy - r_out))), min(h, int(np.ceil(cy + r_out)) + 1)
+    floor, ceil = math.floor, math.ceil  # the integers int(np.floor(...)), int(np.ceil(...)) give (and their errors)
+    x0, x1 = max(0, floor(cx - r_out)), min(w, ceil(cx + r_out) + 1)
+    y0, y1 = max(0, floor(cy - r_out)), min(h, ceil(cy + r_out) + 1)
     if x1 <= x0 or y1 <= y0:
         return float("nan")
     win = y[y0:y1, x0:x1].astype(np.float64)

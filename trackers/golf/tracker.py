@@ -28,7 +28,7 @@ import numpy as np
 
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.base import Marked, TrackerBase, TrackState
-from trackreplay.trackers.filters.particles import ParticleFilter
+from trackreplay.trackers.filters.particles import ParticleFilter, squared_deviations
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
 from trackreplay.trackers.golf.blobs import ApparentMotion, BlobTargets, GatedBlobs, roundness, select_ball, start_targets
@@ -79,6 +79,7 @@ class GolfTracker(TrackerBase):
         self.intermediates = GolfIntermediates.idle("")
         self._moments_memo: list = [None, None, {}]  # particles, weights, {first component: (mean, spread)}
         self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
+        self._followed: bool | None = None  # this frame's ReinitPolicy.follows answer, once _predict asked
 
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
@@ -97,6 +98,7 @@ class GolfTracker(TrackerBase):
         # With encoders (optional): the samples move with the pose change, living in camera-independent directions.
         compensated = self.started and cfg.particles.compensate_camera_motion and camera is not None and prev_camera is not None
         marked_now = self.marks.on(frame.index)
+        self._followed = None
         if self.started and not marked_now:
             reinit = self._predict(frame, camera, scale, compensated)  # §2.3 re-initialisation, or eq. (1)
         elif (region := self.marks.start_region(frame.index)) is not None:
@@ -140,7 +142,7 @@ class GolfTracker(TrackerBase):
                     sil, gated, seen_gated = fallback
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
                                         diameter=diameter, size=(width, height), scale=scale, lost=lost,
-                                        entry_only=not self.reinit.centre_search(camera, prev_camera, width, height),
+                                        entry_only=not self._centre_search(camera, prev_camera, width, height),
                                         seen=seen_gated)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
@@ -213,8 +215,16 @@ class GolfTracker(TrackerBase):
         if out is None:
             p = particles[:, first:first + 2]
             mean = weights @ p
-            out = memo[2][first] = (mean, np.sqrt(np.maximum(weights @ (p - mean) ** 2, 0.0)))
+            out = memo[2][first] = (mean, np.sqrt(np.maximum(weights @ squared_deviations(p, mean), 0.0)))
         return out
+
+    def _centre_search(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int) -> bool:
+        """:meth:`ReinitPolicy.centre_search`, answered from this frame's :meth:`ReinitPolicy.follows`
+        when :meth:`_predict` asked it already: the same question (same poses and size; nothing in
+        between adds to the policy's history, only :meth:`_measured` does)."""
+        if self._followed is not None and self.reinit.cfg.lost == "auto":
+            return self._followed
+        return self.reinit.centre_search(camera, previous, width, height)
 
     def _estimate(self) -> np.ndarray:
         """``ParticleFilter.estimate`` (eq. (3)), once per set of samples (a copy: the caller may keep it)."""
@@ -312,7 +322,7 @@ class GolfTracker(TrackerBase):
             self.pf.particles = warp(self.pf.particles, pose_homography(prev_camera, camera))
         if self.misses == 1 and self.reinit.at_rest(cfg.particles.rest_frames, cfg.particles.rest_px * scale):
             self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
-        followed = self.reinit.follows(camera, prev_camera, width, height)
+        followed = self._followed = self.reinit.follows(camera, prev_camera, width, height)
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 
