@@ -54,7 +54,7 @@ def merged(*cfgs: dict) -> dict:
 # The Tables 1-3 ablations run on the paper's pipeline (PAPER: uniform pixel weights, fixed
 # reference), as the paper compares them; the last row of each is our defaults.
 P = PAPER
-OURS = "ours, defaults (Epanechnikov kernel + adaptive reference + foreground cue, geometry)"
+OURS = "ours, defaults (Epanechnikov kernel + adaptive reference + foreground cue + region refinement, geometry)"
 TABLES = {
     "Table 1 (colorpf-illumination)": ("colorpf-illumination", {
         "H-S (proposed), size noise": merged(P, NOISE),
@@ -78,6 +78,7 @@ KERNEL, PARTS = {"likelihood": {"kernel": "epanechnikov"}}, {"likelihood": {"par
 CV, MS = {"motion": {"model": "constant_velocity"}}, {"refine": {"mode": "meanshift"}}
 UPDATE, RW = {"reference": {"update_rate": 0.05}}, {"size": {"no_plane": "random_walk"}}
 FG, NO_FG = {"likelihood": {"foreground": 10.0}}, {"likelihood": {"foreground": 0.0}}
+REGION, NO_REGION = {"refine": {"mode": "foreground"}}, {"refine": {"mode": "none"}}
 SWITCHES = {
     "paper (before: uniform, fixed reference)": P,
     "paper + Epanechnikov kernel": merged(P, KERNEL),
@@ -87,8 +88,11 @@ SWITCHES = {
     "paper + adaptive reference (0.05)": merged(P, UPDATE),
     "paper + scale random walk without a plane": merged(P, RW),
     "paper + foreground cue (10)": merged(P, FG),
-    "defaults without the foreground cue (kernel + adaptive reference; the previous defaults)": NO_FG,
-    "defaults (kernel + adaptive reference + foreground cue)": {},
+    "paper + foreground-region refinement": merged(P, REGION),
+    "defaults without the foreground cue (kernel + adaptive reference + region refinement)": NO_FG,
+    "defaults without the region refinement (kernel + adaptive reference + foreground cue; the previous defaults)":
+        NO_REGION,
+    "defaults (kernel + adaptive reference + foreground cue + region refinement)": {},
     "defaults + two parts": PARTS,
     "defaults + constant velocity": CV,
     "defaults + mean-shift refinement": MS,
@@ -295,7 +299,8 @@ def main() -> None:
             for name, cfg in {"H-S+V": {"likelihood": {"histogram": "hsv"}},
                               "target-only reference": {"reference": {"mode": "target"}}, "size noise": NOISE,
                               "fixed box": {"size": {"mode": "fixed"}},
-                              "without the foreground cue": NO_FG}.items():
+                              "without the foreground cue": NO_FG,
+                              "without the region refinement (the previous defaults)": NO_REGION}.items():
                 results["otb"][f"{name}, seed 0"], _ = scores(
                     replay(ReplayRequest(log=marked, tracker="colorpf", seed=0, config=cfg)).trajectory, gt)
             summary, frames = scores(csrt(py, REAL / "img", (x - 1, y - 1, w, h), 0, tmp), gt)

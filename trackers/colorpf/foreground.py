@@ -25,6 +25,10 @@ frame's brightness (:func:`brightness_gain`: a uniform illumination step is not 
 needs a static camera, as eq. (7) does: a frame that differs from the background over more than half
 its area (:func:`scene_changed`: the camera moved) gets no cue, and without a background (no usable
 one, or before the "early" median exists) there is none.
+
+The same mask also refines the estimate (``refine.mode = "foreground"``, :func:`foreground_region`):
+the connected foreground components around the estimate, placed as the marked box was on its own
+foreground (:func:`region_layout`), move the estimate when they are consistent with one target.
 """
 
 from __future__ import annotations
@@ -124,3 +128,106 @@ def neighbour_shares(image: np.ndarray, background: np.ndarray, estimate: np.nda
     area = np.prod(c[:, 2:] - c[:, :2], axis=1).astype(np.float64)
     return np.where(area > 0, _sums(integral, c) / np.maximum(area, 1.0), 0.0)
 
+
+
+REGION_CONTEXT = 4.0  # the mask for the region refinement is made over the estimate's box x 4 per axis
+
+
+def _spread(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Centroid ``(x, y)`` (pixel centres) and standard deviation per axis of a bool mask's pixels."""
+    m = cv2.moments(mask.astype(np.uint8), binaryImage=True)
+    if m["m00"] <= 0:
+        return None
+    centre = np.array([m["m10"], m["m01"]]) / m["m00"]
+    sd = np.sqrt(np.maximum(np.array([m["mu20"], m["mu02"]]) / m["m00"], 1.0 / 12.0))  # one pixel: 1/sqrt(12)
+    return centre, sd
+
+
+def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+    """Where the marked box lies relative to its foreground, ``(u_x, u_y, s_x, s_y)``: box centre =
+    foreground centroid + u * its standard deviation, box size = s * the standard deviation, per axis
+    (a box wholly foreground: 0, 0, sqrt(12), sqrt(12)). ``mask`` is eq. (7)'s foreground of the marked
+    box (its top-left pixel at ``offset``), ``box`` the marked box ``(x, y, w, h)``. None when the mask
+    is empty. Moments, not the bounding box: a few pixels of the target that differ from the floor on
+    one frame and not on another (legs over a zebra crossing) move them little."""
+    spread = _spread(mask)
+    if spread is None:
+        return None
+    centre, sd = spread
+    centre = centre + np.asarray(offset, np.float64)
+    box = np.asarray(box, np.float64)
+    return np.concatenate([(box[:2] - centre) / sd, box[2:4] / sd])
+
+
+IDENTITY = np.array([0.0, 0.0, np.sqrt(12.0), np.sqrt(12.0)])
+
+
+def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.ndarray, threshold: float,
+                      open_px: int, gain: float, mark_share: float, layout: np.ndarray = IDENTITY, *,
+                      window: float = 1.5, factor: float = 2.0,
+                      min_part: float = 0.01) -> tuple[np.ndarray | None, str]:
+    """The target's box ``(x, y, w, h)`` from the foreground region the estimate sits on, or None and
+    why not (``refine.mode = "foreground"``, ours).
+
+    The foreground mask (as for the cue) over the estimate's box times :data:`REGION_CONTEXT` per axis,
+    its 8-connected components (``cv2.connectedComponentsWithStats``). A component larger than the
+    target could be (reaching the context's edge where that is not the image's, or a bounding box of
+    more than ``factor`` times the box's area: a passing car, a shadow's edge) is not part of the
+    region. The others with most of their pixels, and at least ``min_part`` of the box's area, inside
+    the box times ``window`` (per axis) make the region (their whole extent: a head apart from the
+    body). The target's box is placed on the region's centroid and standard deviations as the marked
+    box was on its own foreground (``layout``, :func:`region_layout`: a part of the target the colour
+    of the floor behind it, dark legs on a dark road, is not foreground at the mark either). It is
+    taken only when it is consistent with one target:
+
+    - each side within ``sqrt(factor)`` of the estimate box's (either way);
+    - the region's foreground share of it within ``factor`` of the marked box's ``mark_share``
+      (P_detect / P_square of eq. 7, either way);
+    - the neighbour check's condition: none of the four boxes of the estimate's size beside it holds
+      more foreground than ``mark_share``.
+    """
+    x, y, w, h = (float(v) for v in np.asarray(estimate, dtype=np.float64)[:4])
+    height, width = image.shape[:2]
+    cx0, cy0, cx1, cy1 = (int(v) for v in box_corners(np.array([x, y, w * REGION_CONTEXT, h * REGION_CONTEXT]),
+                                                        width, height)[0])
+    if cx1 <= cx0 or cy1 <= cy0 or w <= 0 or h <= 0:
+        return None, "outside the image"
+    fg = _mask(image[cy0:cy1, cx0:cx1], background[cy0:cy1, cx0:cx1], threshold, open_px, gain)
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), connectivity=8)
+    if n <= 1:
+        return None, "no foreground"
+    shift = np.array([cx0, cy0, cx0, cy0])
+    left, top = stats[:, cv2.CC_STAT_LEFT], stats[:, cv2.CC_STAT_TOP]
+    right, bottom = left + stats[:, cv2.CC_STAT_WIDTH], top + stats[:, cv2.CC_STAT_HEIGHT]
+    large = (((left == 0) & (cx0 > 0)) | ((top == 0) & (cy0 > 0)) | ((right == cx1 - cx0) & (cx1 < width))
+             | ((bottom == cy1 - cy0) & (cy1 < height))
+             | (stats[:, cv2.CC_STAT_WIDTH] * stats[:, cv2.CC_STAT_HEIGHT] > factor * w * h))
+    wx0, wy0, wx1, wy1 = box_corners(np.array([x, y, w * window, h * window]), width, height)[0] - shift
+    counts = np.bincount(labels[wy0:wy1, wx0:wx1].ravel(), minlength=n)
+    part = (counts >= min_part * w * h) & (2 * counts >= stats[:, cv2.CC_STAT_AREA]) & ~large
+    part[0] = False  # the background label
+    if not part.any():
+        return None, "no region of the target's size" if (counts[1:] > 0).any() else "no foreground"
+    region = part[labels]
+    centre, sd = _spread(region)
+    layout = np.asarray(layout, np.float64)
+    centre = centre + np.array([cx0, cy0])
+    box = np.concatenate([centre + layout[:2] * sd, layout[2:4] * sd])
+    ratio = box[2:4] / np.array([w, h])
+    if not ((ratio >= 1.0 / np.sqrt(factor)) & (ratio <= np.sqrt(factor))).all():
+        return None, "size"
+    # the region's pixels in the target's box, and the four boxes of the estimate's size beside it
+    bx, by = box[0], box[1]
+    xy = np.array([[bx, by], [bx - w, by], [bx + w, by], [bx, by - h], [bx, by + h]])
+    wh = np.vstack([box[2:4], np.broadcast_to([w, h], (4, 2))])
+    corners = box_corners(np.column_stack([xy, wh]), width, height) - shift
+    c = np.clip(corners, 0, [cx1 - cx0, cy1 - cy0, cx1 - cx0, cy1 - cy0])
+    c[:, 2:] = np.maximum(c[:, 2:], c[:, :2])
+    areas = np.prod(c[:, 2:] - c[:, :2], axis=1).astype(np.float64)
+    own = _sums(cv2.integral(region.astype(np.uint8)), c[:1])[0] / max(areas[0], 1.0)
+    if not mark_share / factor <= own <= mark_share * factor:
+        return None, "share"
+    beside = np.where(areas[1:] > 0, _sums(cv2.integral(fg.astype(np.uint8)), c[1:]) / np.maximum(areas[1:], 1.0), 0.0)
+    if beside.max() > mark_share:
+        return None, "against a larger region"
+    return box, ""

@@ -24,7 +24,10 @@ Departures of ours, each a switch (``colorpf.config``; measured in docs/colorpf.
 histograms are Epanechnikov-weighted, the reference adapts (rate 0.05, only while the confidence
 against the reference as built is high and tells the target from the background) and, once eq. (7)'s
 background exists, each particle's likelihood is multiplied by a foreground centre-surround cue
-(:mod:`~trackreplay.trackers.colorpf.foreground`; the confidence stays colour's alone); off by default,
+(:mod:`~trackreplay.trackers.colorpf.foreground`; the confidence stays colour's alone) and the estimate
+is refined onto the foreground region it sits on when that region is consistent with the target
+(``refine.mode = "foreground"``, :func:`.foreground.foreground_region`: the cloud moves with it,
+without a ground plane the size follows it, and such a frame does not count towards "lost"); off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -40,7 +43,8 @@ from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.config import ColorPfConfig
-from trackreplay.trackers.colorpf.foreground import (brightness_gain, foreground_contrast, neighbour_shares,
+from trackreplay.trackers.colorpf.foreground import (IDENTITY, brightness_gain, foreground_contrast,
+                                                     foreground_region, neighbour_shares, region_layout,
                                                      scene_changed)
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
@@ -94,6 +98,7 @@ class ColorPfTracker(TrackerBase):
         self._s_mark: float | None = None
         self.background_image: np.ndarray | None = None  # eq. (7)'s background, once there is one
         self.adapted: np.ndarray | None = None  # reference.update_rate > 0: the adapted H_ref (None: as built)
+        self.layout: np.ndarray | None = None  # refine.mode = "foreground": foreground_region's layout
         self.template: TemplateModel | None = None  # likelihood.template > 0: the target's grey template
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self._pending: list[str] = []
@@ -197,8 +202,36 @@ class ColorPfTracker(TrackerBase):
                       "(the target was in the picture from the start); until then the marked box's own histogram")
         self.reference = ref
         self.adapted = None
+        if self.config.refine.mode == "foreground" and ref.mask.size and self.mark is not None:
+            # the marked box on its own foreground, for foreground_region
+            self.layout = region_layout(ref.mask, ref.mask_offset,
+                                        np.array([self.mark.x, self.mark.y, self.mark.w, self.mark.h]))
         self.background_image = background  # likelihood.foreground: what differs from it is foreground
         return ref.mask
+
+    def _refine_foreground(self, image: np.ndarray, background: np.ndarray, gain: float,
+                           estimate: np.ndarray) -> tuple[np.ndarray, bool]:
+        """``refine.mode = "foreground"``: the estimate's centre on the foreground region it sits on
+        (:func:`.foreground.foreground_region`), the cloud moved with it; without a ground plane the
+        size (and so the aspect) follows the region's box, smoothed. No region: the estimate as it is."""
+        cfg, ref = self.config, self.reference
+        assert ref is not None and self.size is not None and self.aspect is not None
+        layout = self.layout if cfg.refine.layout else IDENTITY
+        if layout is None:
+            return estimate, False
+        region, _ = foreground_region(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px,
+                                      gain, ref.p_detect / ref.p_square, layout, window=cfg.refine.window,
+                                      factor=cfg.refine.factor, min_part=cfg.refine.min_part)
+        if region is None:
+            return estimate, False
+        self.pf.particles[:, :2] += region[:2] - estimate[:2]  # the cloud moves with the estimate
+        if cfg.size.mode == "geometry" and not self.size.has_distance and cfg.refine.size_rate > 0:
+            a = cfg.refine.size_rate
+            wh = (1.0 - a) * estimate[2:4] + a * region[2:4]
+            self.pf.particles[:, 2:4] *= wh / estimate[2:4]
+            self.size.area0 = float(wh[0] * wh[1])  # S' without a plane (eq. 9 with Z = Z_0)
+            self.aspect.ratio = float(wh[1] / wh[0])
+        return self.pf.estimate(), True
 
     def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
         cfg = self.config
@@ -216,7 +249,8 @@ class ColorPfTracker(TrackerBase):
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
         likelihood = m.likelihood
         background, gain = self.background_image, 1.0
-        if background is not None and (cfg.likelihood.foreground > 0 or cfg.neighbour_check):
+        uses_foreground = cfg.likelihood.foreground > 0 or cfg.neighbour_check or cfg.refine.mode == "foreground"
+        if background is not None and uses_foreground:
             gain = brightness_gain(image, background)  # a uniform illumination change is not foreground
             if scene_changed(image, background, cfg.reference.threshold, gain):
                 self._say(SCENE_NOTICE)
@@ -239,10 +273,14 @@ class ColorPfTracker(TrackerBase):
         self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
         self.pf.weigh(lambda _: likelihood)
         estimate = self.pf.estimate()  # eq. (6)
+        placed = False  # refine.mode = "foreground" placed the estimate on a region consistent with the target
         if cfg.refine.mode == "meanshift" and not weigh_only:
             refined, _ = mean_shift(self.model, image, estimate, working, cfg.refine.iterations)
             self.pf.particles[:, :2] += refined[:2] - estimate[:2]  # the cloud moves with the estimate
             estimate = self.pf.estimate()
+        elif (cfg.refine.mode == "foreground" and not weigh_only and background is not None
+              and self.reference.p_square > 0):
+            estimate, placed = self._refine_foreground(image, background, gain, estimate)
         if not weigh_only:
             s = cfg.motion.smoothing
             self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
@@ -286,6 +324,8 @@ class ColorPfTracker(TrackerBase):
                                           cfg.reference.open_px, gain)
                 if shares.max() > self.reference.p_detect / self.reference.p_square:
                     status = "predicted"
+        elif placed and cfg.refine.keeps_track:
+            status = "predicted"  # the foreground region places the target: not a miss towards "lost"
         else:
             self.misses += 1
             status = "lost" if self.misses >= cfg.lost_after else "predicted"

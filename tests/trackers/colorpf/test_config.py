@@ -15,18 +15,19 @@ def test_paper_overrides_change_only_the_default_departures():
     assert paper.likelihood.foreground == 0.0 and not paper.neighbour_check
     assert ours.likelihood.kernel == "epanechnikov" and ours.reference.update_rate > 0
     assert ours.likelihood.foreground > 0 and ours.neighbour_check
+    assert paper.refine.mode == "none" and ours.refine.mode == "foreground"
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
-                               neighbour_check=True) == ours
-    assert (ours.likelihood.parts, ours.motion.model, ours.refine.mode, ours.size.no_plane) == (
-        1, "random_walk", "none", "constant")
+                               neighbour_check=True, refine=ours.refine) == ours
+    assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 
 @pytest.mark.parametrize("table, values", [
     ("likelihood", {"kernel": "gaussian"}), ("likelihood", {"parts": 0}), ("likelihood", {"foreground": -1.0}),
     ("reference", {"update_rate": 1.5}), ("reference", {"update_above": -0.1}),
     ("motion", {"model": "ballistic"}), ("motion", {"smoothing": 1.0}),
-    ("refine", {"mode": "camshift"}), ("refine", {"iterations": 0}),
+    ("refine", {"mode": "camshift"}), ("refine", {"iterations": 0}), ("refine", {"factor": 1.0}),
+    ("refine", {"size_rate": 1.5}),
     ("size", {"no_plane": "plane"}),
 ])
 def test_bad_switch_values_are_named(table, values):

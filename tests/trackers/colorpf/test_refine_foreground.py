@@ -1,0 +1,104 @@
+"""The foreground-region refinement (refine.mode = "foreground", colorpf.foreground.foreground_region)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.trackers.colorpf.aspect import AspectEstimate
+from trackreplay.trackers.colorpf.config import AspectConfig, ColorPfConfig
+from trackreplay.trackers.colorpf.foreground import IDENTITY, foreground_region, region_layout
+from trackreplay.trackers.colorpf.size import WeakPerspectiveSize
+from trackreplay.trackers.colorpf.tracker import ColorPfTracker
+
+FIGURE = (105.5, 97.5)  # centre of the figure's pixels, columns 100-111 and rows 80-115 (12 x 36)
+
+
+def _scene():
+    background = np.full((200, 200, 3), 100, np.uint8)
+    image = background.copy()
+    image[80:116, 100:112] = 20
+    return image, background
+
+
+def _region(image, background, estimate, mark_share=0.6, layout=IDENTITY):
+    return foreground_region(image, background, np.asarray(estimate, np.float64), 25.0, 3, 1.0, mark_share, layout)
+
+
+def test_the_estimate_moves_onto_an_offset_blob():
+    image, background = _scene()
+    box, why = _region(image, background, [99.5, 92.0, 12.0, 36.0])  # 6 px left of, 5.5 px above the figure
+    assert why == "" and box is not None
+    assert np.allclose(box[:2], FIGURE, atol=0.01)
+    assert np.allclose(box[2:], [12.0, 36.0], atol=0.1)  # a wholly foreground box: the figure's own size
+
+
+def test_a_blob_merged_with_a_much_larger_region_does_not_move_the_estimate():
+    image, background = _scene()
+    image[70:120, 112:190] = 30  # a car against the figure's right side: one component
+    box, why = _region(image, background, [99.5, 92.0, 12.0, 36.0])
+    assert box is None and why
+
+
+def test_a_blob_beside_a_larger_separate_region_does_not_move_the_estimate():
+    image, background = _scene()
+    image[80:116, 115:175] = 30  # a car 3 px to the figure's right, a component of its own
+    box, why = _region(image, background, [99.5, 92.0, 12.0, 36.0])
+    assert box is None and why
+
+
+def test_a_region_of_another_size_or_share_does_not_move_the_estimate():
+    image, background = _scene()
+    assert _region(image, background, [99.5, 92.0, 30.0, 90.0])[0] is None  # far smaller than the box
+    assert _region(image, background, [99.5, 92.0, 12.0, 36.0], mark_share=0.3)[0] is None  # share 1 vs 0.3
+
+
+def test_the_layout_places_the_box_as_the_mark_was_on_its_foreground():
+    # at the mark only the upper 20 of 36 rows differed from the floor (dark legs on a dark road)
+    mask = np.zeros((36, 12), bool)
+    mask[:20] = True
+    layout = region_layout(mask, np.array([100, 80]), np.array([*FIGURE, 12.0, 36.0]))
+    image, background = _scene()
+    image[100:116, 100:112] = 100  # now too: only the upper 20 rows are foreground
+    box, why = _region(image, background, [99.5, 92.0, 12.0, 36.0], mark_share=20 / 36, layout=layout)
+    assert why == "" and np.allclose(box, [*FIGURE, 12.0, 36.0], atol=0.01)
+    assert region_layout(np.zeros((5, 5), bool), np.zeros(2), np.array([2.0, 2.0, 5.0, 5.0])) is None
+
+
+def _tracker(has_plane: bool):
+    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    tracker.reference = SimpleNamespace(p_detect=432, p_square=720)  # mark share 0.6
+    tracker.layout = IDENTITY
+    tracker.size = WeakPerspectiveSize(0.2, 432.0, 10.0 if has_plane else float("nan"))
+    tracker.aspect = AspectEstimate(AspectConfig(), 3.0)
+    rng = np.random.default_rng(1)
+    tracker.pf.particles = np.column_stack([rng.normal(99.5, 2.0, 40), rng.normal(92.0, 2.0, 40),
+                                            np.full(40, 12.0), np.full(40, 36.0)])
+    return tracker
+
+
+def test_the_cloud_moves_with_the_estimate_and_the_size_follows_only_without_a_plane():
+    image, background = _scene()
+    for has_plane in (True, False):
+        tracker = _tracker(has_plane)
+        before = tracker.pf.particles.copy()
+        estimate = tracker.pf.estimate()
+        refined, placed = tracker._refine_foreground(image, background, 1.0, estimate)
+        assert placed and np.allclose(refined[:2], FIGURE, atol=0.01)
+        assert np.allclose(tracker.pf.particles[:, :2] - before[:, :2], refined[:2] - estimate[:2])
+        assert np.allclose(refined[2:], [12.0, 36.0], atol=0.1)  # the figure's size is the box's here
+    tracker = _tracker(False)
+    image[80:116, 100:112] = 100
+    image[86:116, 101:111] = 20  # a figure of 10 x 30: without a plane the box moves 20 % towards it
+    refined, placed = tracker._refine_foreground(image, background, 1.0, tracker.pf.estimate())
+    assert placed and np.allclose(refined[2:], [0.8 * 12 + 0.2 * 10, 0.8 * 36 + 0.2 * 30], atol=0.1)
+    assert np.isclose(tracker.size.area0, refined[2] * refined[3]) and np.isclose(tracker.aspect.ratio,
+                                                                                  refined[3] / refined[2])
+
+
+def test_without_a_background_nothing_moves(scene_log):
+    log = scene_log("colorpf-illumination")
+    runs = [replay(ReplayRequest(log=log, tracker="colorpf", seed=0,
+                                 config={"reference": {"background": "none"}, "refine": {"mode": mode}}))
+            for mode in ("none", "foreground")]
+    assert runs[0].digest == runs[1].digest
