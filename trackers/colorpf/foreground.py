@@ -47,6 +47,11 @@ SCENE_CHANGED = 0.5  # the background no longer describes a frame that differs f
 
 
 def _grey(image: np.ndarray) -> np.ndarray:
+    """float32 mean of the channels."""
+    if image.ndim == 3 and image.dtype == np.uint8 and image.shape[-1] == 3:
+        # The float32 channel sum of uint8 is an exact integer (<= 765): summed as integers, then
+        # divided, it is the same number as image.astype(np.float32).mean(axis=-1), ~8x cheaper.
+        return (image[..., 0].astype(np.uint16) + image[..., 1] + image[..., 2]).astype(np.float32) / np.float32(3)
     return image.astype(np.float32).mean(axis=-1) if image.ndim == 3 else image.astype(np.float32)
 
 

@@ -48,3 +48,11 @@ def test_a_changed_scene_is_noticed_and_a_brightness_step_is_not():
     rng = np.random.default_rng(0)
     moved = rng.integers(0, 256, background.shape, dtype=np.uint8)  # another view altogether
     assert scene_changed(moved, background, 25.0, brightness_gain(moved, background))
+
+
+def test_grey_is_the_float32_mean_of_the_channels():
+    from trackreplay.trackers.colorpf.foreground import _grey
+
+    image = np.random.default_rng(3).integers(0, 256, (37, 53, 3), dtype=np.uint8)
+    for view in (image, image[::4, ::3], image[5:20, 7:40]):
+        assert np.array_equal(_grey(view), view.astype(np.float32).mean(axis=-1))
