@@ -38,9 +38,25 @@ def coarse_counts(pixels: np.ndarray, bin_: int) -> np.ndarray:
 
 
 def smooth3(values: np.ndarray, sigma: float) -> np.ndarray:
-    """Separable Gaussian smoothing of a 3-D array (``sigma`` in cells, zero outside the array)."""
+    """Separable Gaussian smoothing of a 3-D array (``sigma`` in cells, zero outside the array).
+
+    Computed over the non-zero cells' bounding box widened by the kernel's radius only (a colour
+    histogram fills a small part of its cube): every cell outside it is 0 and every cell inside gets
+    the same sums in the same order as over the whole array, since the terms left out are all 0."""
     if sigma <= 0:
         return values
+    r = int(np.ceil(3 * sigma))
+    support = np.nonzero(values)
+    out = np.zeros_like(values)
+    if not len(support[0]):
+        return out
+    box = tuple(slice(max(int(a.min()) - r, 0), min(int(a.max()) + r + 1, n)) for a, n in zip(support, values.shape))
+    out[box] = _smooth3_dense(np.ascontiguousarray(values[box]), sigma)
+    return out
+
+
+def _smooth3_dense(values: np.ndarray, sigma: float) -> np.ndarray:
+    """:func:`smooth3` over the whole array."""
     r = int(np.ceil(3 * sigma))
     k = np.exp(-0.5 * (np.arange(-r, r + 1) / sigma) ** 2)
     k /= k.sum()
@@ -76,9 +92,27 @@ def two_class_table(foreground: np.ndarray, background: np.ndarray, *, smooth: f
     ``background_scale`` puts subsampled background counts back on the foreground's footing
     (e.g. ``stride²`` when every ``stride``-th pixel per axis was counted).
     """
-    fg = smooth3(foreground, smooth)
-    bg = smooth3(background, smooth) * background_scale
-    return (foreground_weight * fg > bg) & (fg > min_count)
+    if smooth <= 0:
+        return (foreground_weight * foreground > background * background_scale) & (foreground > min_count)
+    # Only where the smoothed foreground is non-zero can a cell be "ball": the decision is made over
+    # the foreground's support (+ the kernel radius), the background smoothed over that box widened
+    # by the radius again (every sum the box's cells need, in the same order: the same numbers).
+    r = int(np.ceil(3 * smooth))
+    out = np.zeros(foreground.shape, bool)
+    support = np.nonzero(foreground)
+    if not len(support[0]):
+        return out
+    shape = foreground.shape
+    lo = [max(int(a.min()) - r, 0) for a in support]
+    hi = [min(int(a.max()) + r + 1, n) for a, n in zip(support, shape)]
+    wide_lo, wide_hi = [max(v - r, 0) for v in lo], [min(v + r, n) for v, n in zip(hi, shape)]
+    box = tuple(slice(a, b) for a, b in zip(lo, hi))
+    inner = tuple(slice(a - w, b - w) for a, b, w in zip(lo, hi, wide_lo))
+    fg = _smooth3_dense(np.ascontiguousarray(foreground[box]), smooth)
+    wide = tuple(slice(a, b) for a, b in zip(wide_lo, wide_hi))
+    bg = _smooth3_dense(np.ascontiguousarray(background[wide]), smooth)[inner] * background_scale
+    out[box] = (foreground_weight * fg > bg) & (fg > min_count)
+    return out
 
 
 def coarse_index(pixels: np.ndarray, bin_: int) -> np.ndarray:

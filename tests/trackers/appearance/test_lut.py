@@ -33,6 +33,21 @@ def test_smoothing_keeps_mass_inside_and_spreads_it():
     assert smooth3(v, 0.0) is v
 
 
+def test_smoothing_over_the_support_is_the_smoothing_over_the_whole_cube():
+    # smooth3 works on the non-zero cells' box (+ the kernel radius): the same numbers, bit for bit,
+    # as the whole cube, near the cube's edges too; and nothing outside the widened box.
+    from trackreplay.trackers.appearance.lut import _smooth3_dense
+
+    rng = np.random.default_rng(4)
+    for centre, spread in (((32, 30, 34), (6, 3, 2)), ((1, 62, 5), (2, 2, 9)), ((20, 20, 20), (40, 40, 40))):
+        v = np.zeros((64, 64, 64))
+        idx = tuple(np.clip(rng.normal(centre, spread, (300, 3)).astype(int), 0, 63).T)
+        np.add.at(v, idx, rng.integers(1, 40, 300).astype(float))
+        for sigma in (0.7, 1.0, 2.0):
+            assert np.array_equal(smooth3(v, sigma), _smooth3_dense(v, sigma))
+    assert not smooth3(np.zeros((8, 8, 8)), 1.0).any()
+
+
 def test_two_classes_from_samples_with_the_count_prior():
     ball = np.tile(np.array([[240, 128, 128]], np.uint8), (50, 1))  # white
     sky = np.tile(np.array([[150, 160, 100]], np.uint8), (5000, 1))
@@ -71,3 +86,18 @@ def test_bin_one_lookup_is_the_full_table_and_bad_bins_are_refused():
     for bad in (0, 3):
         with pytest.raises(ValueError, match="power of 2"):
             ColourLut(np.zeros((1, 1, 1), bool), bad)
+
+
+def test_the_decision_over_the_foreground_support_is_the_whole_cube_decision():
+    from trackreplay.trackers.appearance.lut import _smooth3_dense, two_class_table
+
+    rng = np.random.default_rng(5)
+    for _ in range(10):
+        fg, bg = np.zeros((64, 64, 64)), np.zeros((64, 64, 64))
+        c = rng.integers(0, 64, 3)
+        np.add.at(fg, tuple(np.clip(rng.normal(c, 4, (40, 3)).astype(int), 0, 63).T), 3.0)
+        np.add.at(bg, tuple(np.clip(rng.normal(c, 12, (2000, 3)).astype(int), 0, 63).T), 1.0)
+        sf, sb = _smooth3_dense(fg, 1.0), _smooth3_dense(bg, 1.0) * 16.0
+        expected = (1000.0 * sf > sb) & (sf > 0.02)
+        got = two_class_table(fg, bg, smooth=1.0, foreground_weight=1000.0, min_count=0.02, background_scale=16.0)
+        assert np.array_equal(got, expected)
