@@ -237,7 +237,10 @@ class RefineConfig:
     # box's, no larger moving region beside it: the neighbour check's condition) the estimate's centre
     # moves to it, the particle cloud with it, and without a ground plane the size follows it,
     # w, h <- (1 - size_rate) (w, h) + size_rate (w_r, h_r) (the aspect with it). Such a frame is
-    # "predicted" at worst, not a miss towards "lost" (`keeps_track`). Otherwise the estimate is the
+    # "predicted" at worst, not a miss towards "lost" (`keeps_track`), for at most `keep_frames` such
+    # frames in a row since the last "measured" one; once "lost" there is no refinement (a region is
+    # no re-acquisition: after a loss the foreground cue would pull the cloud onto any other walker,
+    # and the region would keep a track on them "predicted" indefinitely). Otherwise the estimate is the
     # PF's, untouched. Default: otb_crossing AUC 0.516 -> 0.617, synthetic scenes level or better
     # (docs/colorpf.md); window, factor, min_part, size_rate are not tuned (window 2 / factor 3 /
     # size_rate 0.1-0.4 measured within 0.01 on otb_crossing).
@@ -249,12 +252,15 @@ class RefineConfig:
     size_rate: float = 0.2
     layout: bool = True
     keeps_track: bool = True
+    keep_frames: int = 30
 
     def __post_init__(self) -> None:
         if self.mode not in REFINES:
             raise ValueError(f"refine.mode must be one of {', '.join(REFINES)}, not {self.mode!r}")
         if self.iterations < 1:
             raise ValueError("refine.iterations must be >= 1")
+        if self.keep_frames < 0:
+            raise ValueError("refine.keep_frames must be >= 0")
         if self.window < 1 or self.factor <= 1 or not 0 <= self.min_part < 1 or not 0 <= self.size_rate <= 1:
             raise ValueError("refine.window >= 1, refine.factor > 1, 0 <= refine.min_part < 1, "
                              "0 <= refine.size_rate <= 1")

@@ -91,6 +91,7 @@ class ColorPfTracker(TrackerBase):
         self.aspect: AspectEstimate | None = None
         self.started = False
         self.misses = 0
+        self.placed_run = 0  # refine.mode = "foreground": placed frames in a row since the last measured one
         self.side = 0.0
         self.initial_wh = np.zeros(2)
         self._marked_image: np.ndarray | None = None
@@ -279,7 +280,7 @@ class ColorPfTracker(TrackerBase):
             self.pf.particles[:, :2] += refined[:2] - estimate[:2]  # the cloud moves with the estimate
             estimate = self.pf.estimate()
         elif (cfg.refine.mode == "foreground" and not weigh_only and background is not None
-              and self.reference.p_square > 0):
+              and self.reference.p_square > 0 and self.misses < cfg.lost_after):  # no re-acquisition by region
             estimate, placed = self._refine_foreground(image, background, gain, estimate)
         if not weigh_only:
             s = cfg.motion.smoothing
@@ -315,7 +316,7 @@ class ColorPfTracker(TrackerBase):
                 and confidence >= cfg.reference.update_above):
             self.template.blend(image, estimate, t_rate)
         if confidence >= cfg.measured_fraction:
-            status, self.misses = "measured", 0
+            status, self.misses, self.placed_run = "measured", 0, 0
             if cfg.neighbour_check and background is not None and self.reference.p_square > 0 and not weigh_only:
                 # a neighbour holds more foreground than the marked box did: the estimate is on or against
                 # a larger moving region; its colour matches, its position is not vouched for. Only the
@@ -324,7 +325,8 @@ class ColorPfTracker(TrackerBase):
                                           cfg.reference.open_px, gain)
                 if shares.max() > self.reference.p_detect / self.reference.p_square:
                     status = "predicted"
-        elif placed and cfg.refine.keeps_track:
+        elif placed and cfg.refine.keeps_track and self.placed_run < cfg.refine.keep_frames:
+            self.placed_run += 1
             status = "predicted"  # the foreground region places the target: not a miss towards "lost"
         else:
             self.misses += 1

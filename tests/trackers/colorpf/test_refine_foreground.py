@@ -102,3 +102,48 @@ def test_without_a_background_nothing_moves(scene_log):
                                  config={"reference": {"background": "none"}, "refine": {"mode": mode}}))
             for mode in ("none", "foreground")]
     assert runs[0].digest == runs[1].digest
+
+
+def test_a_region_keeps_no_lost_track_on_another_walker():
+    # The target walks out of the picture past a second walker standing at the exit. Colour loses
+    # the target; the foreground cue then pulls the cloud onto the other walker, where a region of
+    # the target's size would place the box and keep the track "predicted" for as long as they stay.
+    # A region keeps a track only for refine.keep_frames frames since the last measured one and
+    # never re-acquires a lost one: the track goes lost and stays lost.
+    from trackreplay.recorder.synth.colorpf import (OTHER_COLOURS, TARGET_COLOURS, Camera, ColorPfSceneConfig,
+                                                    draw_walker, render_background)
+    from trackreplay.schemas.records import InitRegion
+    from trackreplay.trackers.frame import Frame
+
+    scene = ColorPfSceneConfig(width=480, height=320, seed=0)
+    cam, rng = Camera.of(scene), np.random.default_rng(0)
+    background = render_background(scene, cam, rng)
+    empty, walk, frames_n = 8, 110, 200
+    images, target_boxes = [], []
+    for i in range(frames_n):
+        image, box = background.copy(), None
+        k = i - empty
+        if k >= 0:
+            draw_walker(image, cam, np.array([-5.0, 11.8]), np.array([0.0, -1.0]), 0.0, OTHER_COLOURS)
+            if k <= walk:
+                t = k / walk
+                box = draw_walker(image, cam, np.array([-9.0 * t, 11.0]), np.array([-1.0, 0.0]), k / 30, TARGET_COLOURS)
+        noisy = image + rng.standard_normal(image.shape).astype(np.float32) * 2.0
+        images.append(np.clip(np.round(noisy), 0, 255).astype(np.uint8))
+        target_boxes.append(box)
+    x0, y0, x1, y1 = target_boxes[empty]
+    mark = InitRegion(empty, 0, (x0 + x1 - 1) / 2, (y0 + y1 - 1) / 2, x1 - x0, y1 - y0, "target")
+    cfg = ColorPfConfig()
+    tracker = ColorPfTracker(cfg, np.random.default_rng(0))
+    statuses = {}
+    for i, image in enumerate(images):
+        states = tracker.step(Frame(index=i, t_ns=i * 33_333_333, image=image, all_hints=(mark,),
+                                    hints=(mark,) if i == empty else ()))
+        if states:
+            statuses[i] = states[0].status
+    gone = next(i for i in range(empty, frames_n) if target_boxes[i] is None)
+    after = [statuses[i] for i in range(gone, frames_n)]
+    bound = cfg.lost_after + cfg.refine.keep_frames
+    assert "lost" in after[:bound + 1]
+    first = after.index("lost")
+    assert set(after[first:]) == {"lost"}, after  # lost, and not taken back onto the other walker
