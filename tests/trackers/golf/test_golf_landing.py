@@ -125,12 +125,19 @@ def test_measurement_jacobian_by_finite_differences():
     assert not H[:, 3:].any()
 
 
-def test_advance_reports_the_landing_once_and_bounces():
+def falling(height: float) -> tuple[BallisticEkf, PtzCamera]:
+    """A drag-free filter started 40 m out, then set falling from ``height`` (10 m/s on, 5 m/s down),
+    armed for a landing; and the camera that saw it."""
     ekf = BallisticEkf(EkfConfig(drag_k=0.0), D / 2)
     cam = follow(np.array([40.0, 0.0, 3.0]))
     ekf.update(cam, cam.project_points(np.array([[40.0, 0.0, 3.0]]))[0], 40.0, 0.05)
-    ekf.kf.x = np.array([40.0, 0.0, 3.0, 10.0, 0.0, -5.0])
+    ekf.kf.x = np.array([40.0, 0.0, height, 10.0, 0.0, -5.0])
     ekf.armed = True
+    return ekf, cam
+
+
+def test_advance_reports_the_landing_once_and_bounces():
+    ekf, cam = falling(3.0)
     landings = [ekf.advance(1 / FPS) for _ in range(30)]
     hits = [k for k, p in enumerate(landings) if p is not None]
     assert len(hits) == 1 and not ekf.armed
@@ -205,11 +212,7 @@ def test_a_question_to_the_filter_does_not_restart_it():
 
 
 def test_the_landing_flag_is_cleared_only_when_the_filter_forgets():
-    ekf = BallisticEkf(EkfConfig(drag_k=0.0), D / 2)
-    cam = follow(np.array([40.0, 0.0, 3.0]))
-    ekf.update(cam, cam.project_points(np.array([[40.0, 0.0, 3.0]]))[0], 40.0, 0.05)
-    ekf.kf.x = np.array([40.0, 0.0, 0.2, 10.0, 0.0, -5.0])
-    ekf.armed = True
+    ekf, cam = falling(0.2)
     while ekf.advance(1 / FPS) is None:
         pass
     assert ekf.landed

@@ -74,6 +74,13 @@ def marked_sequence(backdrop, draw_ball, positions):
             for k, p in enumerate(positions)]
 
 
+def assert_followed(rows, path):
+    """Every row ``measured`` within 3 px of the ball."""
+    assert [s.status for s in rows] == ["measured"] * len(path)
+    for s, (x, y) in zip(rows, path):
+        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+
+
 def track(frames, **particles):
     """The golf tracker's rows over ``frames`` with the default config, ``particles`` fields replaced."""
     cfg = GolfConfig()
@@ -88,10 +95,7 @@ def test_a_followed_ball_that_stops_in_the_picture_is_still_measured(backdrop, d
     # ball stopped). The mixed state's stopped samples are already where it is: every frame measured.
     path = [(400.0 + 25 * k, 360.0) for k in range(10)] + [(625.0, 360.0)] * 10
     frames = marked_sequence(backdrop, draw_ball, path)
-    rows = track(frames)
-    assert [s.status for s in rows] == ["measured"] * 20
-    for s, (x, y) in zip(rows, path):
-        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+    assert_followed(track(frames), path)
     # Constant-velocity samples alone run on past it: predicted (then lost) as soon as it stops,
     # and found again only by the re-confirmation of a lost ball.
     moving_only = [s.status for s in track(frames, stop_share=0.0)]
@@ -106,10 +110,7 @@ def test_a_ball_that_bounces_is_followed_by_the_samples_drawn_around_it(backdrop
     path = [(100.0 + 6 * k, 40.0 + 8 * k) for k in range(10)]
     path += [(100.0 + 6 * k, 112.0 - 8 * (k - 9)) for k in range(10, 20)]
     frames = marked_sequence(backdrop, draw_ball, path)
-    rows = track(frames)
-    assert [s.status for s in rows] == ["measured"] * 20
-    for s, (x, y) in zip(rows, path):
-        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+    assert_followed(track(frames), path)
     # Without them the weights alone cannot turn a cloud that has no sample moving up: one frame
     # after the bounce the ball is off the prediction, and in a fixed view it is not taken back.
     weights_only = [s.status for s in track(frames, detection_share=0.0)]
