@@ -72,3 +72,13 @@ def test_inject_replaces_a_share_of_the_particles_around_a_detection() -> None:
     again.initialise(np.zeros(2), 1.0)
     again.inject(0.1, np.array([50.0, -20.0]), 0.5)
     assert np.array_equal(again.particles, pf.particles)  # the caller's generator: same seed, same draws
+
+
+def test_squared_deviations_are_the_broadcast_ones():
+    from trackreplay.trackers.filters.particles import squared_deviations
+
+    p = np.random.default_rng(2).normal(size=(500, 4))
+    mean = p.mean(axis=0)
+    assert np.array_equal(squared_deviations(p, mean), (p - mean) ** 2)
+    assert np.array_equal(squared_deviations(p[:, 1:3], mean[1:3]), (p[:, 1:3] - mean[1:3]) ** 2)  # a column view
+    assert np.array_equal(squared_deviations(p.T.copy().T, mean), (p - mean) ** 2)  # column-major

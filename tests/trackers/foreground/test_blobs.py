@@ -83,3 +83,25 @@ def test_unmeasured_blobs_have_no_covariance():
     m[10:15, 30:35] = 1
     blobs = measure_blobs(m, min_area=10)
     assert np.isnan(blobs.covariance[0]).all() and np.isfinite(blobs.covariance[1]).all()
+
+
+def test_chain_length_is_the_same_on_short_and_long_contours():
+    # Contours up to SHORT_CONTOUR points are walked in Python, longer ones with numpy: one formula.
+    import cv2
+
+    from trackreplay.trackers.foreground import blobs
+
+    for radius in (2, 5, 9, 20):
+        mask = np.zeros((60, 60), np.uint8)
+        cv2.circle(mask, (30, 30), radius, 1, -1)
+        contour = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)[0][0][:, 0, :]
+        short, long_ = contour[:blobs.SHORT_CONTOUR], contour  # the long one crosses the threshold for r >= 9
+        saved = blobs.SHORT_CONTOUR
+        try:
+            blobs.SHORT_CONTOUR = 0  # numpy everywhere
+            by_numpy = chain_length(short), chain_length(long_)
+            blobs.SHORT_CONTOUR = 10**9  # Python everywhere
+            by_python = chain_length(short), chain_length(long_)
+        finally:
+            blobs.SHORT_CONTOUR = saved
+        assert by_numpy == by_python
