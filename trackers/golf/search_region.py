@@ -43,6 +43,20 @@ def search_region(centre: np.ndarray, spread: np.ndarray, diameter: float, width
     return SearchRegion(box, np.asarray(centre, dtype=np.float64), spread)
 
 
+def reaching(region: SearchRegion, point: np.ndarray, reach: float, width: int, height: int) -> SearchRegion:
+    """``region`` grown (centre and spread kept) to also hold the square of half-side ``reach``
+    around ``point``, within the frame: where a tentative track (:mod:`.validate`) looks next."""
+    x0, y0, w, h = region.box.tolist()
+    if not all(math.isfinite(v) for v in (x0, y0, w, h, *point.tolist(), reach)):
+        return region
+    px, py = float(point[0]), float(point[1])
+    lo_x, lo_y = max(0.0, min(x0, _floor(px - reach))), max(0.0, min(y0, _floor(py - reach)))
+    hi_x, hi_y = min(float(width), max(x0 + w, _ceil(px + reach))), min(float(height), max(y0 + h, _ceil(py + reach)))
+    if lo_x == x0 and lo_y == y0 and hi_x == x0 + w and hi_y == y0 + h:
+        return region
+    return SearchRegion(np.array([lo_x, lo_y, hi_x - lo_x, hi_y - lo_y]), region.centre, region.spread)
+
+
 def _clip(v: float, lo: float, hi: float) -> float:
     """``np.clip`` of one number: ``min(max(v, lo), hi)``, NaN kept."""
     return v if v != v else min(max(v, lo), hi)

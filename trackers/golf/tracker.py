@@ -42,7 +42,7 @@ from trackreplay.trackers.golf.particles import (DIM, ParticleSet, launch, likel
                                                  with_camera_motion)
 from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
-from trackreplay.trackers.golf.search_region import search_region
+from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, previous_in_pose)
 from trackreplay.trackers.foreground.silhouette import silhouette
@@ -110,8 +110,11 @@ class GolfTracker(TrackerBase):
             return []
         if camera is not None and prev_camera is not None and reinit.kind != "start":
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
+            self.validator.follow_camera(pose_homography(prev_camera, camera))
         diameter = self.targets.diameter
         search = search_region(*self._moments(0), diameter, width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
+        if (ahead := self.validator.next_point(diameter, scale)) is not None:  # ours: where a jump's evidence will be
+            search = reaching(search, *ahead, width, height)
         sil, ycc = lut_silhouette(frame.image, search.box, self.luts, self.lut_name)  # §2.1 I_c
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames

@@ -34,10 +34,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackreplay.trackers.geometry.homography import apply_homography
 from trackreplay.trackers.golf.blobs import GatedBlobs, roundness, shape_tolerance
 from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
@@ -91,15 +92,29 @@ def track_fit(areas: np.ndarray, rounds: np.ndarray, cfg: BlobConfig, scale: flo
 
 @dataclass
 class Tentative:
-    """One unconfirmed track: (frame, x, y) rows and the (area, roundness) of each blob."""
+    """One unconfirmed track: (frame, x, y) rows as each frame saw them, the (area, roundness) of
+    each blob, and the rows' points as the latest pose sees them (``in_view``: the camera's own
+    motion since taken out, :meth:`Validator.follow_camera`)."""
 
     rows: list[tuple[int, float, float]]
     shapes: list[tuple[float, float]]
+    in_view: list[tuple[float, float]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        if not self.in_view:
+            self.in_view = [row[1:] for row in self.rows]
+
+    def add(self, index: int, point: tuple[float, float], shape: tuple[float, float]) -> None:
+        self.rows.append((index, *point))
+        self.in_view.append(point)
+        self.shapes.append(shape)
 
     def expected(self) -> np.ndarray:
-        """Constant-velocity extrapolation of its last two points to the next frame (its last point when it has one)."""
-        last = np.array(self.rows[-1][1:])
-        return last + (last - np.array(self.rows[-2][1:])) if len(self.rows) > 1 else last
+        """Constant-velocity extrapolation of its last two points to the next frame (its last point
+        when it has one), in the latest pose's pixels: the ball's motion against the world, so a
+        camera sweeping after it does not bend the track."""
+        last = np.array(self.in_view[-1])
+        return last + (last - np.array(self.in_view[-2])) if len(self.in_view) > 1 else last
 
 
 SCENERY_PLACES = 4
@@ -126,6 +141,28 @@ class Validator:
         self.tracks = []
         self.best = None
         self.scenery = set()
+
+    def follow_camera(self, homography: np.ndarray) -> None:
+        """The pose changed by ``homography`` (last frame's pixels -> this frame's): the tentative
+        tracks' points are carried along, so their extrapolation (:meth:`Tentative.expected`) is
+        the ball's own motion, not the sweep of a camera following it."""
+        if not self.tracks:
+            return
+        points = apply_homography(homography, np.array([p for t in self.tracks for p in t.in_view], float))
+        start = 0
+        for track in self.tracks:
+            n = len(track.in_view)
+            track.in_view = [(float(x), float(y)) for x, y in points[start:start + n]]
+            start += n
+
+    def next_point(self, diameter: float, scale: float) -> tuple[np.ndarray, float] | None:
+        """Where the longest tentative track expects its next blob, and how far from there it may
+        be (None: no track): the search region must reach it, or the evidence it waits for is
+        never looked at (a ball hopping out of the samples' reach)."""
+        if self.best is None:
+            return None
+        reach = self.cfg.confirm_px if len(self.best.rows) > 1 else self.cfg.confirm_first_step_px
+        return self.best.expected(), reach * scale + diameter
 
     def gate(self, spread: np.ndarray, diameter: float, scale: float) -> tuple[float, float]:
         """``(s, radius)``: the motion scale and the gate radius for this frame."""
@@ -260,8 +297,7 @@ class Validator:
             if dist[j] <= reach:
                 free[j] = False
                 k = int(ok[j])
-                track.rows.append((index, float(c[k, 0]), float(c[k, 1])))
-                track.shapes.append((float(gated.blobs.area[k]), float(rounds[k])))
+                track.add(index, (float(c[k, 0]), float(c[k, 1])), (float(gated.blobs.area[k]), float(rounds[k])))
                 kept.append((track, k))
         starts = ok[free]
         if border is not None and starts.size:

@@ -1,0 +1,72 @@
+"""The validation stage's tentative tracks under a moving camera, and the search region that reaches them."""
+
+import cv2
+import numpy as np
+
+from trackreplay.trackers.foreground.blobs import measure_blobs
+from trackreplay.trackers.golf.blobs import GatedBlobs
+from trackreplay.trackers.golf.config import BlobConfig, SearchConfig, ValidateConfig
+from trackreplay.trackers.golf.search_region import reaching, search_region
+from trackreplay.trackers.golf.validate import Validator
+
+SIZE = (1280, 720)
+
+
+def disc_at(x: float, y: float, radius: int = 4) -> GatedBlobs:
+    mask = np.zeros(SIZE[::-1], np.uint8)
+    cv2.circle(mask, (int(round(x)), int(round(y))), radius, 1, -1)
+    blobs = measure_blobs(mask)
+    return GatedBlobs(blobs, np.zeros(len(blobs.area), np.int64), -1, np.array([float(blobs.area[0]), 0.9]), 1.0)
+
+
+def shift(dx: float) -> np.ndarray:
+    return np.array([[1.0, 0.0, dx], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+
+
+def verdicts(pans: list[float], follow: bool) -> list[str]:
+    """A ball still against the world while the camera sweeps ``pans[k]`` px right before frame k
+    (slowing down: the ball's image steps shrink 60, 30, 10 px). The track is lost (every sighting
+    is tentative evidence); ``follow``: the validator is told each pose change."""
+    validator = Validator(ValidateConfig(), BlobConfig())
+    x, out = 700.0, []
+    for k, pan in enumerate(pans):
+        x -= pan
+        if follow and k:
+            validator.follow_camera(shift(-pan))
+        check = validator.validate(index=k, gated=disc_at(x, 300.0), predicted=np.array([640.0, 360.0]),
+                                   spread=np.full(2, 50.0), diameter=9.0, size=SIZE, scale=1.0, lost=True)
+        out.append(check.verdict)
+    return out
+
+
+def test_tentative_tracks_follow_the_camera_sweep():
+    pans = [0.0, 60.0, 30.0, 10.0]
+    assert verdicts(pans, follow=True)[2] == "confirmed"  # still against the world: three sightings agree
+    # Extrapolated in raw image pixels the slowing sweep bends the track 30 px off (> 12 px + D):
+    assert "confirmed" not in verdicts(pans, follow=False)[:3]
+
+
+def test_follow_camera_carries_the_points_not_the_rows_as_seen():
+    validator = Validator(ValidateConfig(), BlobConfig())
+    for k, x in enumerate((500.0, 520.0)):
+        validator.validate(index=k, gated=disc_at(x, 200.0), predicted=np.array([640.0, 360.0]), spread=np.full(2, 50.0),
+                           diameter=9.0, size=SIZE, scale=1.0, lost=True)
+    validator.follow_camera(shift(-15.0))
+    track = validator.best
+    assert [r[1] for r in track.rows] == [500.0, 520.0]  # as each frame saw them (shown, velocity)
+    assert np.allclose([p[0] for p in track.in_view], [485.0, 505.0])
+    point, reach = validator.next_point(9.0, 1.0)
+    assert np.allclose(point, [525.0, 200.0]) and reach == ValidateConfig().confirm_px + 9.0
+
+
+def test_search_region_reaches_the_next_tentative_point():
+    cfg = SearchConfig()
+    region = search_region(np.array([640.0, 400.0]), np.array([10.0, 10.0]), 8.0, *SIZE, 1.0, cfg)
+    x0, y0, w, h = region.box
+    grown = reaching(region, np.array([640.0, 200.0]), 20.0, *SIZE)
+    gx0, gy0, gw, gh = grown.box
+    assert gy0 == 180.0 and gy0 + gh == y0 + h and gx0 == x0 and gw == w  # grown up to hold 200 +- 20, nothing else
+    assert grown.centre is region.centre and grown.spread is region.spread  # the gate is still the samples'
+    assert reaching(region, np.array([640.0, 400.0]), 5.0, *SIZE) is region  # already inside: unchanged
+    edge = reaching(region, np.array([5.0, 5.0]), 40.0, *SIZE)
+    assert edge.box[0] == 0.0 and edge.box[1] == 0.0  # clipped to the frame
