@@ -149,6 +149,31 @@ def run_metrics(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray, landin
     return m, frames
 
 
+SPECK_PX = 3.0  # a ball narrower than this is a "speck": a few pixels, dimmed by blur and JPEG
+
+
+def miss_causes(frames: pl.DataFrame, gt: pl.DataFrame, start: int | None, shutter: float) -> dict[str, int]:
+    """The visible frames not detected (not `measured` within DETECT_PX), each under its first
+    cause: before the track's first mark; a speck (true diameter < SPECK_PX); a streak (the ball's
+    smear over the shutter, image step x ``shutter``, longer than twice its diameter: its peak
+    contrast below half a still ball's); else other."""
+    truth = gt.sort("frame").with_columns(
+        (pl.col("x").diff().pow(2) + pl.col("y").diff().pow(2)).sqrt().alias("step"))
+    missed = (frames.filter(pl.col("visible") & pl.col("x").is_not_null())
+              .filter(~((pl.col("status") == "measured") & (pl.col("centre_error") <= DETECT_PX)).fill_null(False))
+              .select("frame").join(truth.select("frame", "w", "step"), on="frame", how="left"))
+    first = -1 if start is None else start
+    cause = (pl.when(pl.col("frame") < first).then(pl.lit("before the first mark"))
+             .when(pl.col("w") < SPECK_PX).then(pl.lit("speck"))
+             .when(pl.col("step").fill_null(0.0) * shutter > 2.0 * pl.col("w")).then(pl.lit("streak"))
+             .otherwise(pl.lit("other")))
+    counts = dict(missed.with_columns(cause.alias("cause")).group_by("cause").len().iter_rows())
+    return {c: int(counts.get(c, 0)) for c in MISS_CAUSES}
+
+
+MISS_CAUSES = ("before the first mark", "speck", "streak", "other")
+
+
 def config_for(reinit: bool, lost: str) -> GolfConfig:
     """The default configuration with the landing re-initialisation on/off and the lost search."""
     return GolfConfig(reinit=ReinitConfig(landing=reinit, lost=lost))
@@ -337,6 +362,8 @@ def main() -> int:
             # ball not visible in the 30 frames after the landing (it hops out of the tight shot)
             land = info["landing_frame"]
             out_after = 0 if land is None else gt.filter((pl.col("frame") >= land) & (pl.col("frame") < land + 30) & ~pl.col("visible")).height
+            m = per["R+C"][0]
+            m["misses"] = miss_causes(per["R+C"][1], gt, m["start"], scene.shutter)
             results[key] = {"desc": desc, "info": info, "per": per, "out_after": out_after, "log": log, "gt": gt, "camera": camera}
             m = per["R+C"][0]
             print(f"{key:9s} det5 {pct(m['detected']):>7s}  rmse {fmt(m['rmse']):>7s}  los {fmt(m['los_median'], '.4f')} deg  "
@@ -508,6 +535,24 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
             f"{fmt(m['median'], '.2f')} | {fmt(m['los_median'], '.4f')} / {fmt(m['los_p95'], '.4f')} | "
             f"{reac(m['reacquire'])} | {pct(m['completeness'])} | {m['false_measured']} of {m['hidden']} | `{m['digest'][:16]}` |"
         )
+    L += [
+        "",
+        "**Why the visible frames are missed** (default configuration; each missed frame under its first",
+        f"cause: *before the first mark*: the track cannot start earlier; *speck*: the true ball is under {SPECK_PX:g} px",
+        "wide (far away, before the camera zooms in; dimmed by blur and JPEG to a few levels above the sky);",
+        "*streak*: its smear over the shutter (image step × shutter fraction) is longer than twice its",
+        "diameter, so its peak contrast is under half a still ball's (the launch, the hops); *other*: the rest):",
+        "",
+        "| run | visible | missed | " + " | ".join(MISS_CAUSES) + " | detected from the first mark on |",
+        "|---|---|---|" + "---|" * len(MISS_CAUSES) + "---|",
+    ]
+    for key, r in results.items():
+        m = r["per"]["R+C"][0]
+        causes = m["misses"]
+        missed = sum(causes.values())
+        after = m["visible"] - causes["before the first mark"]
+        L.append(f"| {r['desc']} | {m['visible']} | {missed} | " + " | ".join(str(causes[c]) for c in MISS_CAUSES)
+                 + f" | {pct((after - missed + causes['before the first mark']) / after) if after else '–'} |")
     L += [
         "",
         "Earlier versions on the same logs (issue 10: honest status; numbers as their commits measured them):",

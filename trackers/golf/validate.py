@@ -215,10 +215,13 @@ class Validator:
             border = (size, cfg.entry_margin_px * scale + 2.0 * diameter)
         # A blob seen only with low confidence (off the prediction: a bounce, a hop) starts or extends a
         # tentative track like any other, so that seen on confirm_frames frames it is confirmed; while
-        # the ball's size is known (in the gate, not lost) only if its shape fits the ball's (min_fit).
-        k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only)
-        if found is not None and k >= 0 and blob_fit(gated, k, self.blobs, scale) < cfg.min_fit:
-            k = -1
+        # the ball's size is known (a blob in the gate, not lost) only if its shape fits the ball's (min_fit).
+        evidence = gated.accepted
+        if found is not None:  # a blob whose shape says it is not the ball is no evidence for it
+            evidence = evidence.copy()
+            for j in np.flatnonzero(evidence):
+                evidence[j] = blob_fit(gated, int(j), self.blobs, scale) >= cfg.min_fit
+        k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only, evidence=evidence)
         if k >= 0 and fit >= cfg.confirm_fit:
             if self._ambiguous(gated, k, scale):
                 return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
@@ -271,7 +274,8 @@ class Validator:
         return track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, self.cfg.confirm_min_area_px)
 
     def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float,
-                border: tuple[tuple[int, int], float] | None = None, must_move: bool = False) -> tuple[int, float]:
+                border: tuple[tuple[int, int], float] | None = None, must_move: bool = False,
+                evidence: np.ndarray | None = None) -> tuple[int, float]:
         """Continue the tentative tracks with this frame's shape-accepted blobs (each track takes the
         blob nearest its extrapolation, longest tracks first; a blob extends one track), start a track
         from every blob left over (only within ``border = ((width, height), margin)`` of the picture's
@@ -279,9 +283,10 @@ class Validator:
         track that can be confirmed (``confirm_frames`` long, its track fit; of several, the one whose
         blobs' area is nearest the targets'; -1: none) and that fit.
         ``must_move``: the view is fixed, so a track that stays put over its confirm frames (less
-        than a ball diameter) is part of the scene, not a ball in play, and is not confirmed."""
+        than a ball diameter) is part of the scene, not a ball in play, and is not confirmed.
+        ``evidence``: the blobs that may extend or start a track (default: the shape-accepted ones)."""
         cfg = self.cfg
-        ok = np.flatnonzero(gated.accepted)
+        ok = np.flatnonzero(gated.accepted if evidence is None else evidence)
         c = gated.blobs.centroid
         rounds = roundness(gated.blobs)
         live = sorted((t for t in self.tracks if index - t.rows[-1][0] == 1), key=lambda t: -len(t.rows))

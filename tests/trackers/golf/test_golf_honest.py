@@ -233,13 +233,13 @@ def test_fixed_camera_many_still_white_things_do_not_crowd_out_the_ball(backdrop
     # back in from the top beside them. Still tracks are scenery in a fixed view: they have places
     # of their own, so the ball's new track is not crowded out and is confirmed.
     path = [(640.0, 150.0 - 10 * k) for k in range(16)]
-    back = [(696.0, 0.0 + 12 * k) for k in range(16)]
+    back = [(700.0, 0.0 + 12 * k) for k in range(16)]
     positions = [p if p[1] > -5 else None for p in path] + [None] * 8 + back
-    still = [(590.0 + 21 * (j % 5), 30.0 + 22 * (j // 5)) for j in range(20)]
+    still = [(580.0 + 24 * (j % 5), 30.0 + 24 * (j // 5)) for j in range(20)]
 
-    def with_still(image):  # white discs larger than the ball (no look-alikes: 3.4x its area; a look-alike makes it ambiguous)
-        for q in still:
-            image = draw_ball(image, q, 9.0)
+    def with_still(image):  # white discs larger than the ball: no look-alikes (their blobs 3.4x its blob's area,
+        for q in still:      # beyond area_tolerance; a look-alike in view makes the ball's new track ambiguous)
+            image = draw_ball(image, q, 10.0)
         return image
 
     frames = [dataclasses.replace(f, image=with_still(f.image)) if f.index >= 16 else f
@@ -253,7 +253,7 @@ def test_fixed_camera_many_still_white_things_do_not_crowd_out_the_ball(backdrop
     assert back_measured and back_measured[0] <= 28, st
     for k in back_measured:
         (s,), _ = out[k]
-        assert abs(s.x - 696.0) < 3 and abs(s.y - back[k - 24][1]) < 3
+        assert abs(s.x - 700.0) < 3 and abs(s.y - back[k - 24][1]) < 3
     assert set(st[back_measured[0]:]) == {"measured"}
 
 
