@@ -446,6 +446,18 @@ def findings(results: dict[str, dict]) -> str:
         "  ball leaves the top of the picture; it is taken again, after confirmation, once it slows near the",
         "  top of the hop. (3) *Second bounce*: the same.",
         "  In between, in flight and while rolling, it holds the ball to a pixel.",
+        f"- **By cause, over all {len(results)} runs** (the second table): of {sum(sum(r['per']['R+C'][0]['misses'].values()) for r in results.values())} missed visible frames,",
+        f"  {sum(r['per']['R+C'][0]['misses']['speck'] for r in results.values())} are specks and {sum(r['per']['R+C'][0]['misses']['streak'] for r in results.values())} streaks,"
+        f" {sum(r['per']['R+C'][0]['misses']['before the first mark'] for r in results.values())} come before the first mark and "
+        f"{sum(r['per']['R+C'][0]['misses']['other'] for r in results.values())} are other.",
+        "  Specks and streaks are where one frame does not show the ball: at the true position of the 2 px speck of",
+        "  `launch2` (frames 27-43) the white top-hat of the luminance is 6-20 levels, below the 51st brightest",
+        "  pixel of the 320 px search region, and a line filter along the true streak did not lift it (checked",
+        "  frame by frame with the replay's own crops). Following them would need detection over several frames",
+        "  along the predicted path (track-before-detect), which this tracker does not do: there it says `lost`.",
+        "  Since tentative tracks are extrapolated in the latest pose's pixels (the camera's sweep taken out) and",
+        "  the search region reaches the longest one's next point, a ball found again while the operator is",
+        "  still swinging after it is confirmed up to 4 frames sooner.",
         "- **The paper's claim (landing re-initialisation recovers the ball after the bounce) is not",
         "  reproduced on these shots.** The EKF's predicted ground contact is good: the particles are",
         f"  re-initialised {span(dist, '.0f')} px from the true ball in the landing frame in every run with encoders (table",
