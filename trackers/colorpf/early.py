@@ -76,22 +76,26 @@ class ExcludingMedian:
 
     def model(self) -> np.ndarray | None:
         """Per pixel the median (the upper middle value, as ``MedianBackground``) of the frames that
-        leave it in; of all the frames where none does. uint8, the frames' shape; None before any frame."""
+        leave it in; of all the frames where none does. uint8, the frames' shape; None before any frame.
+        The plain median (``np.partition``) everywhere, then one ``np.sort`` over only the pixels some
+        frames leave out (the track's corridor)."""
         if not self._frames:
             return None
         stack = np.stack(self._frames)  # (F, H, W[, C])
         height, width = stack.shape[1:3]
+        median = np.partition(stack, len(stack) // 2, axis=0)[len(stack) // 2]
         out = self._inside(0, 0, width, height)  # (F, H, W)
-        valid = (~out).sum(axis=0)
-        everywhere = valid == 0
-        out[:, everywhere] = False  # no frame leaves the pixel in: the plain median
-        valid[everywhere] = len(stack)
-        if stack.ndim == 4:
-            out = out[..., None]
-        ranked = np.sort(np.where(out, np.uint16(256), stack.astype(np.uint16)), axis=0)  # left-out values last
-        k = (valid // 2).reshape(1, height, width, *([1] * (stack.ndim - 3)))
-        median = np.take_along_axis(ranked, np.broadcast_to(k, (1, *stack.shape[1:])), axis=0)[0]
-        return median.astype(np.uint8)
+        some = out.any(axis=0) & ~out.all(axis=0)  # left out of some frames, not of all
+        if not some.any():
+            return median
+        left_out = out[:, some]  # (F, n)
+        values = stack[:, some].astype(np.uint16)  # (F, n[, C])
+        if values.ndim == 3:
+            left_out = left_out[..., None]
+        ranked = np.sort(np.where(left_out, np.uint16(256), values), axis=0)  # left-out values last
+        k = ((~out[:, some]).sum(axis=0) // 2).reshape(1, -1, *([1] * (values.ndim - 2)))
+        median[some] = np.take_along_axis(ranked, np.broadcast_to(k, (1, *values.shape[1:])), axis=0)[0]
+        return median
 
     def clear(self) -> None:
         self._frames, self._boxes = [], []

@@ -86,3 +86,19 @@ def test_background_frames_are_ready_earlier_with_the_exclusion():
 def test_exclude_must_be_off_or_at_least_one():
     with pytest.raises(ValueError):
         ReferenceConfig(exclude=0.5)
+
+
+def test_the_median_equals_the_per_pixel_definition():
+    rng = np.random.default_rng(3)
+    median = ExcludingMedian(30, 1, 1.5)
+    for i in range(7):
+        median.add(rng.integers(0, 256, (12, 16, 3), dtype=np.uint8))
+        if i != 3:  # frame 3: never told (left out everywhere)
+            median.leave_out(np.array([4.0 + i, 6.0, 5.0, 6.0]))
+    stack, out = np.stack(median._frames), median._inside(0, 0, 16, 12)
+    expected = np.empty_like(stack[0])
+    for y in range(12):
+        for x in range(16):
+            kept = stack[~out[:, y, x], y, x] if (~out[:, y, x]).any() else stack[:, y, x]
+            expected[y, x] = np.sort(kept, axis=0)[len(kept) // 2]  # the upper middle value
+    assert np.array_equal(median.model(), expected)
