@@ -54,7 +54,8 @@ def merged(*cfgs: dict) -> dict:
 # The Tables 1-3 ablations run on the paper's pipeline (PAPER: uniform pixel weights, fixed
 # reference), as the paper compares them; the last row of each is our defaults.
 P = PAPER
-OURS = "ours, defaults (Epanechnikov kernel + adaptive reference + foreground cue + region refinement, geometry)"
+OURS = ("ours, defaults (Epanechnikov kernel + adaptive reference + foreground cue + region refinement + early "
+        "background without the tracked box + hold, geometry)")
 TABLES = {
     "Table 1 (colorpf-illumination)": ("colorpf-illumination", {
         "H-S (proposed), size noise": merged(P, NOISE),
@@ -79,6 +80,7 @@ CV, MS = {"motion": {"model": "constant_velocity"}}, {"refine": {"mode": "meansh
 UPDATE, RW = {"reference": {"update_rate": 0.05}}, {"size": {"no_plane": "random_walk"}}
 FG, NO_FG = {"likelihood": {"foreground": 10.0}}, {"likelihood": {"foreground": 0.0}}
 REGION, NO_REGION = {"refine": {"mode": "foreground"}}, {"refine": {"mode": "none"}}
+NO_HOLD, NO_EXCLUDE = {"hold": {"enabled": False}}, {"reference": {"exclude": 0.0}}
 SWITCHES = {
     "paper (before: uniform, fixed reference)": P,
     "paper + Epanechnikov kernel": merged(P, KERNEL),
@@ -89,10 +91,14 @@ SWITCHES = {
     "paper + scale random walk without a plane": merged(P, RW),
     "paper + foreground cue (10)": merged(P, FG),
     "paper + foreground-region refinement": merged(P, REGION),
-    "defaults without the foreground cue (kernel + adaptive reference + region refinement)": NO_FG,
-    "defaults without the region refinement (kernel + adaptive reference + foreground cue; the previous defaults)":
-        NO_REGION,
-    "defaults (kernel + adaptive reference + foreground cue + region refinement)": {},
+    "defaults without the foreground cue": NO_FG,
+    "defaults without the region refinement": NO_REGION,
+    "defaults without the hold (early background without the tracked box kept)": NO_HOLD,
+    "defaults without the early background without the tracked box (hold kept)": NO_EXCLUDE,
+    "defaults without either (the previous defaults: kernel + adaptive reference + foreground cue + region refinement)":
+        merged(NO_HOLD, NO_EXCLUDE),
+    "defaults (kernel + adaptive reference + foreground cue + region refinement + early background without the "
+    "tracked box + hold)": {},
     "defaults + two parts": PARTS,
     "defaults + constant velocity": CV,
     "defaults + mean-shift refinement": MS,
@@ -300,7 +306,9 @@ def main() -> None:
                               "target-only reference": {"reference": {"mode": "target"}}, "size noise": NOISE,
                               "fixed box": {"size": {"mode": "fixed"}},
                               "without the foreground cue": NO_FG,
-                              "without the region refinement (the previous defaults)": NO_REGION}.items():
+                              "without the region refinement": NO_REGION,
+                              "without the hold and the early background without the tracked box (the previous "
+                              "defaults)": merged(NO_HOLD, NO_EXCLUDE)}.items():
                 results["otb"][f"{name}, seed 0"], _ = scores(
                     replay(ReplayRequest(log=marked, tracker="colorpf", seed=0, config=cfg)).trajectory, gt)
             summary, frames = scores(csrt(py, REAL / "img", (x - 1, y - 1, w, h), 0, tmp), gt)

@@ -27,6 +27,7 @@ import numpy as np
 
 from trackreplay.trackers.appearance.histogram import image_part_histograms, index_histogram
 from trackreplay.trackers.colorpf.config import ReferenceConfig
+from trackreplay.trackers.colorpf.early import ExcludingMedian
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners
 from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
 
@@ -114,7 +115,10 @@ class BackgroundFrames:
         self.start = start
         self.source = cfg.background
         self._before: list[np.ndarray] = []
-        self._early = MedianBackground(cfg.frames)
+        self._early: MedianBackground | ExcludingMedian = (
+            ExcludingMedian(cfg.frames, cfg.min_frames, cfg.exclude) if cfg.exclude > 0 else MedianBackground(cfg.frames))
+        self._marked: np.ndarray | None = None  # reference.exclude: the marked box's corners (ready once it is free)
+        self.early_count = 0
 
     def offer(self, index: int, image: np.ndarray) -> None:
         """Every frame before the mark and, while "early" is collecting, after it."""
@@ -142,11 +146,24 @@ class BackgroundFrames:
         self._early.add(image)
         return None, "early"
 
+    def leave_out(self, box_xywh: np.ndarray, marked: np.ndarray | None = None) -> None:
+        """``reference.exclude``: the last offered frame's tracked box (``marked``: the marked box's
+        corners, on the marked frame), left out of its median (:class:`.early.ExcludingMedian`)."""
+        if marked is not None:
+            self._marked = marked
+        if self.source == "early" and isinstance(self._early, ExcludingMedian):
+            self._early.leave_out(box_xywh)
+
     @property
     def early_ready(self) -> bool:
-        return self.source == "early" and self._early.full
+        if self.source != "early":
+            return False
+        if isinstance(self._early, ExcludingMedian) and self._marked is not None:
+            return self._early.ready(self._marked)
+        return self._early.full
 
     def early_model(self) -> np.ndarray | None:
+        self.early_count = len(self._early)  # the frames the median was taken over
         model = self._early.model()
         self._early.clear()
         self.source = "used"

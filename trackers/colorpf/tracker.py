@@ -27,7 +27,11 @@ background exists, each particle's likelihood is multiplied by a foreground cent
 (:mod:`~trackreplay.trackers.colorpf.foreground`; the confidence stays colour's alone) and the estimate
 is refined onto the foreground region it sits on when that region is consistent with the target
 (``refine.mode = "foreground"``, :func:`.foreground.foreground_region`: the cloud moves with it,
-without a ground plane the size follows it, and such a frame does not count towards "lost"); off by default,
+without a ground plane the size follows it, and such a frame does not count towards "lost"); with an
+"early" background each frame's tracked box is left out of the median, so it is ready once the target
+has left its marked box (``reference.exclude``, :mod:`.early`); and while a larger moving region is
+beside the estimate (the neighbour check's condition) and no region places it, the estimate is held
+on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -102,6 +106,9 @@ class ColorPfTracker(TrackerBase):
         self.layout: np.ndarray | None = None  # refine.mode = "foreground": foreground_region's layout
         self.template: TemplateModel | None = None  # likelihood.template > 0: the target's grey template
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
+        self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
+        self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
+        self.hold_run = 0  # hold.enabled: held frames in a row
         self._pending: list[str] = []
         self.intermediates = ColorPfIntermediates.idle()
 
@@ -139,7 +146,10 @@ class ColorPfTracker(TrackerBase):
             mask = self._rebuild_reference(self.background.early_model(), "early")
             if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
                 self._s_mark = self._mark_score(marked)
-        return self._track(frame, mask)
+        out = self._track(frame, mask)
+        if out and out[0].x is not None:  # reference.exclude: the target is in this box on this frame
+            self.background.leave_out(np.array([out[0].x, out[0].y, out[0].w, out[0].h], dtype=np.float64))
+        return out
 
     def _start(self, frame: Frame) -> list[TrackState]:
         cfg, mark = self.config, self.mark
@@ -172,7 +182,9 @@ class ColorPfTracker(TrackerBase):
         sigma = np.concatenate([position_sigma(self.initial_wh, cfg.noise, cfg.min_noise_px), [0.0, 0.0]])
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
         self.started = True
-        return self._track(frame, mask, weigh_only=True)
+        out = self._track(frame, mask, weigh_only=True)
+        self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), marked=box)
+        return out
 
     def _mark_score(self, image: np.ndarray) -> float:
         """``S`` of the marked box (on the marked frame) against the current reference."""
@@ -198,7 +210,12 @@ class ColorPfTracker(TrackerBase):
         if ref is None:
             self._say(self._no_background(f"{source} background: {why}"))
             return None
-        if source == "early":
+        if source == "early" and self.config.reference.exclude > 0:
+            assert self.background is not None
+            self._say(f"reference: eq. (7) from the median of the first {self.background.early_count} frames from the "
+                      "mark on, each without its tracked box (the target was in the picture from the start); until "
+                      "then the marked box's own histogram")
+        elif source == "early":
             self._say(f"reference: eq. (7) from the median of {self.config.reference.frames} frames from the mark on "
                       "(the target was in the picture from the start); until then the marked box's own histogram")
         self.reference = ref
@@ -233,6 +250,35 @@ class ColorPfTracker(TrackerBase):
             self.size.area0 = float(wh[0] * wh[1])  # S' without a plane (eq. 9 with Z = Z_0)
             self.aspect.ratio = float(wh[1] / wh[0])
         return self.pf.estimate(), True
+
+    def _hold(self, image: np.ndarray, background: np.ndarray, gain: float, prev: np.ndarray,
+              estimate: np.ndarray) -> tuple[np.ndarray, bool]:
+        """``hold.enabled``: when a box of the estimate's size beside it holds more foreground than the
+        marked box did (the neighbour check's condition: a larger moving region, whose colour and
+        foreground match the target's as well), the estimate's centre is the prediction ``prev + v``
+        (eq. (2) with the track's velocity as drift), the cloud moved with it; at most
+        ``hold.max_frames`` frames in a row."""
+        cfg, ref = self.config, self.reference
+        assert ref is not None
+        if self.hold_run >= cfg.hold.max_frames:
+            return estimate, False
+        shares = neighbour_shares(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px, gain)
+        if shares.max() <= ref.p_detect / ref.p_square:
+            self.hold_run = 0
+            return estimate, False
+        self.hold_run += 1
+        self.pf.particles[:, :2] += prev[:2] + self.track_velocity - estimate[:2]  # the cloud moves with it
+        return self.pf.estimate(), True
+
+    def _vouch(self, index: int, estimate: np.ndarray, vouched: bool) -> None:
+        """``hold.enabled``: the track's velocity from consecutive vouched estimates (exponentially smoothed)."""
+        if not vouched:
+            return
+        if self._vouched is not None:
+            last, xy = self._vouched
+            s = self.config.hold.smoothing
+            self.track_velocity = s * self.track_velocity + (1.0 - s) * (estimate[:2] - xy) / max(index - last, 1)
+        self._vouched = (index, estimate[:2].copy())
 
     def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
         cfg = self.config
@@ -282,6 +328,10 @@ class ColorPfTracker(TrackerBase):
         elif (cfg.refine.mode == "foreground" and not weigh_only and background is not None
               and self.reference.p_square > 0 and self.misses < cfg.lost_after):  # no re-acquisition by region
             estimate, placed = self._refine_foreground(image, background, gain, estimate)
+        held = False  # hold.enabled: the estimate is the motion prediction (a larger moving region beside it)
+        if (cfg.hold.enabled and not weigh_only and not placed and background is not None
+                and self.reference.p_square > 0 and self.misses < cfg.lost_after):
+            estimate, held = self._hold(image, background, gain, prev, estimate)
         if not weigh_only:
             s = cfg.motion.smoothing
             self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
@@ -328,9 +378,13 @@ class ColorPfTracker(TrackerBase):
         elif placed and cfg.refine.keeps_track and self.placed_run < cfg.refine.keep_frames:
             self.placed_run += 1
             status = "predicted"  # the foreground region places the target: not a miss towards "lost"
+        elif held:
+            status = "predicted"  # the motion prediction, bounded by hold.max_frames: not a miss towards "lost"
         else:
             self.misses += 1
             status = "lost" if self.misses >= cfg.lost_after else "predicted"
+        if cfg.hold.enabled and not weigh_only:
+            self._vouch(frame.index, estimate, status == "measured" or placed)
         ref = self.reference
         self.intermediates = ColorPfIntermediates(
             "track", self.pf.particles.copy(), self.pf.weights.copy(), m.similarity, m.likelihood, estimate,

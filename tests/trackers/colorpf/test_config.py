@@ -16,9 +16,11 @@ def test_paper_overrides_change_only_the_default_departures():
     assert ours.likelihood.kernel == "epanechnikov" and ours.reference.update_rate > 0
     assert ours.likelihood.foreground > 0 and ours.neighbour_check
     assert paper.refine.mode == "none" and ours.refine.mode == "foreground"
+    assert paper.reference.exclude == 0.0 and ours.reference.exclude >= 1.0
+    assert not paper.hold.enabled and ours.hold.enabled
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
-                               neighbour_check=True, refine=ours.refine) == ours
+                               neighbour_check=True, refine=ours.refine, hold=ours.hold) == ours
     assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 
@@ -29,6 +31,7 @@ def test_paper_overrides_change_only_the_default_departures():
     ("refine", {"mode": "camshift"}), ("refine", {"iterations": 0}), ("refine", {"factor": 1.0}),
     ("refine", {"size_rate": 1.5}),
     ("size", {"no_plane": "plane"}),
+    ("reference", {"exclude": 0.5}), ("hold", {"smoothing": 1.0}), ("hold", {"max_frames": -1}),
 ])
 def test_bad_switch_values_are_named(table, values):
     with pytest.raises(TrackreplayError, match=f"invalid {table} .*{next(iter(values))}"):

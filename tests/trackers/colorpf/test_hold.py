@@ -1,0 +1,95 @@
+"""The hold on the motion prediction beside a larger moving region (hold.enabled, ColorPfTracker._hold)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.colorpf.config import ColorPfConfig, HoldConfig
+from trackreplay.trackers.colorpf.tracker import ColorPfTracker
+from trackreplay.trackers.frame import Frame
+
+EMPTY, FRAMES = 8, 70
+
+
+def _passing_car() -> tuple[list[np.ndarray], list[tuple[float, float] | None]]:
+    """A walker (red jacket over trousers the floor's colour, 12 x 36) walks left at 0.8 px per frame;
+    a red car (70 x 24) drives right at 4 px per frame just behind its upper half (otb_crossing's case:
+    only the jacket is foreground, and the car has its colour)."""
+    rng = np.random.default_rng(0)
+    floor = np.clip(rng.normal(120, 6, (160, 240, 3)), 0, 255).astype(np.uint8)
+    images, truth = [], []
+    for i in range(FRAMES):
+        image, k, top = floor.copy(), i - EMPTY, 80
+        if k >= 0:
+            car = -60 + 4 * k
+            image[top - 16:top + 8, max(car, 0):max(car + 70, 0)] = (30, 30, 140)
+            x0 = int(round(170.0 - 0.8 * k - 6))
+            image[top:top + 18, x0:x0 + 12] = (30, 30, 150)
+            image[top + 18:top + 36, x0:x0 + 12] = (108, 108, 108)
+            truth.append((x0 + 5.5, top + 17.5))
+        else:
+            truth.append(None)
+        images.append(image)
+    return images, truth
+
+
+def _centre_errors(cfg: ColorPfConfig) -> dict[int, float]:
+    images, truth = _passing_car()
+    mark = InitRegion(EMPTY, 0, truth[EMPTY][0], truth[EMPTY][1], 12, 36, "target")
+    tracker = ColorPfTracker(cfg, np.random.default_rng(0))
+    errors = {}
+    for i, image in enumerate(images):
+        states = tracker.step(Frame(index=i, t_ns=i * 33_333_333, image=image, all_hints=(mark,),
+                                    hints=(mark,) if i == EMPTY else ()))
+        if i > EMPTY and states and states[0].x is not None:
+            errors[i] = float(np.hypot(states[0].x - truth[i][0], states[0].y - truth[i][1]))
+    return errors
+
+
+def test_a_larger_mover_passing_behind_the_target_does_not_carry_the_box_away():
+    held = _centre_errors(ColorPfConfig(hold=HoldConfig(enabled=True)))
+    free = _centre_errors(ColorPfConfig(hold=HoldConfig(enabled=False)))
+    assert len(held) == FRAMES - EMPTY - 1  # a position on every frame
+    assert max(held.values()) < 12.0, held  # held near the prediction while the car passes
+    assert max(held[i] for i in range(FRAMES - 10, FRAMES)) < 2.0  # and on the walker again after it
+    assert max(free.values()) > 30.0  # without the hold the car takes the box with it
+
+
+def _tracker(enabled: bool = True) -> ColorPfTracker:
+    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(enabled=enabled)), np.random.default_rng(0))
+    tracker.reference = SimpleNamespace(p_detect=216, p_square=432)  # the mark's foreground share: 0.5
+    rng = np.random.default_rng(1)
+    tracker.pf.particles = np.column_stack([rng.normal(100.0, 2.0, 40), rng.normal(90.0, 2.0, 40),
+                                            np.full(40, 12.0), np.full(40, 36.0)])
+    tracker.track_velocity = np.array([-1.0, 0.5])
+    return tracker
+
+
+def test_the_estimate_is_the_prediction_only_beside_a_larger_region():
+    background = np.full((200, 200, 3), 100, np.uint8)
+    image = background.copy()
+    image[72:108, 94:106] = 20  # the target, under the estimate
+    tracker = _tracker()
+    prev = np.array([98.0, 91.0, 12.0, 36.0])
+    estimate = tracker.pf.estimate()
+    out, held = tracker._hold(image, background, 1.0, prev, estimate)
+    assert not held and np.array_equal(out, estimate)  # nothing beside it: the PF's estimate
+    image[30:72, 60:160] = 20  # a region larger than the target right above it
+    before = tracker.pf.particles.copy()
+    out, held = tracker._hold(image, background, 1.0, prev, estimate)
+    assert held and np.allclose(out[:2], prev[:2] + [-1.0, 0.5])  # the last estimate plus the velocity
+    assert np.allclose(tracker.pf.particles[:, :2] - before[:, :2], out[:2] - estimate[:2])  # the cloud with it
+    assert tracker.hold_run == 1
+    tracker.hold_run = tracker.config.hold.max_frames
+    assert not tracker._hold(image, background, 1.0, prev, tracker.pf.estimate())[1]  # at most max_frames in a row
+
+
+def test_the_velocity_comes_from_vouched_estimates_only():
+    tracker = _tracker()
+    tracker.track_velocity = np.zeros(2)
+    tracker._vouch(10, np.array([100.0, 50.0, 12.0, 36.0]), True)
+    tracker._vouch(11, np.array([0.0, 0.0, 12.0, 36.0]), False)  # not vouched for: ignored
+    tracker._vouch(12, np.array([96.0, 52.0, 12.0, 36.0]), True)  # 2 frames later: (-2, 1) per frame
+    s = tracker.config.hold.smoothing
+    assert np.allclose(tracker.track_velocity, (1.0 - s) * np.array([-2.0, 1.0]))
