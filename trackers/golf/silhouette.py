@@ -25,7 +25,7 @@ import numpy as np
 
 import cv2
 
-from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
 from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
@@ -73,8 +73,8 @@ def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, s
     if y.size == 0:
         return np.zeros(y.shape, np.uint8)
     hat = _top_hat(y, diameter, cfg, scale)
-    med = float(np.median(hat))
-    noise = 1.4826 * float(np.median(np.abs(hat.astype(np.float32) - med)))
+    med, mad = median_and_mad(hat, 0, 256)
+    noise = 1.4826 * mad
     threshold = max(cfg.min_contrast, med + cfg.noise_sigmas * noise)
     return (hat >= threshold).astype(np.uint8)
 
@@ -85,6 +85,22 @@ def _top_hat(y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) 
     return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
 
 
+def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, float]:
+    """``np.median`` of integer ``values`` (all in ``[low, low + levels)``) and ``np.median`` of their
+    absolute deviations from it, read off the counts per level: the middle one or two of the
+    sorted values (and of the sorted deviations), averaged. The same numbers: every value,
+    deviation and mean of two is a multiple of 1/4 far below 2^20, exact in float32 and float64."""
+    counts = np.bincount((values.ravel() - low).astype(np.intp), minlength=levels)
+    n = int(values.size)
+    middle = np.array([(n - 1) // 2, n // 2])
+    lo, hi = (np.searchsorted(np.cumsum(counts), middle, side="right") + low).tolist()
+    med = (lo + hi) / 2
+    deviation = np.abs(np.arange(low, low + levels) - med)
+    order = np.argsort(deviation, kind="stable")
+    a, b = deviation[order[np.searchsorted(np.cumsum(counts[order]), middle, side="right")]].tolist()
+    return float(med), (a + b) / 2
+
+
 def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
     """The luminance of the previous frame (BGR) brought into this pose over a crop at ``offset``
     of ``shape`` (h, w): ``homography`` maps previous pixels to this frame's. Where the previous
@@ -93,7 +109,7 @@ def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple
     to_crop = np.array([[1.0, 0.0, -offset[0]], [0.0, 1.0, -offset[1]], [0.0, 0.0, 1.0]]) @ homography
     bgr = cv2.warpPerspective(previous, to_crop, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=(255, 255, 255))
-    return to_ycbcr(bgr)[..., 0]
+    return cv2.extractChannel(to_ycrcb(bgr), 0)  # Y, as to_ycbcr gives it, without reordering Cb and Cr
 
 
 def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
@@ -110,7 +126,7 @@ def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, 
     side = 2 * max(int(round(cfg.registration_px)), 0) + 1
     before = cv2.dilate(np.ascontiguousarray(previous_y, dtype=np.uint8), np.ones((side, side), np.uint8))
     rise = np.minimum(hat, y.astype(np.int16) - before.astype(np.int16))
-    med = float(np.median(rise))
-    noise = 1.4826 * float(np.median(np.abs(rise - med)))
+    med, mad = median_and_mad(rise, -255, 511)
+    noise = 1.4826 * mad
     threshold = max(cfg.moving_min_contrast, med + cfg.noise_sigmas * noise)
     return (rise >= threshold).astype(np.uint8)
