@@ -112,7 +112,8 @@ def _masks(seed: int, count: int):
     """Random masks: specks, dilated clumps, 255s, blobs on the border, odd and even sizes."""
     rng = np.random.default_rng(seed)
     for i in range(count):
-        h, w = (int(v) for v in rng.integers(1, 90, 2))
+        size = rng.integers(1, 90, 2) if i % 50 else rng.integers(200, 500, 2)  # a few big enough for OpenCV's threads
+        h, w = (int(v) for v in size)
         m = (rng.random((h, w)) < rng.choice([0.002, 0.02, 0.1, 0.4, 0.8])).astype(np.uint8)
         if i % 3 == 0:
             m = cv2.dilate(m, np.ones((int(rng.integers(2, 5)),) * 2, np.uint8))
