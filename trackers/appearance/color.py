@@ -7,9 +7,10 @@ import numpy as np
 
 
 def _bgr(image: np.ndarray) -> np.ndarray:
+    # A crop of a frame goes to OpenCV as it is: OpenCV takes rows with a stride, so no copy first.
     if image.ndim == 2:
         return cv2.cvtColor(image, cv2.COLOR_GRAY2BGR)
-    return np.ascontiguousarray(image)
+    return image
 
 
 def to_ycrcb(image: np.ndarray) -> np.ndarray:

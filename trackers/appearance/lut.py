@@ -31,10 +31,13 @@ def flat_index(pixels: np.ndarray) -> np.ndarray:
 
 
 def coarse_counts(pixels: np.ndarray, bin_: int) -> np.ndarray:
-    """Counts of ``(..., 3)`` uint8 pixels on a ``(256/bin_)³`` grid (float64)."""
+    """Counts of ``(..., 3)`` uint8 pixels on a ``(256/bin_)³`` grid (float64).
+
+    Each pixel's cell ``(c0 // bin_ * q + c1 // bin_) * q + c2 // bin_`` is :func:`coarse_index`'s
+    (``bin_`` divides 256: a power of 2, so the divisions are shifts)."""
     q = 256 // bin_
-    c = pixels.reshape(-1, 3).astype(np.int64) // bin_
-    return np.bincount((c[:, 0] * q + c[:, 1]) * q + c[:, 2], minlength=q**3).astype(np.float64).reshape(q, q, q)
+    cells = coarse_index(pixels.reshape(-1, 3), bin_)
+    return np.bincount(cells, minlength=q**3).astype(np.float64).reshape(q, q, q)
 
 
 def smooth3(values: np.ndarray, sigma: float) -> np.ndarray:

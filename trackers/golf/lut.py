@@ -283,9 +283,9 @@ class GolfLuts:
             self._labels = self.luminance_labels()
             self._label_levels = [(i, np.flatnonzero(self._labels == i)) for i, name in enumerate(LUT_NAMES) if name in self.luts]
         flat = np.asarray(y, dtype=np.uint8).ravel()
-        # The pixels per LUT counted through the labels at once: the same integers as the float sums
-        # of a luminance histogram over each LUT's levels (exact below 2^53), divided by the same total.
-        per_lut = np.bincount(self._labels[flat], minlength=len(LUT_NAMES)).tolist()
+        # The pixels per LUT: the region's luminance counts summed over each LUT's levels, the same
+        # integers (exact in float64 below 2^53) as counting the pixels' labels, divided by the same total.
+        per_lut = np.bincount(self._labels, weights=np.bincount(flat, minlength=256), minlength=len(LUT_NAMES)).tolist()
         total = max(float(flat.size), 1.0)
         for i, _ in self._label_levels:
             scores[i] = float(per_lut[i] / total)

@@ -25,7 +25,7 @@ import numpy as np
 
 import cv2
 
-from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
 from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
@@ -64,25 +64,48 @@ def lut_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, current: 
     return LutSilhouette(name, scores, mask, np.array(offset, np.int64)), ycc
 
 
-def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float,
+                        hat: np.ndarray | None = None) -> np.ndarray:
     """Pixels of the crop ``ycc`` brighter than their local background: the white top-hat of Y with
     a disc ``kernel_diameters`` ball diameters wide, above ``min_contrast`` levels and above
     ``noise_sigmas`` times the top-hat's robust spread (so textured ground, where many pixels stand
-    out a little, needs more). A 0/1 uint8 mask the size of the crop."""
+    out a little, needs more). A 0/1 uint8 mask the size of the crop. ``hat``: :func:`top_hat` of
+    the same crop when the caller has it (the moving silhouette needs it too)."""
     y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
     if y.size == 0:
         return np.zeros(y.shape, np.uint8)
-    hat = _top_hat(y, diameter, cfg, scale)
-    med = float(np.median(hat))
-    noise = 1.4826 * float(np.median(np.abs(hat.astype(np.float32) - med)))
+    hat = top_hat(ycc, diameter, cfg, scale) if hat is None else hat
+    med, mad = median_and_mad(hat, 0, 256)
+    noise = 1.4826 * mad
     threshold = max(cfg.min_contrast, med + cfg.noise_sigmas * noise)
     return (hat >= threshold).astype(np.uint8)
 
 
-def _top_hat(y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+def top_hat(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+    """The white top-hat of the crop's luminance with a disc ``kernel_diameters`` ball diameters wide
+    (at most ``max_kernel_px``, scaled), as :func:`contrast_silhouette` and :func:`moving_silhouette` threshold it."""
+    y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
+    if y.size == 0:
+        return np.zeros(y.shape, np.uint8)
     side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
     side += 1 - side % 2
     return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+
+
+def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, float]:
+    """``np.median`` of integer ``values`` (all in ``[low, low + levels)``) and ``np.median`` of their
+    absolute deviations from it, read off the counts per level: the middle one or two of the
+    sorted values (and of the sorted deviations), averaged. The same numbers: every value,
+    deviation and mean of two is a multiple of 1/4 far below 2^20, exact in float32 and float64."""
+    counts = np.bincount((values.ravel() - low).astype(np.intp), minlength=levels)
+    n = int(values.size)
+    middle = np.array([(n - 1) // 2, n // 2])
+    lo, hi = (np.searchsorted(np.cumsum(counts), middle, side="right") + low).tolist()
+    med = (lo + hi) / 2
+    deviation = np.abs(np.arange(low, low + levels) - med)
+    order = np.argsort(deviation, kind="stable")
+    a, b = deviation[order[np.searchsorted(np.cumsum(counts[order]), middle, side="right")]].tolist()
+    return float(med), (a + b) / 2
 
 
 def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
@@ -93,24 +116,26 @@ def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple
     to_crop = np.array([[1.0, 0.0, -offset[0]], [0.0, 1.0, -offset[1]], [0.0, 0.0, 1.0]]) @ homography
     bgr = cv2.warpPerspective(previous, to_crop, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=(255, 255, 255))
-    return to_ycbcr(bgr)[..., 0]
+    return cv2.extractChannel(to_ycrcb(bgr), 0)  # Y, as to_ycbcr gives it, without reordering Cb and Cr
 
 
-def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
+def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float,
+                      hat: np.ndarray | None = None) -> np.ndarray:
     """Pixels of the crop that stand above their local background now (white top-hat, as
     :func:`contrast_silhouette`) *and* are brighter than every pixel within
     ``registration_px`` of the same place in the previous frame brought into this pose
     (``previous_y``, :func:`previous_in_pose`): bright and new there, i.e. moving against a
     background fixed in the world. The smaller of the two rises must clear ``moving_min_contrast``
-    and ``noise_sigmas`` robust sigmas of its spread over the crop. A 0/1 uint8 mask."""
+    and ``noise_sigmas`` robust sigmas of its spread over the crop. A 0/1 uint8 mask. ``hat``: as
+    for :func:`contrast_silhouette`."""
     y = np.ascontiguousarray(ycc[..., 0], dtype=np.uint8)
     if y.size == 0:
         return np.zeros(y.shape, np.uint8)
-    hat = _top_hat(y, diameter, cfg, scale).astype(np.int16)
+    hat = (top_hat(ycc, diameter, cfg, scale) if hat is None else hat).astype(np.int16)
     side = 2 * max(int(round(cfg.registration_px)), 0) + 1
     before = cv2.dilate(np.ascontiguousarray(previous_y, dtype=np.uint8), np.ones((side, side), np.uint8))
     rise = np.minimum(hat, y.astype(np.int16) - before.astype(np.int16))
-    med = float(np.median(rise))
-    noise = 1.4826 * float(np.median(np.abs(rise - med)))
+    med, mad = median_and_mad(rise, -255, 511)
+    noise = 1.4826 * mad
     threshold = max(cfg.moving_min_contrast, med + cfg.noise_sigmas * noise)
     return (rise >= threshold).astype(np.uint8)

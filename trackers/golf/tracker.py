@@ -21,6 +21,7 @@ confidently measured ball also teaches the LUT of the background it is over (:me
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 
@@ -44,7 +45,7 @@ from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
-                                                  moving_silhouette, previous_in_pose)
+                                                  moving_silhouette, previous_in_pose, top_hat)
 from trackreplay.trackers.foreground.silhouette import silhouette
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
 from trackreplay.trackers.golf.validate import Validator
@@ -119,7 +120,8 @@ class GolfTracker(TrackerBase):
         self.lut_name = sil.lut_name
         lost = self.misses > cfg.max_predicted_frames
         motion = None if lost else self._apparent_motion(search.centre, camera, compensated)
-        moving = (lambda: self._moving(frame, ycc, sil.offset, diameter, scale)) if cfg.contrast.moving else (lambda: None)
+        hat = functools.cache(lambda: top_hat(ycc, diameter, cfg.contrast, scale))  # the contrast and moving silhouettes share it
+        moving = (lambda: self._moving(frame, ycc, sil.offset, diameter, scale, hat)) if cfg.contrast.moving else (lambda: None)
         if lost and (mask := moving()) is not None:  # once lost, a ball moving against the world is a candidate too
             sil = dataclasses.replace(sil, mask=sil.mask | mask)
         gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
@@ -140,7 +142,7 @@ class GolfTracker(TrackerBase):
                     sil, gated, self.lut_name, seen_gated = other, alt, name, seen_alt
                     break
             else:
-                fallback = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion, moving)
+                fallback = self._contrast_fallback(ycc, sil, search, diameter, (width, height), scale, lost, motion, moving, hat)
                 if fallback is not None:
                     sil, gated, seen_gated = fallback
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
@@ -247,9 +249,10 @@ class GolfTracker(TrackerBase):
         sigma = np.maximum(self.pf.spread(), spread_sigma(cfg.noise_pos_px * scale, cfg.noise_vel_px * scale))
         self.pf.inject(cfg.detection_share, state(point, velocity), sigma)
 
-    def _moving(self, frame: Frame, ycc: np.ndarray, offset: np.ndarray, diameter: float, scale: float) -> np.ndarray | None:
+    def _moving(self, frame: Frame, ycc: np.ndarray, offset: np.ndarray, diameter: float, scale: float,
+                hat: Callable[[], np.ndarray]) -> np.ndarray | None:
         """The moving-against-the-world silhouette over the crop (None: no pose for this frame and
-        the one before it, or not the frame right after it)."""
+        the one before it, or not the frame right after it); ``hat()`` gives the crop's top-hat."""
         prev_camera, prev_index, prev_t_ns = self._prev
         if (not self.config.contrast.moving or frame.camera is None or prev_camera is None or self._prev_image is None
                 or prev_index != frame.index - 1 or ycc.size == 0):
@@ -258,18 +261,19 @@ class GolfTracker(TrackerBase):
             return None  # a time gap: the frame before is no picture of where the world was a frame ago
         before = previous_in_pose(self._prev_image, pose_homography(prev_camera, frame.camera), (int(offset[0]), int(offset[1])),
                                   ycc.shape[:2])
-        return moving_silhouette(ycc, before, diameter, self.config.contrast, scale)
+        return moving_silhouette(ycc, before, diameter, self.config.contrast, scale, hat=hat())
 
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
                            scale: float, lost: bool, motion: ApparentMotion | None,
-                           moving: Callable[[], np.ndarray | None]) -> tuple[LutSilhouette, GatedBlobs, tuple] | None:
+                           moving: Callable[[], np.ndarray | None],
+                           hat: Callable[[], np.ndarray]) -> tuple[LutSilhouette, GatedBlobs, tuple] | None:
         """Neither LUT saw the ball near the prediction: the local-contrast silhouette (with the
         moving one when there is a pose), taken only when it finds a blob the validation gate
         measures (same gate, same confidence)."""
         cfg = self.config
         if not cfg.contrast.enabled:
             return None
-        for make in (lambda: contrast_silhouette(ycc, diameter, cfg.contrast, scale), moving):
+        for make in (lambda: contrast_silhouette(ycc, diameter, cfg.contrast, scale, hat=hat()), moving):
             mask = make()  # the moving one second and alone: joined, its pixels would reshape a contrast blob
             if mask is None:
                 continue

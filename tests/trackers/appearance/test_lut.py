@@ -101,3 +101,13 @@ def test_the_decision_over_the_foreground_support_is_the_whole_cube_decision():
         expected = (1000.0 * sf > sb) & (sf > 0.02)
         got = two_class_table(fg, bg, smooth=1.0, foreground_weight=1000.0, min_count=0.02, background_scale=16.0)
         assert np.array_equal(got, expected)
+
+
+def test_coarse_counts_by_shifts_are_the_counts_by_division():
+    px = np.random.default_rng(3).integers(0, 256, (5000, 3)).astype(np.uint8)
+    for bin_ in (1, 2, 4, 8, 32, 256):
+        q = 256 // bin_
+        c = px.astype(np.int64) // bin_  # the plain form
+        plain = np.bincount((c[:, 0] * q + c[:, 1]) * q + c[:, 2], minlength=q**3).astype(np.float64).reshape(q, q, q)
+        assert np.array_equal(coarse_counts(px, bin_), plain)
+        assert np.array_equal(coarse_counts(px.reshape(50, 100, 3), bin_), plain)

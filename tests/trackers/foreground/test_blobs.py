@@ -4,7 +4,8 @@ import cv2
 import numpy as np
 import pytest
 
-from trackreplay.trackers.foreground.blobs import Blobs, chain_length, measure_blobs, nearest
+from trackreplay.trackers.foreground import blobs as blobs_module
+from trackreplay.trackers.foreground.blobs import Blobs, chain_length, components, measure_blobs, nearest
 
 
 def test_fields_of_a_disc_in_a_crop_are_in_frame_pixels():
@@ -105,3 +106,45 @@ def test_chain_length_is_the_same_on_short_and_long_contours():
         finally:
             blobs.SHORT_CONTOUR = saved
         assert by_numpy == by_python
+
+
+def _masks(seed: int, count: int):
+    """Random masks: specks, dilated clumps, 255s, blobs on the border, odd and even sizes."""
+    rng = np.random.default_rng(seed)
+    for i in range(count):
+        size = rng.integers(1, 90, 2) if i % 50 else rng.integers(200, 500, 2)  # a few big enough for OpenCV's threads
+        h, w = (int(v) for v in size)
+        m = (rng.random((h, w)) < rng.choice([0.002, 0.02, 0.1, 0.4, 0.8])).astype(np.uint8)
+        if i % 3 == 0:
+            m = cv2.dilate(m, np.ones((int(rng.integers(2, 5)),) * 2, np.uint8))
+        yield m * 255 if i % 5 == 0 else m
+
+
+def _whole_mask(mask):
+    """The plain form: OpenCV's statistics over the whole mask."""
+    n, labels, stats, centroids = cv2.connectedComponentsWithStats(mask, connectivity=8, ltype=cv2.CV_32S)
+    return n, (0, 0), labels, stats[1:], centroids[1:]
+
+
+def test_components_over_the_foreground_window_are_opencvs_over_the_whole_mask():
+    for m in _masks(0, 1500):
+        n, (x0, y0), labels, stats, centroids = components(m)
+        n_all, _, labels_all, stats_all, centroids_all = _whole_mask(m)
+        placed = np.zeros(m.shape, np.int32)
+        placed[y0:y0 + labels.shape[0], x0:x0 + labels.shape[1]] = labels
+        assert n == n_all and np.array_equal(placed, labels_all)
+        assert stats.dtype == stats_all.dtype and np.array_equal(stats, stats_all)
+        assert centroids.tobytes() == centroids_all.tobytes()
+
+
+def test_measure_blobs_in_the_window_equals_the_whole_mask(monkeypatch):
+    masks = list(_masks(1, 600))
+    near = np.array([30.0, 20.0])
+    args = [dict(), dict(min_area=3.0, max_measured=4, near=near), dict(min_area=2.0, moments=False)]
+    ours = [measure_blobs(m, (7, 11), **a) for m in masks for a in args]
+    monkeypatch.setattr(blobs_module, "components", _whole_mask)
+    plain = [measure_blobs(m, (7, 11), **a) for m in masks for a in args]
+    for a, b in zip(ours, plain):
+        for field in ("centroid", "area", "circularity", "bbox", "covariance"):
+            x, y = getattr(a, field), getattr(b, field)
+            assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes(), field

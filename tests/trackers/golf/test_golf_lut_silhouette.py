@@ -84,3 +84,15 @@ def test_labels_override_the_colour_guess(marked):
     img, regions = marked
     relabelled = (InitRegion(0, 0, 400.0, 150.0, 14, 14, "ball ground"),)
     assert region_samples(img, relabelled[0], LutConfig(), CONTEXT_PX).name == "ground"
+
+
+def test_scores_from_luminance_counts_are_the_labels_counted(marked, backdrop):
+    img, regions = marked
+    luts = build_luts([(img, regions)], LutConfig())
+    frame = backdrop(seed=3)
+    for top in range(0, 700, 37):
+        ycc, _ = crop_ycc(frame, np.array([600, top, 80 + top % 7, 60]))
+        flat = ycc[..., 0].ravel()
+        per_lut = np.bincount(luts.luminance_labels()[flat], minlength=2)  # the plain form
+        _, scores = luts.choose(ycc[..., 0], "")
+        assert scores.tolist() == [float(per_lut[0] / flat.size), float(per_lut[1] / flat.size)]

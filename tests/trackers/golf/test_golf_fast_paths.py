@@ -1,0 +1,48 @@
+"""Fast paths of the golf stages, pinned bit for bit to the plain forms they replace."""
+
+import cv2
+import numpy as np
+
+from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.foreground.blobs import measure_blobs
+from trackreplay.trackers.golf.blobs import _disc_table
+from trackreplay.trackers.golf.silhouette import median_and_mad, previous_in_pose
+
+
+def test_median_and_mad_from_counts_are_numpys():
+    rng = np.random.default_rng(0)
+    for n in [*range(1, 40), 999, 1000, 4096]:
+        y = rng.integers(0, 256, n).astype(np.uint8) if n % 2 else np.minimum(rng.geometric(0.3, n), 255).astype(np.uint8)
+        med = float(np.median(y))  # contrast_silhouette's plain form: the MAD over float32
+        assert median_and_mad(y, 0, 256) == (med, float(np.median(np.abs(y.astype(np.float32) - med))))
+        rise = (rng.integers(-255, 256, n) if n % 3 else np.clip(rng.normal(0, 4, n).round(), -255, 255)).astype(np.int16)
+        med = float(np.median(rise))  # moving_silhouette's plain form: the MAD over float64
+        assert median_and_mad(rise, -255, 511) == (med, float(np.median(np.abs(rise - med))))
+
+
+def test_disc_table_in_one_mask_is_the_disc_by_disc_table():
+    areas, circs = [], []
+    for r in np.arange(0.5, 60.0, 0.25):
+        n = int(np.ceil(r)) + 2
+        ys, xs = np.mgrid[-n:n + 1, -n:n + 1]
+        for cx, cy in ((0.0, 0.0), (0.5, 0.5), (0.5, 0.0)):
+            b = measure_blobs((((xs - cx) ** 2 + (ys - cy) ** 2) <= r * r).astype(np.uint8), moments=False)
+            if len(b) == 1:
+                areas.append(b.area[0])
+                circs.append(b.circularity[0])
+    areas, circs = np.array(areas), np.array(circs)
+    levels = np.unique(areas)
+    table = _disc_table()
+    assert table[0].tobytes() == levels.tobytes()
+    assert table[1].tobytes() == np.array([np.median(circs[areas == a]) for a in levels]).tobytes()
+
+
+def test_previous_in_pose_is_the_y_of_to_ycbcr():
+    rng = np.random.default_rng(1)
+    frame = rng.integers(0, 256, (90, 120, 3)).astype(np.uint8)
+    homography = np.array([[1.01, 0.02, -3.0], [-0.01, 0.99, 2.5], [1e-5, 0.0, 1.0]])
+    y = previous_in_pose(frame, homography, (10, 7), (40, 50))
+    to_crop = np.array([[1.0, 0.0, -10.0], [0.0, 1.0, -7.0], [0.0, 0.0, 1.0]]) @ homography
+    bgr = cv2.warpPerspective(frame, to_crop, (50, 40), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                              borderValue=(255, 255, 255))
+    assert np.array_equal(y, to_ycbcr(bgr)[..., 0])
