@@ -145,7 +145,7 @@ class ReferenceConfig:
     # the kernel, checked on otb_crossing: docs/colorpf.md).
     update_rate: float = 0.05
     update_above: float = 0.8
-    # Ours (colorpf.early): with an "early" background, each frame's tracked box (the marked box, then
+    # Ours (reference.BackgroundFrames.leave_out): with an "early" background, each frame's tracked box (the marked box, then
     # the estimate) times `exclude` per axis is left out of the median, which is ready once every pixel
     # of the marked box has min_frames frames that leave it in (the target has left it), at the latest
     # after `frames` frames. 0: off, the plain median of `frames` frames. Default 2 (the box x 2 covers

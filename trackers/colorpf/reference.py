@@ -27,9 +27,8 @@ import numpy as np
 
 from trackreplay.trackers.appearance.histogram import image_part_histograms, index_histogram
 from trackreplay.trackers.colorpf.config import ReferenceConfig
-from trackreplay.trackers.colorpf.early import ExcludingMedian
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners
-from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
+from trackreplay.trackers.foreground.background import ExcludingMedianBackground, MedianBackground, foreground_mask
 
 
 def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: float, p_square: float) -> np.ndarray:
@@ -115,8 +114,7 @@ class BackgroundFrames:
         self.start = start
         self.source = cfg.background
         self._before: list[np.ndarray] = []
-        self._early: MedianBackground | ExcludingMedian = (
-            ExcludingMedian(cfg.frames, cfg.min_frames, cfg.exclude) if cfg.exclude > 0 else MedianBackground(cfg.frames))
+        self._early = ExcludingMedianBackground(cfg.frames, cfg.min_frames) if cfg.exclude > 0 else MedianBackground(cfg.frames)
         self._marked: np.ndarray | None = None  # reference.exclude: the marked box's corners (ready once it is free)
         self.early_count = 0
 
@@ -146,19 +144,25 @@ class BackgroundFrames:
         self._early.add(image)
         return None, "early"
 
-    def leave_out(self, box_xywh: np.ndarray, marked: np.ndarray | None = None) -> None:
-        """``reference.exclude``: the last offered frame's tracked box (``marked``: the marked box's
-        corners, on the marked frame), left out of its median (:class:`.early.ExcludingMedian`)."""
+    def leave_out(self, box_xywh: np.ndarray, size: tuple[int, int], marked: np.ndarray | None = None) -> None:
+        """``reference.exclude``: the last offered frame's tracked box ``(x, y, w, h)`` in an image of
+        ``size`` (width, height), times ``exclude`` per axis, left out of the early median
+        (``marked``: the marked box's corners, on the marked frame). The background is then ready as
+        soon as every pixel of the marked box has ``min_frames`` frames without the track there (the
+        target has left it), at the latest after ``frames`` frames: it need not wait for the target to
+        be gone from half of them."""
         if marked is not None:
             self._marked = marked
-        if self.source == "early" and isinstance(self._early, ExcludingMedian):
-            self._early.leave_out(box_xywh)
+        if self.source == "early" and isinstance(self._early, ExcludingMedianBackground):
+            box = np.asarray(box_xywh, dtype=np.float64).copy()
+            box[2:4] *= self.cfg.exclude
+            self._early.leave_out(box_corners(box, *size)[0])
 
     @property
     def early_ready(self) -> bool:
         if self.source != "early":
             return False
-        if isinstance(self._early, ExcludingMedian) and self._marked is not None:
+        if isinstance(self._early, ExcludingMedianBackground) and self._marked is not None:
             return self._early.ready(self._marked)
         return self._early.full
 

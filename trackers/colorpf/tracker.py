@@ -29,7 +29,7 @@ is refined onto the foreground region it sits on when that region is consistent 
 (``refine.mode = "foreground"``, :func:`.foreground.foreground_region`: the cloud moves with it,
 without a ground plane the size follows it, and such a frame does not count towards "lost"); with an
 "early" background each frame's tracked box is left out of the median, so it is ready once the target
-has left its marked box (``reference.exclude``, :mod:`.early`); and while a larger moving region is
+has left its marked box (``reference.exclude``, :class:`.reference.BackgroundFrames`); and while a larger moving region is
 beside the estimate (the neighbour check's condition) and no region places it, the estimate is held
 on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
@@ -148,7 +148,8 @@ class ColorPfTracker(TrackerBase):
                 self._s_mark = self._mark_score(marked)
         out = self._track(frame, mask)
         if out and out[0].x is not None:  # reference.exclude: the target is in this box on this frame
-            self.background.leave_out(np.array([out[0].x, out[0].y, out[0].w, out[0].h], dtype=np.float64))
+            self.background.leave_out(np.array([out[0].x, out[0].y, out[0].w, out[0].h], dtype=np.float64),
+                                      (frame.image.shape[1], frame.image.shape[0]))
         return out
 
     def _start(self, frame: Frame) -> list[TrackState]:
@@ -183,7 +184,8 @@ class ColorPfTracker(TrackerBase):
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
         self.started = True
         out = self._track(frame, mask, weigh_only=True)
-        self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), marked=box)
+        self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64),
+                                  (frame.image.shape[1], frame.image.shape[0]), marked=box)
         return out
 
     def _mark_score(self, image: np.ndarray) -> float:

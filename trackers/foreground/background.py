@@ -53,6 +53,80 @@ class MedianBackground:
         self._frames = []
 
 
+class ExcludingMedianBackground(MedianBackground):
+    """A :class:`MedianBackground` whose frames each leave a box out: per pixel the median of the
+    frames that leave it in, so a target moving through the first frames is not in the background
+    once it has left a place (the plain median waits for it to be gone from half of the frames).
+
+    Each added frame leaves out its whole area until :meth:`leave_out` names its box. A pixel left
+    out of every frame takes the plain median of all of them."""
+
+    def __init__(self, capacity: int = 30, min_samples: int = 1) -> None:
+        super().__init__(capacity)
+        if min_samples < 1:
+            raise ValueError(f"an excluding median needs min_samples >= 1, not {min_samples}")
+        self.min_samples = min_samples
+        self._boxes: list[np.ndarray | None] = []  # integer corners x0, y0, x1, y1 left out (None: the whole frame)
+
+    def add(self, image: np.ndarray) -> bool:
+        kept = super().add(image)
+        if kept:
+            self._boxes.append(None)
+        return kept
+
+    def leave_out(self, corners: np.ndarray) -> None:
+        """The last added frame leaves out the pixels ``x0 <= x < x1, y0 <= y < y1`` (integer ``corners``)."""
+        if self._boxes:
+            self._boxes[-1] = np.asarray(corners, dtype=np.int64).reshape(4)
+
+    def _inside(self, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
+        """(frames, y1 - y0, x1 - x0) bool: the pixel lies in the frame's left-out box."""
+        xs, ys = np.arange(x0, x1), np.arange(y0, y1)
+        b = np.array([[-1, -1, -1, -1] if c is None else c for c in self._boxes], dtype=np.int64)
+        unknown = np.array([c is None for c in self._boxes])
+        in_x = ((xs >= b[:, :1]) & (xs < b[:, 2:3])) | unknown[:, None]
+        in_y = ((ys >= b[:, 1:2]) & (ys < b[:, 3:4])) | unknown[:, None]
+        return in_y[:, :, None] & in_x[:, None, :]
+
+    def ready(self, corners: np.ndarray) -> bool:
+        """Every pixel in ``corners`` (x0, y0, x1, y1) has ``min_samples`` frames that leave it in (or the frames are full)."""
+        if self.full:
+            return True
+        if not self._frames:
+            return False
+        x0, y0, x1, y1 = (int(v) for v in corners)
+        if x1 <= x0 or y1 <= y0:
+            return False
+        samples = len(self._frames) - self._inside(x0, y0, x1, y1).sum(axis=0)
+        return bool(samples.min() >= self.min_samples)
+
+    def model(self) -> np.ndarray | None:
+        """Per pixel the median (the upper middle value, as :meth:`MedianBackground.model`) of the
+        frames that leave it in; of all the frames where none does. The plain median everywhere,
+        then one ``np.sort`` over only the pixels some frames leave out."""
+        median = super().model()
+        if median is None:
+            return None
+        stack = np.stack(self._frames)  # (F, H, W[, C])
+        height, width = stack.shape[1:3]
+        out = self._inside(0, 0, width, height)  # (F, H, W)
+        some = out.any(axis=0) & ~out.all(axis=0)  # left out of some frames, not of all
+        if not some.any():
+            return median
+        left_out = out[:, some]  # (F, n)
+        values = stack[:, some].astype(np.uint16)  # (F, n[, C])
+        if values.ndim == 3:
+            left_out = left_out[..., None]
+        ranked = np.sort(np.where(left_out, np.uint16(256), values), axis=0)  # left-out values last
+        k = ((~out[:, some]).sum(axis=0) // 2).reshape(1, -1, *([1] * (values.ndim - 2)))
+        median[some] = np.take_along_axis(ranked, np.broadcast_to(k, (1, *values.shape[1:])), axis=0)[0]
+        return median
+
+    def clear(self) -> None:
+        super().clear()
+        self._boxes = []
+
+
 def difference(image: np.ndarray, background: np.ndarray) -> np.ndarray:
     """Largest absolute per-channel difference, uint8 (H, W)."""
     diff = cv2.absdiff(image, background)
