@@ -81,6 +81,7 @@ class GolfTracker(TrackerBase):
         self._moments_memo: list = [None, None, {}]  # particles, weights, {first component: (mean, spread)}
         self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
         self._followed: bool | None = None  # this frame's ReinitPolicy.follows answer, once _predict asked
+        self._pose_change: np.ndarray | None = None  # this frame's pose homography from the last frame's
 
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
@@ -96,6 +97,8 @@ class GolfTracker(TrackerBase):
         height, width = frame.image.shape[:2]
         scale = height / cfg.reference_height
         prev_camera = self._prev[0]
+        # the pose change from the last frame to this one (None: a pose is missing), asked by several stages
+        self._pose_change = pose_homography(prev_camera, camera) if camera is not None and prev_camera is not None else None
         # With encoders (optional): the samples move with the pose change, living in camera-independent directions.
         compensated = self.started and cfg.particles.compensate_camera_motion and camera is not None and prev_camera is not None
         marked_now = self.marks.on(frame.index)
@@ -111,7 +114,7 @@ class GolfTracker(TrackerBase):
             return []
         if camera is not None and prev_camera is not None and reinit.kind != "start":
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
-            self.validator.follow_camera(pose_homography(prev_camera, camera))
+            self.validator.follow_camera(self._pose_change)
         diameter = self.targets.diameter
         search = search_region(*self._moments(0), diameter, width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
         if (ahead := self.validator.next_point(diameter, scale)) is not None:  # ours: where a jump's evidence will be
@@ -183,7 +186,7 @@ class GolfTracker(TrackerBase):
         self.trail.add((x, y) if status == "measured" else None, los, self.ekf.x)
         vx, vy = float(estimate[2]), float(estimate[3])
         if compensated:  # the velocity in this pose's pixels includes the camera's own motion
-            vx, vy = with_camera_motion((vx, vy), (x, y), pose_homography(prev_camera, camera))
+            vx, vy = with_camera_motion((vx, vy), (x, y), self._pose_change)
 
         self._prev = (camera, frame.index, frame.t_ns)
         self._prev_image = frame.image
@@ -203,7 +206,7 @@ class GolfTracker(TrackerBase):
         samples are compensated) and its spread: how long the ball's streak may be this frame."""
         velocity, spread = self._moments(2)
         if compensated:
-            velocity = np.array(with_camera_motion(tuple(velocity), tuple(position), pose_homography(self._prev[0], camera)))
+            velocity = np.array(with_camera_motion(tuple(velocity), tuple(position), self._pose_change))
         return ApparentMotion(velocity, float(np.max(spread)))
 
     def _moments(self, first: int) -> tuple[np.ndarray, np.ndarray]:
@@ -259,7 +262,7 @@ class GolfTracker(TrackerBase):
             return None
         if prev_t_ns is not None and not 0 < frame.t_ns - prev_t_ns <= self.config.ekf.max_gap_s * 1e9:
             return None  # a time gap: the frame before is no picture of where the world was a frame ago
-        before = previous_in_pose(self._prev_image, pose_homography(prev_camera, frame.camera), (int(offset[0]), int(offset[1])),
+        before = previous_in_pose(self._prev_image, self._pose_change, (int(offset[0]), int(offset[1])),
                                   ycc.shape[:2])
         return moving_silhouette(ycc, before, diameter, self.config.contrast, scale, hat=hat())
 
@@ -326,7 +329,7 @@ class GolfTracker(TrackerBase):
             return reinit
         self.pf.resample()
         if compensated:
-            self.pf.particles = warp(self.pf.particles, pose_homography(prev_camera, camera))
+            self.pf.particles = warp(self.pf.particles, self._pose_change)
         if self.misses == 1 and self.reinit.at_rest(cfg.particles.rest_frames, cfg.particles.rest_px * scale):
             self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
         followed = self._followed = self.reinit.follows(camera, prev_camera, width, height)
