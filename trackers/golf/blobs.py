@@ -25,6 +25,7 @@ its path.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from dataclasses import dataclass
@@ -86,8 +87,8 @@ def roundness(blobs: Blobs) -> np.ndarray:
     return value
 
 
-REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess", "elongated")
-OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS, ELONGATED = range(len(REASONS))
+REASONS = ("ok", "tiny", "area_small", "area_large", "circularity", "excess", "elongated", "still")
+OK, TINY, AREA_SMALL, AREA_LARGE, CIRCULARITY, EXCESS, ELONGATED, STILL = range(len(REASONS))
 
 
 @dataclass(frozen=True)
@@ -270,3 +271,13 @@ def select_ball(mask: np.ndarray, offset: tuple[int, int], predicted: np.ndarray
     reason = gate(blobs, targets, cfg, scale, widen=widen, motion=motion)
     selected = nearest(blobs.centroid, reason == OK, predicted)
     return GatedBlobs(blobs, reason, selected, np.array([targets.area, targets.circularity]), float(widen))
+
+
+def refuse(gated: GatedBlobs, refused: np.ndarray, why: int, predicted: np.ndarray) -> GatedBlobs:
+    """The same gate with the accepted blobs in ``refused`` given reason ``why`` (e.g. ``STILL``:
+    :mod:`.scenery`), and the ball chosen again among the rest."""
+    refused = refused & gated.accepted
+    if not refused.any():
+        return gated
+    reason = np.where(refused, why, gated.reason)
+    return dataclasses.replace(gated, reason=reason, selected=nearest(gated.blobs.centroid, reason == OK, predicted))

@@ -56,6 +56,7 @@ class ParticleConfig:
     launch_velocity_px: float = 40.0
     rest_frames: int = 2
     rest_px: float = 1.5
+    rest_roundness: float = 0.8  # ... or seen on its marked frame only, at least this round (no motion blur: a streak 2.5x as long as wide is ~0.8)
     miss_velocity_damping: float = 0.85  # per frame without a ball the sample velocities decay: no drift when lost
     # With encoders, move the samples by each pose change (they then live in camera-independent
     # directions). Off by default: the operator keeps the ball nearly still in the picture, which the
@@ -168,6 +169,23 @@ class BlobConfig:
 
 
 @dataclass(frozen=True)
+class SnapConfig:
+    """Each marked box placed on the bright ball drawn round (ours, :mod:`.snap`); ``[golf.snap]``."""
+
+    enabled: bool = True  # False: the boxes as drawn (the paper: a box that fits the ball)
+    window: float = 2.0  # the box's surroundings: a window this many times its size
+    min_contrast: float = 12.0  # the box's brightest pixel above the window's median luminance (levels)
+    # The ball: pixels above the median plus this share of the way to that brightest pixel. A quarter:
+    # a small ball's blur is most of it (half the way keeps only its core: 3x4 px of a 6x6 px ball).
+    level: float = 0.25
+    min_fill: float = 0.5  # the ball's blob fills at least this of its bounding box ...
+    max_aspect: float = 2.0  # ... which is at most this elongated (a still or slow ball)
+    min_area_px: float = 4.0  # ... and has at least this many pixels (one pixel has no size)
+    slack_px: float = 1.0  # a box is loose when its samples' ellipse is wider than the ball's blob by more (frame pixels)
+    keep_px: float = 1.0  # a drawn centre within this of the ball's stays (frame pixels: a box's corners are integers)
+
+
+@dataclass(frozen=True)
 class ValidateConfig:
     """Honest status (ours, :mod:`.validate`): the motion-model gate, the confidence that makes a
     row ``measured``, and the evidence a jump needs; ``[golf.validate]``."""
@@ -185,6 +203,10 @@ class ValidateConfig:
     entry_margin_px: float = 24.0  # fixed camera, ball gone out of the picture: a new track starts this near the edge
     confirm_min_area_px: float = 2.0  # ... each blob of at least this many pixels (not scaled: one pixel has no shape)
     confirm_fit: float = 0.5  # ... and agree with each other in area and be round (validate.track_fit) at least this well
+    # Still scenery (scenery.py): a blob within this of where a blob was the frame before, seen while the
+    # ball was measured elsewhere, is refused while it stays (reference height; 0: off). Centroids of
+    # a still object move 0.1-0.5 px between frames (noise, JPEG).
+    still_px: float = 1.5
 
     def __post_init__(self) -> None:
         if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1 or not 0 <= self.min_fit <= 1:
@@ -268,3 +290,4 @@ class GolfConfig:
     range: RangeConfig = field(default_factory=RangeConfig)
     reinit: ReinitConfig = field(default_factory=ReinitConfig)
     validate: ValidateConfig = field(default_factory=ValidateConfig)
+    snap: SnapConfig = field(default_factory=SnapConfig)

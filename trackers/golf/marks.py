@@ -4,22 +4,30 @@ The tracker remembers every marked box it has seen (the frame bundle carries all
 marks on every frame, and this frame's own); it starts from the latest box marked at or before the
 current frame (a replay from the log's start begins on the first marked frame; one that starts
 later begins from the nearest earlier mark), preferring a label with "start" or "init".
+Once its frame's image is seen, each box is placed on the ball it was drawn round (:mod:`.snap`);
+the LUTs and the start use the placed box.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
+import numpy as np
+
 from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.golf.config import SnapConfig
 from trackreplay.trackers.golf.lut import region_key
+from trackreplay.trackers.golf.snap import snap_to_ball
 
 
 class Marks:
     """Marked boxes in the order first seen, each once."""
 
-    def __init__(self) -> None:
-        self.regions: list[InitRegion] = []
+    def __init__(self, snap: SnapConfig | None = None, core: float = 1.0) -> None:
+        self.regions: list[InitRegion] = []  # as drawn
         self._keys: set = set()
+        self._snap, self._core = snap or SnapConfig(), core  # core: the ball samples' share of a box (LutConfig.core)
+        self._placed: dict[tuple, InitRegion] = {}  # a drawn box's key -> the box placed on its ball
 
     def __bool__(self) -> bool:
         return bool(self.regions)
@@ -31,9 +39,18 @@ class Marks:
                 self._keys.add(key)
                 self.regions.append(r)
 
+    def place(self, image: np.ndarray, index: int) -> None:
+        """Place the boxes marked on frame ``index`` on the ball in that frame's ``image`` (each once)."""
+        for r in self.regions:
+            if r.frame == index and region_key(r) not in self._placed:
+                self._placed[region_key(r)] = snap_to_ball(image, r, self._snap, self._core)
+
+    def _as_placed(self, region: InitRegion) -> InitRegion:
+        return self._placed.get(region_key(region), region)
+
     def on(self, index: int) -> list[InitRegion]:
-        """The boxes marked on frame ``index``."""
-        return [r for r in self.regions if r.frame == index]
+        """The boxes marked on frame ``index`` (placed on the ball once :meth:`place` saw the frame)."""
+        return [self._as_placed(r) for r in self.regions if r.frame == index]
 
     def start_region(self, index: int) -> InitRegion | None:
         """The box to start from at frame ``index`` (None: nothing marked yet)."""
@@ -44,5 +61,5 @@ class Marks:
         on_latest = [r for r in past if r.frame == latest]
         for r in on_latest:
             if any(word in r.label.lower() for word in ("start", "init")):
-                return r
-        return on_latest[0]
+                return self._as_placed(r)
+        return self._as_placed(on_latest[0])

@@ -32,7 +32,8 @@ from trackreplay.trackers.base import Marked, TrackerBase, TrackState
 from trackreplay.trackers.filters.particles import ParticleFilter, squared_deviations
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
-from trackreplay.trackers.golf.blobs import ApparentMotion, BlobTargets, GatedBlobs, roundness, select_ball, start_targets
+from trackreplay.trackers.golf.blobs import (STILL, ApparentMotion, BlobTargets, GatedBlobs, refuse, roundness, select_ball,
+                                             start_targets)
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
@@ -43,6 +44,7 @@ from trackreplay.trackers.golf.particles import (DIM, ParticleSet, launch, likel
                                                  with_camera_motion)
 from trackreplay.trackers.golf.range import RangeFromArea
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
+from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, previous_in_pose, top_hat)
@@ -61,7 +63,7 @@ class GolfTracker(TrackerBase):
     def __init__(self, config: GolfConfig, rng: np.random.Generator) -> None:
         self.config = config
         self.rng = rng  # handed in by the engine: a tracker never draws its own seed
-        self.marks = Marks()
+        self.marks = Marks(config.snap, config.lut.core)
         self.luts = GolfLuts(config.lut, config.search.min_px, config.reference_height)
         self.pf = ParticleFilter(config.particles.n, DIM, rng)
         self.ekf = BallisticEkf(config.ekf, config.ball_diameter_m / 2.0)
@@ -69,6 +71,7 @@ class GolfTracker(TrackerBase):
         self.reinit = ReinitPolicy(config.reinit, config.search, config.max_predicted_frames)
         self.trail = Trail(config.trail_length)
         self.validator = Validator(config.validate, config.blobs)
+        self.scenery = Scenery(config.validate.still_px)
         self.notices = Notices()
         self.targets: BlobTargets | None = None
         self.lut_name = ""
@@ -77,6 +80,7 @@ class GolfTracker(TrackerBase):
         self._prev: tuple[PtzCamera | None, int | None, int | None] = (None, None, None)  # camera, index, t_ns
         self._prev_image: np.ndarray | None = None
         self._last_measured: tuple[int, float, float] | None = None  # frame, x, y
+        self._sightings = 0  # frames measured since the track (re)started
         self.intermediates = GolfIntermediates.idle("")
         self._moments_memo: list = [None, None, {}]  # particles, weights, {first component: (mean, spread)}
         self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
@@ -86,12 +90,15 @@ class GolfTracker(TrackerBase):
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
         for image, regions in marked:
-            self.luts.learn(image, regions)
             self.marks.remember(regions)
+            for index in sorted({r.frame for r in regions}):
+                self.marks.place(image, index)
+                self.luts.learn(image, self.marks.on(index))
 
     def step(self, frame: Frame) -> list[TrackState]:
         cfg, camera = self.config, frame.camera
         self.marks.remember(frame.all_hints + frame.hints)
+        self.marks.place(frame.image, frame.index)
         self.luts.learn(frame.image, self.marks.on(frame.index))
         notice = self.notices.check(camera is not None, bool(self.marks))
         height, width = frame.image.shape[:2]
@@ -115,6 +122,7 @@ class GolfTracker(TrackerBase):
         if camera is not None and prev_camera is not None and reinit.kind != "start":
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
             self.validator.follow_camera(self._pose_change)
+            self.scenery.follow_camera(self._pose_change)
         diameter = self.targets.diameter
         search = search_region(*self._moments(0), diameter, width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
         if (ahead := self.validator.next_point(diameter, scale)) is not None:  # ours: where a jump's evidence will be
@@ -127,8 +135,7 @@ class GolfTracker(TrackerBase):
         moving = (lambda: self._moving(frame, ycc, sil.offset, diameter, scale, hat)) if cfg.contrast.moving else (lambda: None)
         if lost and (mask := moving()) is not None:  # once lost, a ball moving against the world is a candidate too
             sil = dataclasses.replace(sil, mask=sil.mask | mask)
-        gated = select_ball(sil.mask, sil.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
-                            motion=motion)  # §2.1
+        gated = self._select(sil.mask, sil.offset, search.centre, scale, lost, motion)  # §2.1
         seen_gated = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
                                                  diameter=diameter, size=(width, height), scale=scale, lost=lost)
         found = seen_gated[0]
@@ -137,8 +144,7 @@ class GolfTracker(TrackerBase):
             # the ball may pass the other LUT; take it only if that finds the ball in the gate.
             for name in (n for n in self.luts.names if n != sil.lut_name):
                 other = LutSilhouette(name, sil.lut_scores, silhouette(ycc, self.luts.lut(name)), sil.offset)
-                alt = select_ball(other.mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale,
-                                  motion=motion)
+                alt = self._select(other.mask, other.offset, search.centre, scale, False, motion)
                 seen_alt = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
                                                        diameter=diameter, size=(width, height), scale=scale, lost=lost)
                 if seen_alt[0] is not None and seen_alt[0].verdict == "measured":
@@ -182,6 +188,8 @@ class GolfTracker(TrackerBase):
             confidence = check.confidence
         if status == "measured":
             self._last_measured = (frame.index, x, y)
+            self._sightings += 1
+        self.scenery.update(frame.index, gated.blobs, (x, y) if status == "measured" else None, diameter, scale)
         los = camera.line_of_sight(np.array([[x, y]]))[0] if camera is not None else NAN3
         self.trail.add((x, y) if status == "measured" else None, los, self.ekf.x)
         vx, vy = float(estimate[2]), float(estimate[3])
@@ -266,6 +274,25 @@ class GolfTracker(TrackerBase):
                                   ycc.shape[:2])
         return moving_silhouette(ycc, before, diameter, self.config.contrast, scale, hat=hat())
 
+    def _struck(self, scale: float) -> bool:
+        """The ball, missed this frame for the first time, was lying still when last seen, so it was
+        struck: seen still on ``rest_frames`` frames, or on its marked frame only and as a sharp disc
+        there (round, no motion blur: a mark on the launch frame of a 30 fps clip, gone 40-70 px
+        a frame later; a streak marked in flight is no ball at rest)."""
+        cfg = self.config.particles
+        if self._sightings == 1 and self.targets is not None:  # (never seen since the mark: nothing known)
+            return self.targets.circularity >= cfg.rest_roundness
+        return self.reinit.at_rest(cfg.rest_frames, cfg.rest_px * scale)
+
+    def _select(self, mask: np.ndarray, offset, centre: np.ndarray, scale: float, lost: bool,
+                motion: ApparentMotion | None) -> GatedBlobs:
+        """§2.1's blob gate (:func:`select_ball`), then still scenery refused (:mod:`.scenery`)."""
+        cfg = self.config
+        gated = select_ball(mask, offset, centre, self.targets, self.misses, cfg.blobs, scale, lost=lost, motion=motion)
+        if len(self.scenery.points):
+            gated = refuse(gated, self.scenery.on_scenery(gated.blobs, scale), STILL, centre)
+        return gated
+
     def _contrast_fallback(self, ycc: np.ndarray, sil: LutSilhouette, search, diameter: float, size: tuple[int, int],
                            scale: float, lost: bool, motion: ApparentMotion | None,
                            moving: Callable[[], np.ndarray | None],
@@ -281,8 +308,7 @@ class GolfTracker(TrackerBase):
             if mask is None:
                 continue
             other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
-            gated = select_ball(mask, other.offset, search.centre, self.targets, self.misses, cfg.blobs, scale, lost=lost,
-                                motion=motion)
+            gated = self._select(mask, other.offset, search.centre, scale, lost, motion)
             seen = self.validator.seen_in_gate(gated=gated, predicted=search.centre, spread=search.spread,
                                                diameter=diameter, size=size, scale=scale, lost=lost)
             if seen[0] is not None and seen[0].verdict == "measured":
@@ -295,7 +321,9 @@ class GolfTracker(TrackerBase):
         self.started = True
         self.misses = 0
         self._last_measured = None  # a re-anchor is no step of the ball's
+        self._sightings = 0
         self.validator.reset()
+        self.scenery.reset()  # the user says where the ball is
         name, self.lut_name = self.luts.start_names(frame.image, region)
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
         ycc, offset, mask = box_silhouette(frame.image, box, self.luts.lut(self.lut_name))
@@ -318,6 +346,7 @@ class GolfTracker(TrackerBase):
         if not abs(dt) <= cfg.ekf.max_gap_s:  # a time gap (or a log time jumping back): the ball is lost, not coasted
             self.misses = max(self.misses, cfg.max_predicted_frames + 1)
             self.validator.reset()
+            self.scenery.reset()
             self.ekf.forget()
             steps = 1
         landing = self.ekf.advance(dt)
@@ -330,8 +359,8 @@ class GolfTracker(TrackerBase):
         self.pf.resample()
         if compensated:
             self.pf.particles = warp(self.pf.particles, self._pose_change)
-        if self.misses == 1 and self.reinit.at_rest(cfg.particles.rest_frames, cfg.particles.rest_px * scale):
-            self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))  # struck on the missed frame
+        if self.misses == 1 and self._struck(scale):
+            self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))
         followed = self._followed = self.reinit.follows(camera, prev_camera, width, height)
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit

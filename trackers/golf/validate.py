@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trackreplay.trackers.geometry.homography import apply_homography
-from trackreplay.trackers.golf.blobs import GatedBlobs, roundness, shape_tolerance
+from trackreplay.trackers.golf.blobs import STILL, GatedBlobs, roundness, shape_tolerance
 from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
 VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
@@ -234,7 +234,7 @@ class Validator:
         """Another shape-accepted blob this frame looks as much like the tentative ball (area within
         ``area_tolerance`` of the tentative blobs' median): after a loss the tracker cannot tell which
         of two such balls is its own (a spare ball, a tee marker), so it confirms neither."""
-        others = np.flatnonzero(gated.accepted)
+        others = np.flatnonzero(gated.accepted | (gated.reason == STILL))  # still scenery is a look-alike too
         others = others[others != k]
         if not others.size or self.best is None:
             return False

@@ -173,6 +173,19 @@ def test_a_ball_struck_from_rest_is_caught(backdrop, draw_ball):
     assert "measured" not in [still.step(f)[0].status for f in frames][10:]  # without it the ball is lost
 
 
+def test_a_ball_marked_on_its_launch_frame_only_is_caught(backdrop, draw_ball):
+    # A 30 fps clip marked on the frame the ball is struck: seen once, a sharp disc, then 40 px a
+    # frame up. Seen once and round, it was at rest: missed on the next frame, it was struck. A
+    # streak marked in flight (not round) is no ball at rest (rest_roundness).
+    flight = [(640.0 + 2 * k, 600.0 - 40 * k) for k in range(13)]
+    frames = sequence(backdrop, draw_ball, flight, [(0, flight[0])])
+    st = statuses(run(frames))
+    caught = [k for k in range(1, 13) if st[k] == "measured"]
+    assert caught and caught[0] <= 4, st
+    strict = GolfTracker(GolfConfig(particles=ParticleConfig(rest_roundness=1.01)), np.random.default_rng(0))
+    assert "measured" not in [strict.step(f)[0].status for f in frames][1:]  # without it the ball is lost
+
+
 def test_two_lookalike_balls_after_a_loss_confirm_neither(backdrop, draw_ball):
     # The ball is hidden for 12 frames; then two identical balls move side by side near its path:
     # the tracker cannot tell its own from the spare one, so neither is measured (verdict "ambiguous").
