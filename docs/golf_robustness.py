@@ -1,0 +1,220 @@
+"""Golf tracker (seed 000) on the two real clips played back differently: does it generalise?
+
+    python docs/golf_robustness.py      (about 5 minutes; skips a clip that is absent)
+
+The tracker is measured on other real clips than ours, so each of our two clips (the iron shot into
+the sky, ../shared/data/real/golf_iron_shot_sky; the broadcast approach,
+../shared/data/real/golf_broadcast_approach) is turned into the kinds of clip a user brings: half the
+resolution, half the frame rate, mirrored (a left-handed golfer, a camera on the other side), darker,
+harder JPEG, and marks drawn the way people draw them (3 px off, 1.6x or 0.6x the ball, 3 frames
+later). Each variant is recorded with `trackreplay record --images`, marked once with
+`trackreplay annotate --from-csv` (the clip's one mark, moved with the variant), replayed with
+`trackreplay replay --tracker golf` (default configuration, seed 0) and compared with the clip's
+reference positions moved the same way (tolerances scaled with the resolution). Writes
+docs/golf_robustness.md and docs/golf_robustness.json. Deterministic.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE))
+
+import cv2  # noqa: E402
+import numpy as np  # noqa: E402
+import polars as pl  # noqa: E402
+
+from golf_real import cli, compare  # noqa: E402
+
+REAL = ROOT.parent / "shared" / "data" / "real"
+# key: (video, reference csv, the one mark (frame, x, y, w, h: top-left box), first frame the ball is gone)
+CLIPS = {
+    "iron": (REAL / "golf_iron_shot_sky" / "vid1.mp4", REAL / "golf_iron_shot_sky" / "reference.csv", (458, 593, 1016, 22, 22), 612),
+    "approach": (REAL / "golf_broadcast_approach" / "demo.mp4", HERE / "data" / "golf_broadcast_reference.csv", (20, 312, 200, 8, 8), 208),
+}
+VARIANTS = {  # key: (what it is, how it is made)
+    "as recorded": ("the clip as it is", {}),
+    "half resolution": ("every frame resized to half (INTER_AREA)", {"resize": 0.5}),
+    "half frame rate": ("every other frame (30 fps iron, 15 fps approach)", {"every": 2}),
+    "mirrored": ("left and right swapped", {"flip": True}),
+    "darker": ("luminance x0.75", {"gain": 0.75}),
+    "JPEG q50": ("re-encoded at quality 50", {"quality": 50}),
+    "mark 3 px off": ("the box moved 3 px right and 3 px up", {"shift": (3, -3)}),
+    "mark 1.6x": ("the box 1.6x the ball's, same centre", {"box_scale": 1.6}),
+    "mark 0.6x": ("the box 0.6x the ball's, same centre", {"box_scale": 0.6}),
+    "mark 3 frames late": ("the ball marked 3 frames later (in flight)", {"late": 3}),
+}
+# The same study before this change (commit 8ba91d0): measured, within 5 px, confident wrong (> 25 px), measured while gone.
+BEFORE = {
+    ("iron", "as recorded"): (1.0, 1.0, 0, "0/44"), ("iron", "half resolution"): (1.0, 1.0, 0, "0/44"),
+    ("iron", "half frame rate"): (0.056, 0.056, 0, "0/22"), ("iron", "mirrored"): (1.0, 0.333, 14, "44/44"),
+    ("iron", "darker"): (1.0, 1.0, 0, "0/44"), ("iron", "JPEG q50"): (1.0, 1.0, 0, "2/44"),
+    ("iron", "mark 3 px off"): (0.0, 0.0, 0, "0/44"), ("iron", "mark 1.6x"): (0.0, 0.0, 0, "0/44"),
+    ("iron", "mark 0.6x"): (1.0, 1.0, 0, "0/44"), ("iron", "mark 3 frames late"): (1.0, 1.0, 0, "0/44"),
+    ("approach", "as recorded"): (1.0, 1.0, 0, "0/28"), ("approach", "half resolution"): (0.984, 0.984, 0, "0/28"),
+    ("approach", "half frame rate"): (0.138, 0.011, 12, "0/14"), ("approach", "mirrored"): (1.0, 1.0, 0, "0/28"),
+    ("approach", "darker"): (1.0, 1.0, 0, "0/28"), ("approach", "JPEG q50"): (1.0, 0.995, 0, "0/28"),
+    ("approach", "mark 3 px off"): (0.957, 0.813, 0, "26/28"), ("approach", "mark 1.6x"): (1.0, 1.0, 0, "0/28"),
+    ("approach", "mark 0.6x"): (1.0, 1.0, 0, "0/28"), ("approach", "mark 3 frames late"): (1.0, 1.0, 0, "0/28"),
+}
+
+
+def decoded(video: Path) -> tuple[list[np.ndarray], float]:
+    cap = cv2.VideoCapture(str(video))
+    fps = cap.get(cv2.CAP_PROP_FPS)
+    frames = []
+    while True:
+        ok, frame = cap.read()
+        if not ok:
+            return frames, fps
+        frames.append(frame)
+
+
+def run(clip: str, variant: str, frames: list[np.ndarray], fps: float, tmp: Path) -> dict:
+    video, reference, (mark_frame, bx, by, bw, bh), gone = CLIPS[clip]
+    how = VARIANTS[variant][1]
+    height, width = frames[0].shape[:2]
+    every, s = how.get("every", 1), how.get("resize", 1.0)
+    flip = how.get("flip", False)
+
+    def point(x: float, y: float) -> tuple[float, float]:
+        """A reference position (pixel centres) in the variant's pixels."""
+        x = width - 1 - x if flip else x
+        return ((x + 0.5) * s - 0.5, (y + 0.5) * s - 0.5)
+
+    folder = tmp / f"{clip}-{list(VARIANTS).index(variant)}"
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, i in enumerate(range(0, len(frames), every)):
+        img = frames[i]
+        if flip:
+            img = np.ascontiguousarray(img[:, ::-1])
+        if s != 1.0:
+            img = cv2.resize(img, (round(width * s), round(height * s)), interpolation=cv2.INTER_AREA)
+        if "gain" in how:
+            img = np.clip(img.astype(np.float32) * how["gain"], 0, 255).astype(np.uint8)
+        cv2.imwrite(str(folder / f"{k:05d}.jpg"), img, [cv2.IMWRITE_JPEG_QUALITY, how.get("quality", 95)])
+    log = tmp / f"{folder.name}.mcap"
+    cli("record", str(log), "--images", str(folder), "--fps", str(fps / every), "--quiet")
+
+    ref = pl.read_csv(reference, comment_prefix="#")
+    marked_at = mark_frame + how.get("late", 0)
+    cx = float(np.interp(marked_at, ref["frame"], ref["x"])) if "late" in how else bx + bw / 2 - 0.5
+    cy = float(np.interp(marked_at, ref["frame"], ref["y"])) if "late" in how else by + bh / 2 - 0.5
+    dx, dy = how.get("shift", (0, 0))
+    side_w, side_h = bw * how.get("box_scale", 1.0), bh * how.get("box_scale", 1.0)
+    mx, my = point(cx + dx, cy + dy)
+    box = (round(mx - side_w * s / 2 + 0.5), round(my - side_h * s / 2 + 0.5), max(2, round(side_w * s)), max(2, round(side_h * s)))
+    marks = tmp / f"{folder.name}.csv"
+    marks.write_text(f"frame,x,y,w,h\n{marked_at // every},{box[0]},{box[1]},{box[2]},{box[3]}\n")
+    marked, traj_path = tmp / f"{folder.name}-marked.mcap", tmp / f"{folder.name}.parquet"
+    cli("annotate", str(log), "--from-csv", str(marks), "--label", "ball", "--out", str(marked))
+    said = cli("replay", str(marked), "--tracker", "golf", "--export", str(traj_path), "--interpolate", "none", "--quiet")[0]
+
+    ref = ref.filter(pl.col("frame") % every == 0)
+    moved = [point(x, y) for x, y in zip(ref["x"], ref["y"])]
+    ref = pl.DataFrame({"frame": (ref["frame"] // every).to_list(), "x": [p[0] for p in moved], "y": [p[1] for p in moved]})
+    traj = pl.read_parquet(traj_path)
+    j = compare(traj, ref).filter(pl.col("frame") >= marked_at // every)
+    d = j["dist"].fill_null(np.inf).to_numpy()
+    m = (j["status"] == "measured").fill_null(False).to_numpy()
+    after = traj.filter(pl.col("frame") >= gone // every)
+    return {"clip": clip, "variant": variant, "reference_frames": int(len(d)), "measured": float(m.mean()),
+            "within_5px": float((m & (d <= 5 * s)).mean()), "confident_wrong": int((d[m] > 25 * s).sum()),
+            "measured_while_gone": f"{int((after['status'] == 'measured').sum())}/{after.height}",
+            "digest": next((ln.split("digest ")[1].strip() for ln in said.splitlines() if "digest " in ln), "?")}
+
+
+def main() -> int:
+    rows = []
+    with tempfile.TemporaryDirectory() as td:
+        for clip, (video, *_rest) in CLIPS.items():
+            if not video.is_file():
+                print(f"golf_robustness: {video} is absent; skipping {clip}")
+                continue
+            frames, fps = decoded(video)
+            for variant in VARIANTS:
+                rows.append(run(clip, variant, frames, fps, Path(td)))
+                print(json.dumps(rows[-1]), flush=True)
+    if not rows:
+        return 0
+    (HERE / "golf_robustness.json").write_text(json.dumps(rows, indent=1) + "\n")
+    write_report(rows)
+    return 0
+
+
+def pct(v: float) -> str:
+    return f"{100 * v:.1f} %"
+
+
+def write_report(rows: list[dict]) -> None:
+    lines = [
+        "# Golf tracker on the real clips played back differently",
+        "",
+        "Generated by `python docs/golf_robustness.py` (about 5 minutes). Each real clip, turned into",
+        "the kinds of clip a user brings, recorded, marked once and replayed with the CLI (default",
+        "configuration, seed 0); scored on the clip's reference frames from the mark on (positions and",
+        "tolerances moved and scaled with the variant). *Measured*: share of those frames `measured`;",
+        "*within 5 px*: `measured` and within 5 px (2.5 px at half resolution); *confident wrong*:",
+        "`measured` more than 25 px off; *measured while gone*: `measured` rows after the ball left",
+        "the picture (iron, from frame 612) or dropped into the hole (approach, from frame 208).",
+        "*Before*: the same study at commit 8ba91d0, before the changes below.",
+        "",
+        "| clip | variant | reference frames | measured | within 5 px | confident wrong | measured while gone | before: within 5 px / wrong / while gone |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        b = BEFORE.get((r["clip"], r["variant"]))
+        before = f"{pct(b[1])} / {b[2]} / {b[3]}" if b else "-"
+        lines.append(f"| {r['clip']} | {r['variant']} ({VARIANTS[r['variant']][0]}) | {r['reference_frames']} | {pct(r['measured'])} "
+                     f"| {pct(r['within_5px'])} | {r['confident_wrong']} | {r['measured_while_gone']} | {before} |")
+    lines += ["", FINDINGS]
+    (HERE / "golf_robustness.md").write_text("\n".join(lines) + "\n")
+
+
+FINDINGS = """## What this found, and what changed
+
+Three failures that the clips as recorded never showed (each now has a unit test that fails
+without its fix, in tests/trackers/golf/):
+
+- **Mirrored iron shot: 14 confident wrong rows and `measured` on all 44 frames after the ball
+  had gone.** Faint in front of the trees (frame 493), the ball was missed once; the nearest
+  look-alike in the gate was a flower 32 px behind its path, seen in the same place on the frames
+  before while the ball was measured elsewhere. It was measured, and the track settled on the
+  flower bed. Now a blob that sat still while the ball was measured more than a diameter away is
+  *still scenery*, refused by the gate (reason `still`, shown in the Rerun view) for as long as it
+  stays (`trackers/golf/scenery.py`, `[golf.validate] still_px`).
+- **Marks drawn loosely: the iron shot never measured at all** (box 3 px off, or 1.6x the ball).
+  The LUTs learn the ball's colours from the ellipse inscribed in the box: a loose box gave them
+  turf, the ball merged with it in the silhouette and its size was read as 415-2690 px instead of
+  ~280. Each mark is now placed on the bright blob it was drawn round before anything learns from
+  it (`trackers/golf/snap.py`, `[golf.snap]`): moved to the blob's centroid when more than a pixel
+  off, and given the blob's size when the box's sample ellipse is larger than the blob (a tight
+  box, as the synthetic annotator draws them, is kept as drawn: a ball's dim, shaded side is
+  still the ball).
+- **Iron shot at 30 fps: 1 of 18 reference frames measured.** The one mark is on the launch frame;
+  at 30 fps the ball is 40-70 px away on the next. A ball seen lying still and then missed is
+  taken to be struck (the samples' velocities open up), but "lying still" needed two sightings.
+  Now one sighting does when the ball is round on it (no motion blur: `rest_roundness`); a streak
+  marked in flight is not taken for a ball at rest (tried without that condition: the iron shot
+  marked 3 frames late measured a wrong blob 85 px off in the opened gate, 14 rows).
+
+Left as found: the approach at 15 fps (every other frame of a 30 fps broadcast) is lost from the
+frame after its mark (the ball falls 20 px a frame, outside a velocity prior of 3.6 px a frame at
+this frame size), and after 37 frames lost a white patch moving with the camera's pan is confirmed
+and measured (14 rows, 55-117 px off) while the ball rolls on the green: with no encoders a thing
+fixed in the world moves at a constant velocity in the picture, as a ball would. The mirrored
+approach measures the cup's white liner on 7 of the 28 frames after the ball dropped into it (and,
+where ball and liner are one blob, 2 reference frames 5-25 px off). The approach as recorded now says
+`predicted` on those three frames (before: `measured` within 5 px): its 8x8 px mark is placed on
+the 5x5 px ball, so the LUT learns from the ball's core rather than its blurred rim.
+"""
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
