@@ -6,15 +6,16 @@ field. The ablation switches reproduce the paper's comparisons: ``likelihood.his
 ``"hs"`` | ``"hsv"`` (Table 1), ``reference.mode`` ``"mixed"`` | ``"target"`` (Table 2),
 ``size.mode`` ``"geometry"`` | ``"noise"`` | ``"fixed"`` (Table 3).
 
-Six departures are on by default (measured in docs/colorpf.md, synthetic scenes and otb_crossing):
+Seven departures are on by default (measured in docs/colorpf.md, synthetic scenes and otb_crossing):
 the Epanechnikov kernel weighting of the histograms (``likelihood.kernel``), the adaptive
 reference (``reference.update_rate = 0.05``), the foreground cue (``likelihood.foreground``), the
 foreground-region refinement of the estimate (``refine.mode = "foreground"``), the early background
 without the tracked box (``reference.exclude``) and the hold on the motion prediction beside a
-larger moving region (``hold.enabled``).
+larger moving region (``hold.enabled``), and the camera-motion compensation of the background and the
+particle cloud (``camera.compensate``; docs/colorpf_robustness.md).
 The status also checks the estimate's neighbourhood for foreground (``neighbour_check``).
 ``PAPER`` is the overrides that restore the paper's pipeline exactly (uniform pixel weights, no
-foreground cue, a fixed reference, the plain early median, no neighbour check, no refinement, no hold). The other switches of ours
+foreground cue, a fixed reference, the plain early median, no neighbour check, no refinement, no hold, a still camera). The other switches of ours
 are off: ``likelihood.parts``, ``likelihood.template``, ``motion.model``, ``size.no_plane``.
 
 TOML (every table and key optional; ``trackreplay replay LOG --tracker colorpf --config c.toml``)::
@@ -39,7 +40,8 @@ from trackreplay.trackers.appearance.histogram import KERNELS  # the pixel weigh
 # no foreground cue, a reference fixed at initialisation, the plain early median, no neighbour check
 # of the status, no foreground-region refinement and no hold (the other switches of ours are off by default).
 PAPER: dict = {"likelihood": {"kernel": "uniform", "foreground": 0.0}, "reference": {"update_rate": 0.0, "exclude": 0.0},
-                "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False}}
+                "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False},
+                "camera": {"compensate": False}}
 
 HISTOGRAMS = ("hs", "hsv")
 REFERENCES = ("mixed", "target")
@@ -300,6 +302,26 @@ class HoldConfig:
 
 
 @dataclass(frozen=True)
+class CameraConfig:
+    """Ours, ``[colorpf.camera]``: the camera's translation since the marked frame (colorpf.camera)."""
+
+    # True: the scene's translation since the marked frame (median Lucas-Kanade displacement of
+    # corners outside the tracked box, against a key frame), rounded to whole pixels, moves the
+    # "early" median's frames back to the marked frame's view, the background to the current view
+    # for the foreground cue / region refinement / hold, and the particle cloud with the scene. Why:
+    # eq. (7) and the foreground assume a still camera; a slow pan smears the median and makes every
+    # edge foreground without tripping scene_changed (otb_crossing panned 0.5 px/frame: AUC 0.66 ->
+    # 0.44, docs/colorpf_robustness.md). A still camera measures offset 0: unchanged. False: the
+    # paper (and the defaults before this switch). Frames before the mark ("before") are not moved.
+    compensate: bool = True
+    min_corners: int = 20  # fewer tracked corners: no measurement (the offset stays)
+
+    def __post_init__(self) -> None:
+        if self.min_corners < 3:
+            raise ValueError("camera.min_corners must be >= 3")
+
+
+@dataclass(frozen=True)
 class ColorPfConfig:
     """The whole tracker (``[colorpf]``); each stage gets only its own table."""
 
@@ -334,6 +356,7 @@ class ColorPfConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     refine: RefineConfig = field(default_factory=RefineConfig)
     hold: HoldConfig = field(default_factory=HoldConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
 
     def __post_init__(self) -> None:
         if self.n_particles < 1:
