@@ -250,8 +250,8 @@ class RefineConfig:
     # box's, no larger moving region beside it: the neighbour check's condition) the estimate's centre
     # moves to it, the particle cloud with it, and without a ground plane the size follows it,
     # w, h <- (1 - size_rate) (w, h) + size_rate (w_r, h_r) (the aspect with it). Such a frame is
-    # "predicted" at worst, not a miss towards "lost" (`keeps_track`), for at most `keep_frames` such
-    # frames in a row since the last "measured" one; once "lost" there is no refinement (a region is
+    # "predicted" at worst, not a miss towards "lost" (`keeps_track`; at most `keep_frames` such frames in a
+    # row since the last "measured" one, no bound by default); once "lost" there is no refinement (a region is
     # no re-acquisition: after a loss the foreground cue would pull the cloud onto any other walker,
     # and the region would keep a track on them "predicted" indefinitely). Otherwise the estimate is the
     # PF's, untouched. Default: otb_crossing AUC 0.516 -> 0.617, synthetic scenes level or better
@@ -265,14 +265,24 @@ class RefineConfig:
     size_rate: float = 0.2
     layout: bool = True
     keeps_track: bool = True
-    keep_frames: int = 30
+    # Ours: at most this many placed frames in a row since the last measured one keep the track
+    # (None: no bound; a frame the region does not place still counts towards "lost", and after a loss
+    # there is no refinement). Default None (was 30): the bound was meant against a region keeping a
+    # track on another mover, but a target whose colour match sinks below measured_fraction for good
+    # (its appearance changes as it comes closer or the light changes, and the reference adapts only
+    # above update_above) was dropped after keep_frames + lost_after frames while the region still placed
+    # it within 3 px: otb_crossing reversed in time AUC 0.39 (positions on 57% of the frames) -> 0.66,
+    # others level or better (docs/colorpf_robustness.md). Bounding by the colour instead (a placed box
+    # above the background's score renews the budget) kept only part of it (0.60): the faded colour
+    # scores below the background. 30: the previous default.
+    keep_frames: int | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in REFINES:
             raise ValueError(f"refine.mode must be one of {', '.join(REFINES)}, not {self.mode!r}")
         if self.iterations < 1:
             raise ValueError("refine.iterations must be >= 1")
-        if self.keep_frames < 0:
+        if self.keep_frames is not None and self.keep_frames < 0:
             raise ValueError("refine.keep_frames must be >= 0")
         if self.window < 1 or self.factor <= 1 or not 0 <= self.min_part < 1 or not 0 <= self.size_rate <= 1:
             raise ValueError("refine.window >= 1, refine.factor > 1, 0 <= refine.min_part < 1, "

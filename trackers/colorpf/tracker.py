@@ -415,7 +415,8 @@ class ColorPfTracker(TrackerBase):
                                           cfg.reference.open_px, gain)
                 if shares.max() > self.reference.p_detect / self.reference.p_square:
                     status = "predicted"
-        elif placed and cfg.refine.keeps_track and self.placed_run < cfg.refine.keep_frames:
+        elif placed and cfg.refine.keeps_track and (cfg.refine.keep_frames is None
+                                                    or self.placed_run < cfg.refine.keep_frames):
             self.placed_run += 1
             status = "predicted"  # the foreground region places the target: not a miss towards "lost"
         elif held:
