@@ -181,11 +181,10 @@ def main() -> None:
     if args.only or args.config:
         return
     (HERE / "colorpf_robustness.json").write_text(json.dumps(results, indent=2) + "\n")
-    md = HERE / "colorpf_robustness.md"
-    head = md.read_text().split("<!-- table -->")[0] if md.exists() else "# Colour PF: robustness\n\n"
-    md.write_text(head + "<!-- table -->\n" + table(results) + "\n<!-- /table -->\n"
-                  + (md.read_text().split("<!-- /table -->")[1] if md.exists() and "<!-- /table -->" in md.read_text()
-                     else ""))
+    md = HERE / "colorpf_robustness.md"  # only the table between the markers is rewritten
+    old = md.read_text() if md.exists() else "# Colour PF: robustness\n\n<!-- table -->\n<!-- /table -->\n"
+    head, tail = old.split("<!-- table -->")[0], old.split("<!-- /table -->")[1]
+    md.write_text(head + "<!-- table -->\n" + table(results) + "\n<!-- /table -->" + tail)
 
 
 if __name__ == "__main__":
