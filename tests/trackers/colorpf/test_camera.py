@@ -93,3 +93,17 @@ def test_a_still_camera_is_unchanged_by_the_compensation():
     on = _errors(ColorPfConfig(), pan=0.0)
     off = _errors(ColorPfConfig(camera=CameraConfig(compensate=False)), pan=0.0)
     assert on == off
+
+
+def test_a_wide_frame_is_measured_at_half_size_and_scaled_back():
+    rng = np.random.default_rng(2)
+    coarse = rng.integers(70, 170, (66, 100, 1)).astype(np.uint8)
+    world = np.repeat(cv2.resize(coarse, (800, 528), interpolation=cv2.INTER_CUBIC)[..., None], 3, axis=2)
+    cam, still = CameraMotion(), CameraMotion()
+    for i in range(20):
+        m = np.array([[1.0, 0.0, 0.7 * i], [0.0, 1.0, 10.0 - 0.3 * i]])
+        t = cam.update(cv2.warpAffine(world, m, (700, 480), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP))
+        s = still.update(world[:480, :700])
+    assert cam._factor == 2
+    assert np.allclose(t[:2, 2], [-0.7 * 19, 0.3 * 19], atol=0.4) and abs(scale_of(t) - 1.0) < 0.003
+    assert np.array_equal(snap(s, (700, 480)), IDENTITY)
