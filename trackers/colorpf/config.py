@@ -6,15 +6,16 @@ field. The ablation switches reproduce the paper's comparisons: ``likelihood.his
 ``"hs"`` | ``"hsv"`` (Table 1), ``reference.mode`` ``"mixed"`` | ``"target"`` (Table 2),
 ``size.mode`` ``"geometry"`` | ``"noise"`` | ``"fixed"`` (Table 3).
 
-Six departures are on by default (measured in docs/colorpf.md, synthetic scenes and otb_crossing):
+Seven departures are on by default (measured in docs/colorpf.md, synthetic scenes and otb_crossing):
 the Epanechnikov kernel weighting of the histograms (``likelihood.kernel``), the adaptive
 reference (``reference.update_rate = 0.05``), the foreground cue (``likelihood.foreground``), the
 foreground-region refinement of the estimate (``refine.mode = "foreground"``), the early background
 without the tracked box (``reference.exclude``) and the hold on the motion prediction beside a
-larger moving region (``hold.enabled``).
+larger moving region (``hold.enabled``), and the camera-motion compensation of the background and the
+particle cloud (``camera.compensate``; docs/colorpf_robustness.md).
 The status also checks the estimate's neighbourhood for foreground (``neighbour_check``).
 ``PAPER`` is the overrides that restore the paper's pipeline exactly (uniform pixel weights, no
-foreground cue, a fixed reference, the plain early median, no neighbour check, no refinement, no hold). The other switches of ours
+foreground cue, a fixed reference, the plain early median, no neighbour check, no refinement, no hold, a still camera). The other switches of ours
 are off: ``likelihood.parts``, ``likelihood.template``, ``motion.model``, ``size.no_plane``.
 
 TOML (every table and key optional; ``trackreplay replay LOG --tracker colorpf --config c.toml``)::
@@ -39,7 +40,8 @@ from trackreplay.trackers.appearance.histogram import KERNELS  # the pixel weigh
 # no foreground cue, a reference fixed at initialisation, the plain early median, no neighbour check
 # of the status, no foreground-region refinement and no hold (the other switches of ours are off by default).
 PAPER: dict = {"likelihood": {"kernel": "uniform", "foreground": 0.0}, "reference": {"update_rate": 0.0, "exclude": 0.0},
-                "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False}}
+                "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False},
+                "camera": {"compensate": False}}
 
 HISTOGRAMS = ("hs", "hsv")
 REFERENCES = ("mixed", "target")
@@ -248,8 +250,8 @@ class RefineConfig:
     # box's, no larger moving region beside it: the neighbour check's condition) the estimate's centre
     # moves to it, the particle cloud with it, and without a ground plane the size follows it,
     # w, h <- (1 - size_rate) (w, h) + size_rate (w_r, h_r) (the aspect with it). Such a frame is
-    # "predicted" at worst, not a miss towards "lost" (`keeps_track`), for at most `keep_frames` such
-    # frames in a row since the last "measured" one; once "lost" there is no refinement (a region is
+    # "predicted" at worst, not a miss towards "lost" (`keeps_track`; at most `keep_frames` such frames in a
+    # row since the last "measured" one, no bound by default); once "lost" there is no refinement (a region is
     # no re-acquisition: after a loss the foreground cue would pull the cloud onto any other walker,
     # and the region would keep a track on them "predicted" indefinitely). Otherwise the estimate is the
     # PF's, untouched. Default: otb_crossing AUC 0.516 -> 0.617, synthetic scenes level or better
@@ -263,14 +265,24 @@ class RefineConfig:
     size_rate: float = 0.2
     layout: bool = True
     keeps_track: bool = True
-    keep_frames: int = 30
+    # Ours: at most this many placed frames in a row since the last measured one keep the track
+    # (None: no bound; a frame the region does not place still counts towards "lost", and after a loss
+    # there is no refinement). Default None (was 30): the bound was meant against a region keeping a
+    # track on another mover, but a target whose colour match sinks below measured_fraction for good
+    # (its appearance changes as it comes closer or the light changes, and the reference adapts only
+    # above update_above) was dropped after keep_frames + lost_after frames while the region still placed
+    # it within 3 px: otb_crossing reversed in time AUC 0.39 (positions on 57% of the frames) -> 0.66,
+    # others level or better (docs/colorpf_robustness.md). Bounding by the colour instead (a placed box
+    # above the background's score renews the budget) kept only part of it (0.60): the faded colour
+    # scores below the background. 30: the previous default.
+    keep_frames: int | None = None
 
     def __post_init__(self) -> None:
         if self.mode not in REFINES:
             raise ValueError(f"refine.mode must be one of {', '.join(REFINES)}, not {self.mode!r}")
         if self.iterations < 1:
             raise ValueError("refine.iterations must be >= 1")
-        if self.keep_frames < 0:
+        if self.keep_frames is not None and self.keep_frames < 0:
             raise ValueError("refine.keep_frames must be >= 0")
         if self.window < 1 or self.factor <= 1 or not 0 <= self.min_part < 1 or not 0 <= self.size_rate <= 1:
             raise ValueError("refine.window >= 1, refine.factor > 1, 0 <= refine.min_part < 1, "
@@ -297,6 +309,26 @@ class HoldConfig:
     def __post_init__(self) -> None:
         if not 0.0 <= self.smoothing < 1.0 or self.max_frames < 0:
             raise ValueError("hold.smoothing must be in [0, 1) and hold.max_frames >= 0")
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """Ours, ``[colorpf.camera]``: the camera's translation since the marked frame (colorpf.camera)."""
+
+    # True: the scene's translation since the marked frame (median Lucas-Kanade displacement of
+    # corners outside the tracked box, against a key frame), rounded to whole pixels, moves the
+    # "early" median's frames back to the marked frame's view, the background to the current view
+    # for the foreground cue / region refinement / hold, and the particle cloud with the scene. Why:
+    # eq. (7) and the foreground assume a still camera; a slow pan smears the median and makes every
+    # edge foreground without tripping scene_changed (otb_crossing panned 0.5 px/frame: AUC 0.66 ->
+    # 0.44, docs/colorpf_robustness.md). A still camera measures offset 0: unchanged. False: the
+    # paper (and the defaults before this switch). Frames before the mark ("before") are not moved.
+    compensate: bool = True
+    min_corners: int = 20  # fewer tracked corners: no measurement (the offset stays)
+
+    def __post_init__(self) -> None:
+        if self.min_corners < 3:
+            raise ValueError("camera.min_corners must be >= 3")
 
 
 @dataclass(frozen=True)
@@ -334,6 +366,7 @@ class ColorPfConfig:
     motion: MotionConfig = field(default_factory=MotionConfig)
     refine: RefineConfig = field(default_factory=RefineConfig)
     hold: HoldConfig = field(default_factory=HoldConfig)
+    camera: CameraConfig = field(default_factory=CameraConfig)
 
     def __post_init__(self) -> None:
         if self.n_particles < 1:

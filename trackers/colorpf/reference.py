@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackreplay.trackers.appearance.histogram import image_part_histograms, index_histogram
+from trackreplay.trackers.colorpf.camera import IDENTITY, apply, scale_of, warp
 from trackreplay.trackers.colorpf.config import ReferenceConfig
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners
 from trackreplay.trackers.foreground.background import ExcludingMedianBackground, MedianBackground, foreground_mask
@@ -118,13 +119,16 @@ class BackgroundFrames:
         self._marked: np.ndarray | None = None  # reference.exclude: the marked box's corners (ready once it is free)
         self.early_count = 0
 
-    def offer(self, index: int, image: np.ndarray) -> None:
-        """Every frame before the mark and, while "early" is collecting, after it."""
+    def offer(self, index: int, image: np.ndarray, transform: np.ndarray | None = None) -> None:
+        """Every frame before the mark and, while "early" is collecting, after it; ``transform``
+        (``camera.compensate``): the camera's motion since the marked frame (3x3), taken back so the
+        median is of the marked frame's view."""
         if index < self.start:
             if self.source in ("before", "auto") and index >= self.start - self.cfg.frames:
                 self._before.append(image)
         elif self.source == "early":
-            self._early.add(image)
+            back = None if transform is None or np.array_equal(transform, IDENTITY) else np.linalg.inv(transform)
+            self._early.add(image if back is None else warp(image, back))
 
     def at_start(self, image: np.ndarray) -> tuple[np.ndarray | None, str]:
         """At the marked frame: the background now (``"before"``), or None and the source to wait for."""
@@ -144,7 +148,8 @@ class BackgroundFrames:
         self._early.add(image)
         return None, "early"
 
-    def leave_out(self, box_xywh: np.ndarray, size: tuple[int, int], marked: np.ndarray | None = None) -> None:
+    def leave_out(self, box_xywh: np.ndarray, size: tuple[int, int], marked: np.ndarray | None = None,
+                  transform: np.ndarray | None = None) -> None:
         """``reference.exclude``: the last offered frame's tracked box ``(x, y, w, h)`` in an image of
         ``size`` (width, height), times ``exclude`` per axis, left out of the early median
         (``marked``: the marked box's corners, on the marked frame). The background is then ready as
@@ -156,6 +161,10 @@ class BackgroundFrames:
         if self.source == "early" and isinstance(self._early, ExcludingMedianBackground):
             box = np.asarray(box_xywh, dtype=np.float64).copy()
             box[2:4] *= self.cfg.exclude
+            if transform is not None and not np.array_equal(transform, IDENTITY):
+                # camera.compensate: in the marked frame's view, as the frame was added
+                box[:2] = apply(np.linalg.inv(transform), box[:2])[0]
+                box[2:4] /= scale_of(transform)
             self._early.leave_out(box_corners(box, *size)[0])
 
     @property

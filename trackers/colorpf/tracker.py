@@ -31,7 +31,10 @@ without a ground plane the size follows it, and such a frame does not count towa
 "early" background each frame's tracked box is left out of the median, so it is ready once the target
 has left its marked box (``reference.exclude``, :class:`.reference.BackgroundFrames`); and while a larger moving region is
 beside the estimate (the neighbour check's condition) and no region places it, the estimate is held
-on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`). Off by default,
+on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`); the camera's
+motion since the marked frame (a similarity from corners, :mod:`.camera`) carries the early median's frames back to
+the marked view, the background to each frame's view and the particle cloud with the scene (``camera.compensate``;
+a still camera measures the identity and is unchanged). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -46,6 +49,7 @@ import numpy as np
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
+from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, scale_of, snap, warp
 from trackreplay.trackers.colorpf.config import ColorPfConfig
 from trackreplay.trackers.colorpf.foreground import (IDENTITY, brightness_gain, foreground_contrast,
                                                      foreground_region, neighbour_shares, region_layout,
@@ -109,6 +113,9 @@ class ColorPfTracker(TrackerBase):
         self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
         self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
         self.hold_run = 0  # hold.enabled: held frames in a row
+        # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
+        self.camera: CameraMotion | None = None
+        self.camera_transform = NO_MOTION.copy()
         self._pending: list[str] = []
         self.intermediates = ColorPfIntermediates.idle()
 
@@ -139,7 +146,9 @@ class ColorPfTracker(TrackerBase):
                 self.intermediates = ColorPfIntermediates.idle(self._notice())
                 return []
             return self._start(frame)
-        self.background.offer(frame.index, frame.image)
+        if self.camera is not None:  # camera.compensate: the background and the cloud follow the scene
+            self._follow_camera(frame.image)
+        self.background.offer(frame.index, frame.image, self.camera_transform)
         mask = None
         if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
             marked = self._marked_image
@@ -149,8 +158,31 @@ class ColorPfTracker(TrackerBase):
         out = self._track(frame, mask)
         if out and out[0].x is not None:  # reference.exclude: the target is in this box on this frame
             self.background.leave_out(np.array([out[0].x, out[0].y, out[0].w, out[0].h], dtype=np.float64),
-                                      (frame.image.shape[1], frame.image.shape[0]))
+                                      (frame.image.shape[1], frame.image.shape[0]), transform=self.camera_transform)
         return out
+
+    def _follow_camera(self, image: np.ndarray) -> None:
+        """``camera.compensate``: the camera's motion since the marked frame (snapped); the particle
+        cloud moves with the scene since the last frame, and, without a ground plane, S' scales with it."""
+        assert self.camera is not None
+        height, width = image.shape[:2]
+        t = snap(self.camera.update(image, self._context_box(self.pf.estimate(), image)), (width, height))
+        if np.array_equal(t, self.camera_transform):
+            return
+        d = t @ np.linalg.inv(self.camera_transform)  # the last frame -> this one
+        self.pf.particles[:, :2] = apply(d, self.pf.particles[:, :2])
+        s = scale_of(d)
+        if s != 1.0:
+            self.pf.particles[:, 2:4] *= s
+            if self.size is not None and not self.size.has_distance:
+                self.size.area0 *= s * s
+        self.camera_transform = t
+
+    def _context_box(self, estimate: np.ndarray, image: np.ndarray) -> np.ndarray:
+        """The estimate's box times reference.exclude (at least 2) per axis, integer corners: no camera corners there."""
+        box = np.asarray(estimate[:4], dtype=np.float64).copy()
+        box[2:4] *= max(self.config.reference.exclude, 2.0)
+        return marked_box(tuple(box), image.shape[1], image.shape[0])
 
     def _start(self, frame: Frame) -> list[TrackState]:
         cfg, mark = self.config, self.mark
@@ -183,6 +215,9 @@ class ColorPfTracker(TrackerBase):
         sigma = np.concatenate([position_sigma(self.initial_wh, cfg.noise, cfg.min_noise_px), [0.0, 0.0]])
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
         self.started = True
+        if cfg.camera.compensate and self.background.source != "none":
+            self.camera = CameraMotion(cfg.camera.min_corners)
+            self.camera.update(frame.image, self._context_box(self.pf.estimate(), frame.image))  # the key frame
         out = self._track(frame, mask, weigh_only=True)
         self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64),
                                   (frame.image.shape[1], frame.image.shape[0]), marked=box)
@@ -269,7 +304,8 @@ class ColorPfTracker(TrackerBase):
             self.hold_run = 0
             return estimate, False
         self.hold_run += 1
-        self.pf.particles[:, :2] += prev[:2] + self.track_velocity - estimate[:2]  # the cloud moves with it
+        velocity = self.camera_transform[:2, :2] @ self.track_velocity  # (camera.compensate: into this view)
+        self.pf.particles[:, :2] += prev[:2] + velocity - estimate[:2]  # the cloud moves with it
         return self.pf.estimate(), True
 
     def _vouch(self, index: int, estimate: np.ndarray, vouched: bool) -> None:
@@ -298,6 +334,8 @@ class ColorPfTracker(TrackerBase):
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
         likelihood = m.likelihood
         background, gain = self.background_image, 1.0
+        if background is not None:  # camera.compensate: the background (marked frame's place) where the scene is now
+            background = warp(background, self.camera_transform)
         uses_foreground = cfg.likelihood.foreground > 0 or cfg.neighbour_check or cfg.refine.mode == "foreground"
         if background is not None and uses_foreground:
             gain = brightness_gain(image, background)  # a uniform illumination change is not foreground
@@ -377,7 +415,8 @@ class ColorPfTracker(TrackerBase):
                                           cfg.reference.open_px, gain)
                 if shares.max() > self.reference.p_detect / self.reference.p_square:
                     status = "predicted"
-        elif placed and cfg.refine.keeps_track and self.placed_run < cfg.refine.keep_frames:
+        elif placed and cfg.refine.keeps_track and (cfg.refine.keep_frames is None
+                                                    or self.placed_run < cfg.refine.keep_frames):
             self.placed_run += 1
             status = "predicted"  # the foreground region places the target: not a miss towards "lost"
         elif held:
@@ -386,7 +425,10 @@ class ColorPfTracker(TrackerBase):
             self.misses += 1
             status = "lost" if self.misses >= cfg.lost_after else "predicted"
         if cfg.hold.enabled and not weigh_only:
-            self._vouch(frame.index, estimate, status == "measured" or placed)
+            # in the marked frame's view (camera.compensate): the velocity is the target's, not the camera's
+            scene = np.concatenate([apply(np.linalg.inv(self.camera_transform), estimate[:2])[0], estimate[2:4]]) \
+                if self.camera is not None and not np.array_equal(self.camera_transform, NO_MOTION) else estimate
+            self._vouch(frame.index, scene, status == "measured" or placed)
         ref = self.reference
         self.intermediates = ColorPfIntermediates(
             "track", self.pf.particles.copy(), self.pf.weights.copy(), m.similarity, m.likelihood, estimate,

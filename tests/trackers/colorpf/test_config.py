@@ -18,9 +18,10 @@ def test_paper_overrides_change_only_the_default_departures():
     assert paper.refine.mode == "none" and ours.refine.mode == "foreground"
     assert paper.reference.exclude == 0.0 and ours.reference.exclude >= 1.0
     assert not paper.hold.enabled and ours.hold.enabled
+    assert not paper.camera.compensate and ours.camera.compensate
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
-                               neighbour_check=True, refine=ours.refine, hold=ours.hold) == ours
+                               neighbour_check=True, refine=ours.refine, hold=ours.hold, camera=ours.camera) == ours
     assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 
@@ -32,6 +33,7 @@ def test_paper_overrides_change_only_the_default_departures():
     ("refine", {"size_rate": 1.5}),
     ("size", {"no_plane": "plane"}),
     ("reference", {"exclude": 0.5}), ("hold", {"smoothing": 1.0}), ("hold", {"max_frames": -1}),
+    ("camera", {"min_corners": 2}),
 ])
 def test_bad_switch_values_are_named(table, values):
     with pytest.raises(TrackreplayError, match=f"invalid {table} .*{next(iter(values))}"):

@@ -143,7 +143,9 @@ def test_a_region_keeps_no_lost_track_on_another_walker():
             statuses[i] = states[0].status
     gone = next(i for i in range(empty, frames_n) if target_boxes[i] is None)
     after = [statuses[i] for i in range(gone, frames_n)]
-    bound = cfg.lost_after + cfg.refine.keep_frames
+    # refine.keep_frames is None by default (no bound); measured: the track is lost within lost_after + 30
+    # frames either way (the region does not keep it on the other walker here)
+    bound = cfg.lost_after + (cfg.refine.keep_frames or 30)
     assert "lost" in after[:bound + 1]
     first = after.index("lost")
     assert set(after[first:]) == {"lost"}, after  # lost, and not taken back onto the other walker

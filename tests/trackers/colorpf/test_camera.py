@@ -1,0 +1,109 @@
+"""The camera's translation since the marked frame (camera.compensate, colorpf.camera)."""
+
+import cv2
+import numpy as np
+
+from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.colorpf.camera import IDENTITY, CameraMotion, fit_similarity, scale_of, shift_image, snap
+from trackreplay.trackers.colorpf.config import CameraConfig, ColorPfConfig
+from trackreplay.trackers.colorpf.tracker import ColorPfTracker
+from trackreplay.trackers.frame import Frame
+
+FRAMES, W, H = 70, 240, 160
+
+
+def _world(seed: int = 0) -> np.ndarray:
+    """A textured street: smooth grey blotches 8 px apart (corners for the camera)."""
+    rng = np.random.default_rng(seed)
+    coarse = rng.integers(70, 170, ((H + 20) // 8, (W + 120) // 8, 1)).astype(np.uint8)
+    return np.repeat(cv2.resize(coarse, (W + 120, H + 20), interpolation=cv2.INTER_CUBIC)[..., None], 3, axis=2)
+
+
+def _panning(pan: float) -> tuple[list[np.ndarray], list[tuple[float, float]]]:
+    """A dark walker (grey jacket over brownish trousers, 12 x 36: H-S tells it little from the grey street) walks left at 0.6 px per frame over the
+    street while the camera pans right at ``pan`` px per frame (the view's window slides right)."""
+    world = _world()
+    images, truth = [], []
+    for i in range(FRAMES):
+        scene = world.copy()
+        x0, top = int(round(200.0 - 0.6 * i)), 70
+        scene[top:top + 18, x0:x0 + 12] = (40, 40, 40)
+        scene[top + 18:top + 36, x0:x0 + 12] = (60, 50, 50)
+        ox = pan * i
+        m = np.array([[1.0, 0.0, ox], [0.0, 1.0, 10.0]])
+        images.append(cv2.warpAffine(scene, m, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP))
+        truth.append((x0 + 5.5 - ox, top + 17.5 - 10.0))
+    return images, truth
+
+
+def _errors(cfg: ColorPfConfig, pan: float) -> list[float]:
+    images, truth = _panning(pan)
+    mark = InitRegion(0, 0, truth[0][0], truth[0][1], 12, 36, "target")
+    tracker = ColorPfTracker(cfg, np.random.default_rng(0))
+    errors = []
+    for i, image in enumerate(images):
+        states = tracker.step(Frame(index=i, t_ns=i * 33_333_333, image=image, all_hints=(mark,),
+                                    hints=(mark,) if i == 0 else ()))
+        x = states[0].x if states and states[0].x is not None else None
+        errors.append(float("inf") if x is None else float(np.hypot(x - truth[i][0], states[0].y - truth[i][1])))
+    return errors
+
+
+def test_the_motion_of_a_panning_darkening_view_is_measured_and_a_still_one_is_the_identity():
+    world = _world(1)
+    cam = CameraMotion()
+    for i in range(30):
+        m = np.array([[1.0, 0.0, 0.7 * i], [0.0, 1.0, 5.0 + 0.2 * i]])
+        view = cv2.warpAffine(world, m, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+        t = cam.update(cv2.convertScaleAbs(view, alpha=1.0 - 0.015 * i))  # and the light fades (not motion)
+    assert np.allclose(t[:2, 2], [-0.7 * 29, -0.2 * 29], atol=0.3)  # the content moves against the window
+    assert abs(scale_of(t) - 1.0) < 0.003
+    still = CameraMotion()
+    for _ in range(30):
+        t = still.update(world[:H, :W])
+    assert np.array_equal(snap(t, (W, H)), IDENTITY)
+
+
+def test_a_zoom_is_a_scale_and_other_movers_do_not_bend_the_fit():
+    rng = np.random.default_rng(0)
+    p0 = rng.uniform(0, 200, (60, 2))
+    p1 = 1.1 * (p0 - 100) + 100 + [3.0, -2.0]
+    p1[:15] += [25.0, 0.0]  # a quarter of the corners on a passing car
+    t = fit_similarity(p0, p1)
+    assert abs(scale_of(t) - 1.1) < 1e-6 and np.allclose(t[:2, 2], [-10 + 3, -10 - 2], atol=1e-6)
+
+
+def test_shift_image_moves_content_by_whole_pixels():
+    image = np.zeros((10, 12), np.uint8)
+    image[4, 5] = 255
+    out = shift_image(image, np.array([2, -1]))
+    assert out[3, 7] == 255 and out.sum() == 255
+    assert shift_image(image, np.array([0, 0])) is image
+
+
+def test_a_panning_camera_does_not_pull_the_box_off_the_walker():
+    on = _errors(ColorPfConfig(), pan=1.0)
+    off = _errors(ColorPfConfig(camera=CameraConfig(compensate=False)), pan=1.0)
+    # once the early background exists (frame 30): on the walker, from the median of the marked view
+    assert max(on[35:]) < 3.0 and np.mean(on[35:]) < 1.5, on
+    assert np.mean(off[35:]) > 4.0, off  # without: the smeared median's edges pull the box about
+
+
+def test_a_still_camera_is_unchanged_by_the_compensation():
+    on = _errors(ColorPfConfig(), pan=0.0)
+    off = _errors(ColorPfConfig(camera=CameraConfig(compensate=False)), pan=0.0)
+    assert on == off
+
+
+def test_a_wide_frame_is_measured_at_half_size_and_scaled_back():
+    rng = np.random.default_rng(2)
+    coarse = rng.integers(70, 170, (66, 100, 1)).astype(np.uint8)
+    world = np.repeat(cv2.resize(coarse, (800, 528), interpolation=cv2.INTER_CUBIC)[..., None], 3, axis=2)
+    cam, still = CameraMotion(), CameraMotion()
+    for i in range(20):
+        m = np.array([[1.0, 0.0, 0.7 * i], [0.0, 1.0, 10.0 - 0.3 * i]])
+        t = cam.update(cv2.warpAffine(world, m, (700, 480), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP))
+        s = still.update(world[:480, :700])
+    assert cam._factor == 2
+    assert np.allclose(t[:2, 2], [-0.7 * 19, 0.3 * 19], atol=0.4) and abs(scale_of(t) - 1.0) < 0.003
+    assert np.array_equal(snap(s, (700, 480)), IDENTITY)

@@ -1,0 +1,191 @@
+"""The camera's motion since the marked frame (ours, ``camera.compensate``).
+
+Eq. (7)'s background, the foreground cue, the region refinement and the hold all assume a fixed
+camera. A hand-held, panning or zooming camera (most OTB-style clips) moves the scene a fraction
+of a pixel to a few pixels per frame: the early median is then a smear, and the frame differs from
+it along every edge, yet over less than half the frame, so :func:`.foreground.scene_changed` does
+not switch the cues off and they fire on edges (measured on otb_crossing panned at 0.5 px/frame:
+AUC 0.66 -> 0.44, docs/colorpf_robustness.md).
+
+:class:`CameraMotion` measures a similarity transform (scale, rotation, translation) from the
+marked frame to each frame: Shi-Tomasi corners of a key frame (outside the tracked box, whose
+target moves on its own) followed by pyramidal Lucas-Kanade into each frame (brightness-matched to
+the key frame: LK assumes constant brightness, an illumination change is not motion), and a
+least-squares similarity refitted on the corners within 3x the median residual (other movers are a
+minority of the corners; :func:`fit_similarity`). Always against the key frame, not chained frame
+to frame, so a still camera has no drift (chained, otb_crossing's still camera wandered 0.6 px in
+120 frames); LK starts each corner where it was last found (the motion since the last frame is
+small). The key frame is renewed when fewer than half of its corners are still tracked.
+
+:func:`snap`: a transform that moves no pixel of the frame by half a pixel or more through its
+scale and rotation is taken as a translation rounded to whole pixels (a still camera is then
+exactly the identity: its trajectory is unchanged). Deterministic: no random draw.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+MAX_CORNERS = 200  # fewer (100) measured a worse zoom on otb_crossing (AUC 0.54 vs 0.59)
+QUALITY = 0.01
+# maxLevel 1: LK starts from the last position, so it searches only the motion since the last
+# frame; coarser levels average a 15 px window over 60-120 px, where one large mover (a passing
+# car) then drags the corners around it
+LK = {"winSize": (15, 15), "maxLevel": 1, "criteria": (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)}
+IDENTITY = np.eye(3)
+HALVE_FROM = 640  # frames at least this wide are measured at half size
+
+
+def grey(image: np.ndarray) -> np.ndarray:
+    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else np.ascontiguousarray(image, dtype=np.uint8)
+
+
+def _similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Least-squares ``x' = a x - b y + tx, y' = b x + a y + ty`` (3x3)."""
+    n = len(p0)
+    m = np.zeros((2 * n, 4))
+    m[0::2] = np.column_stack([p0[:, 0], -p0[:, 1], np.ones(n), np.zeros(n)])
+    m[1::2] = np.column_stack([p0[:, 1], p0[:, 0], np.zeros(n), np.ones(n)])
+    a, b, tx, ty = np.linalg.lstsq(m, p1.reshape(-1), rcond=None)[0]
+    return np.array([[a, -b, tx], [b, a, ty], [0.0, 0.0, 1.0]])
+
+
+MIN_BASELINE = 20.0  # px: corners closer than this to the median say little about scale and rotation
+
+
+def _median_similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """Scale and rotation as the medians over the points of their distance ratio and turn about the
+    points' (per-axis) median, then the median translation: each a median, so a minority of other
+    movers does not move it. O(n)."""
+    v0, v1 = p0 - np.median(p0, axis=0), p1 - np.median(p1, axis=0)
+    n0, n1 = np.hypot(*v0.T), np.hypot(*v1.T)
+    far = n0 >= MIN_BASELINE
+    scale, angle = 1.0, 0.0
+    if far.sum() >= 3:
+        scale = float(np.median(n1[far] / n0[far]))
+        turn = np.arctan2(v1[far, 1], v1[far, 0]) - np.arctan2(v0[far, 1], v0[far, 0])
+        angle = float(np.median(np.angle(np.exp(1j * turn))))
+    a, b = scale * np.cos(angle), scale * np.sin(angle)
+    linear = np.array([[a, -b], [b, a]])
+    t = np.median(p1 - p0 @ linear.T, axis=0)
+    return np.array([[a, -b, t[0]], [b, a, t[1]], [0.0, 0.0, 1.0]])
+
+
+def fit_similarity(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarray:
+    """A similarity ``p1 ~ T p0`` (3x3) robust to a minority of other movers: from the
+    medians (:func:`_median_similarity`), each round keeps the points within 3x the median residual
+    (at least 1 px) and refits by least squares."""
+    p0, p1 = np.asarray(p0, np.float64).reshape(-1, 2), np.asarray(p1, np.float64).reshape(-1, 2)
+    transform = _median_similarity(p0, p1)
+    for _ in range(rounds):
+        r = np.hypot(*(apply(transform, p0) - p1).T)
+        keep = r <= max(3.0 * float(np.median(r)), 1.0)
+        if keep.sum() < 3:
+            break
+        transform = _similarity(p0[keep], p1[keep])
+    return transform
+
+
+def apply(transform: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    xy = np.asarray(xy, np.float64).reshape(-1, 2)
+    return xy @ transform[:2, :2].T + transform[:2, 2]
+
+
+def scale_of(transform: np.ndarray) -> float:
+    return float(np.sqrt(abs(np.linalg.det(transform[:2, :2]))))
+
+
+def snap(transform: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """The transform, or a whole-pixel translation when its linear part moves no pixel of a frame of
+    ``size`` (width, height) by half a pixel or more (about the frame's centre)."""
+    half = np.array([size[0], size[1]]) / 2.0
+    linear = transform[:2, :2] - np.eye(2)
+    if np.abs(linear).sum(axis=1).max() * half.max() < 0.5:
+        t = np.round(apply(transform, half[None])[0] - half)
+        return np.array([[1.0, 0.0, t[0]], [0.0, 1.0, t[1]], [0.0, 0.0, 1.0]])
+    return transform
+
+
+def warp(image: np.ndarray, transform: np.ndarray) -> np.ndarray:
+    """``image`` carried by ``transform`` (content at p goes to T p), the uncovered border repeating the
+    edge; a whole-pixel translation copies pixels exactly, the identity returns ``image`` itself."""
+    if np.array_equal(transform, IDENTITY):
+        return image
+    exact = np.array_equal(transform[:2, :2], np.eye(2)) and np.array_equal(transform[:2, 2], np.round(transform[:2, 2]))
+    return cv2.warpAffine(image, transform[:2], (image.shape[1], image.shape[0]),
+                          flags=cv2.INTER_NEAREST if exact else cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+def shift_image(image: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """``image`` moved by the whole-pixel ``offset`` ``(dx, dy)``."""
+    dx, dy = (float(v) for v in offset)
+    return warp(image, np.array([[1.0, 0.0, dx], [0.0, 1.0, dy], [0.0, 0.0, 1.0]]))
+
+
+class CameraMotion:
+    """The similarity ``T`` (3x3) from the first frame given to each frame: a static point at p in
+    the first frame is at ``T p`` in the frame. Frames :data:`HALVE_FROM` px wide or wider are measured
+    at half size (the cost of a 720x480 frame is then a 360x240 one's; T is scaled back)."""
+
+    def __init__(self, min_corners: int = 20, min_distance: int = 8) -> None:
+        self.min_corners = min_corners
+        self.min_distance = min_distance
+        self._key: np.ndarray | None = None
+        self._key_mean = 1.0
+        self._corners: np.ndarray | None = None  # (n, 1, 2) float32 in the key frame
+        self._last: np.ndarray | None = None  # where they were found in the last frame (LK's first guess)
+        self._key_transform = IDENTITY.copy()  # in the measured (possibly halved) frame's pixels
+        self._transform = IDENTITY.copy()
+        self._factor = 1
+
+    @property
+    def transform(self) -> np.ndarray:
+        if self._factor == 1:
+            return self._transform.copy()
+        s = np.diag([float(self._factor), float(self._factor), 1.0])
+        return s @ self._transform @ np.diag([1.0 / self._factor, 1.0 / self._factor, 1.0])
+
+    def _rekey(self, g: np.ndarray, box: np.ndarray | None) -> None:
+        mask = np.full(g.shape, 255, np.uint8)
+        if box is not None:  # the tracked box (x0, y0, x1, y1): its target moves on its own
+            x0, y0, x1, y1 = (int(v) // self._factor for v in box)
+            mask[max(y0, 0):max(y1 + 1, 0), max(x0, 0):max(x1 + 1, 0)] = 0
+        self._key, self._key_transform = g, self._transform.copy()
+        self._key_mean = max(float(g[::4, ::4].mean()), 1.0)
+        self._corners = cv2.goodFeaturesToTrack(g, MAX_CORNERS, QUALITY, self.min_distance, mask=mask, blockSize=5)
+        self._last = None if self._corners is None else self._corners.copy()
+
+    def update(self, image: np.ndarray, box: np.ndarray | None = None) -> np.ndarray:
+        """The frame's transform; ``box``: the tracked box's corners (left out of a new key frame's corners)."""
+        g = grey(image)
+        if self._key is None:
+            self._factor = 2 if g.shape[1] >= HALVE_FROM else 1
+        if self._factor > 1:
+            g = cv2.resize(g, (g.shape[1] // self._factor, g.shape[0] // self._factor), interpolation=cv2.INTER_AREA)
+        if self._key is None or self._key.shape != g.shape:
+            self._rekey(g, box)
+            return self.transform
+        corners = self._corners
+        if corners is None or len(corners) < self.min_corners:  # too little texture: no measurement
+            self._rekey(g, box)
+            return self.transform
+        gain = self._key_mean / max(float(g[::4, ::4].mean()), 1.0)
+        matched = cv2.convertScaleAbs(g, alpha=gain)  # the key's brightness
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, corners, self._last.copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        height, width = g.shape
+        inside = ((moved[:, 0, 0] >= 0) & (moved[:, 0, 0] <= width - 1) & (moved[:, 0, 1] >= 0)
+                  & (moved[:, 0, 1] <= height - 1))
+        ok = (status.ravel() == 1) & inside
+        step = None
+        if ok.sum() >= self.min_corners:
+            step = fit_similarity(corners[ok], moved[ok])  # key -> this frame
+            self._transform = step @ self._key_transform
+        # a corner lost now moves with the scene from here on
+        if step is not None:
+            guess = apply(step, corners).reshape(-1, 1, 2).astype(np.float32)
+            self._last = np.where(ok[:, None, None], moved, guess)
+        if 2 * ok.sum() < len(corners):
+            self._rekey(g, box)
+        return self.transform
