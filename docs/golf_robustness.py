@@ -215,12 +215,12 @@ frame after its mark (the ball falls 20 px a frame, outside a velocity prior of 
 this frame size), and after 37 frames lost a white patch moving with the camera's pan is confirmed
 and measured (14 rows, 55-117 px off) while the ball rolls on the green: with no encoders a thing
 fixed in the world moves at a constant velocity in the picture, as a ball would. The mirrored
-approach measures the cup's white liner on 7 of the 28 frames after the ball dropped into it, the
-shaky approach (each frame moved up to 2 px, no encoders to take it out) on 27 of 28 and only 85 %
-of its reference frames within 5 px (the liner is as large and as round as the zoomed-in ball, and
-a thing fixed in the world is not still in a shaking picture, so it never becomes scenery), the
-shaky iron shot 2 rows after the ball left (and,
-where ball and liner are one blob, 2 reference frames 5-25 px off). The approach as recorded now says
+approach measures the cup's white liner on 7 of the 28 frames after the ball dropped into it (and,
+where ball and liner are one blob, 2 reference frames 5-25 px off); the shaky approach (each frame
+moved up to 2 px, no encoders to take it out) on 27 of 28, with only 85 % of its reference frames
+within 5 px (the liner is as large and as round as the zoomed-in ball, and a thing fixed in the
+world is not still in a shaking picture, so it never becomes scenery); the shaky iron shot 2 rows
+after the ball left. The approach as recorded now says
 `predicted` on those three frames (before: `measured` within 5 px): its 8x8 px mark is placed on
 the 5x5 px ball, so the LUT learns from the ball's core rather than its blurred rim.
 """
