@@ -33,8 +33,8 @@ from trackreplay.replay.reader import LogReader  # noqa: E402
 from trackreplay.replay.config import config_from_dict  # noqa: E402
 from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig  # noqa: E402
 
-# N = 40 step time of other pipelines: the paper's, and every switch of ours on
-VARIANTS = {"paper": PAPER, "defaults": {},
+# N = 40 step time of other pipelines: the paper's, ours without the camera-motion measurement, and every switch of ours on
+VARIANTS = {"paper": PAPER, "defaults": {}, "defaults, camera taken as fixed": {"camera": {"compensate": False}},
             "all switches": {"likelihood": {"parts": 2}, "motion": {"model": "constant_velocity"},
                              "refine": {"mode": "meanshift"}, "size": {"no_plane": "random_walk"}}}
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker  # noqa: E402
