@@ -313,18 +313,19 @@ class HoldConfig:
 
 @dataclass(frozen=True)
 class CameraConfig:
-    """Ours, ``[colorpf.camera]``: the camera's translation since the marked frame (colorpf.camera)."""
+    """Ours, ``[colorpf.camera]``: the camera's motion since the marked frame, a similarity (colorpf.camera)."""
 
-    # True: the scene's translation since the marked frame (median Lucas-Kanade displacement of
-    # corners outside the tracked box, against a key frame), rounded to whole pixels, moves the
+    # True: the scene's motion since the marked frame (a similarity fitted to the Lucas-Kanade
+    # displacements of corners outside the tracked box, against a key frame; a translation rounded
+    # to whole pixels when its scale and rotation move no pixel by half a pixel) moves the
     # "early" median's frames back to the marked frame's view, the background to the current view
     # for the foreground cue / region refinement / hold, and the particle cloud with the scene. Why:
     # eq. (7) and the foreground assume a still camera; a slow pan smears the median and makes every
     # edge foreground without tripping scene_changed (otb_crossing panned 0.5 px/frame: AUC 0.66 ->
-    # 0.44, docs/colorpf_robustness.md). A still camera measures offset 0: unchanged. False: the
+    # 0.44, docs/colorpf_robustness.md). A still camera measures the identity: unchanged. False: the
     # paper (and the defaults before this switch). Frames before the mark ("before") are not moved.
     compensate: bool = True
-    min_corners: int = 20  # fewer tracked corners: no measurement (the offset stays)
+    min_corners: int = 20  # fewer tracked corners: no measurement (the last motion stays)
 
     def __post_init__(self) -> None:
         if self.min_corners < 3:
