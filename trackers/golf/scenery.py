@@ -53,10 +53,12 @@ class Scenery:
         """(K,) bool: the blobs that sit on a scenery point."""
         return _holds(blobs.bbox, self.points, self.still_px * scale).any(axis=1)
 
-    def update(self, index: int, blobs: Blobs, ball: tuple[float, float] | None, diameter: float, scale: float) -> None:
+    def update(self, index: int, blobs: Blobs, look_alike: np.ndarray, ball: tuple[float, float] | None, diameter: float,
+               scale: float) -> None:
         """After frame ``index``: keep the points a blob still sits on; when the ball was measured at
-        ``ball``, add the blobs whose centroid stayed (within ``still_px``) since the last frame,
-        more than a diameter from it."""
+        ``ball``, add the ``look_alike`` blobs (those the gate would take for the ball) whose centroid
+        stayed (within ``still_px``) since the last frame, more than a diameter from it. (A still speck
+        the gate refuses anyway is no scenery: it would only refuse the ball passing over it.)"""
         if self.still_px <= 0:
             return
         radius = self.still_px * scale
@@ -65,7 +67,7 @@ class Scenery:
         if ball is not None and self._previous_index == index - 1 and len(centroids):
             still = _near(centroids, self._previous, radius)
             away = np.hypot(centroids[:, 0] - ball[0], centroids[:, 1] - ball[1]) > diameter + radius
-            fresh = centroids[still & away & ~_near(centroids, kept, radius)]
+            fresh = centroids[still & away & np.asarray(look_alike, bool) & ~_near(centroids, kept, radius)]
             kept = np.concatenate([kept, fresh])
         self.points = kept
         self._previous, self._previous_index = centroids.copy(), index

@@ -189,7 +189,8 @@ class GolfTracker(TrackerBase):
         if status == "measured":
             self._last_measured = (frame.index, x, y)
             self._sightings += 1
-        self.scenery.update(frame.index, gated.blobs, (x, y) if status == "measured" else None, diameter, scale)
+        self.scenery.update(frame.index, gated.blobs, gated.accepted | (gated.reason == STILL),
+                            (x, y) if status == "measured" else None, diameter, scale)
         los = camera.line_of_sight(np.array([[x, y]]))[0] if camera is not None else NAN3
         self.trail.add((x, y) if status == "measured" else None, los, self.ekf.x)
         vx, vy = float(estimate[2]), float(estimate[3])

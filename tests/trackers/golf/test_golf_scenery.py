@@ -25,30 +25,38 @@ def at(*points, side=3):
 
 def test_points_from_still_blobs_away_from_the_measured_ball():
     s = Scenery(still_px=1.5)
-    s.update(0, at((100.0, 100.0), (200.0, 50.0)), (100.0, 100.0), 6.0, 1.0)
+    s.update(0, at((100.0, 100.0), (200.0, 50.0)), True, (100.0, 100.0), 6.0, 1.0)
     assert len(s.points) == 0  # one frame: nothing is known to be still
-    s.update(1, at((100.2, 100.1), (200.3, 50.2)), (100.2, 100.1), 6.0, 1.0)
+    s.update(1, at((100.2, 100.1), (200.3, 50.2)), True, (100.2, 100.1), 6.0, 1.0)
     assert s.points.tolist() == [[200.3, 50.2]]  # the still ball is not scenery, the still thing away from it is
     assert s.on_scenery(at((200.0, 50.0), (205.0, 50.0), (201.0, 48.0)), 1.0).tolist() == [True, False, True]
     # (the third: its centroid moved 2 px, as a blob cut by the search region's edge; its pixels still hold the point)
-    s.update(2, at((120.0, 90.0)), None, 6.0, 1.0)
+    s.update(2, at((120.0, 90.0)), True, None, 6.0, 1.0)
     assert len(s.points) == 0  # nothing there any more: forgotten
 
 
 def test_nothing_added_while_the_ball_is_not_measured_or_across_a_gap():
     s = Scenery(still_px=1.5)
-    s.update(0, at((200.0, 50.0)), (100.0, 100.0), 6.0, 1.0)
-    s.update(1, at((200.0, 50.0)), None, 6.0, 1.0)  # the ball not seen: where is it?
+    s.update(0, at((200.0, 50.0)), True, (100.0, 100.0), 6.0, 1.0)
+    s.update(1, at((200.0, 50.0)), True, None, 6.0, 1.0)  # the ball not seen: where is it?
     assert len(s.points) == 0
-    s.update(3, at((200.0, 50.0)), (100.0, 100.0), 6.0, 1.0)  # frame 2 missing
+    s.update(3, at((200.0, 50.0)), True, (100.0, 100.0), 6.0, 1.0)  # frame 2 missing
     assert len(s.points) == 0
+
+
+def test_only_look_alikes_become_scenery():
+    s = Scenery(still_px=1.5)
+    blobs = at((200.0, 50.0), (300.0, 80.0))
+    s.update(0, blobs, np.array([True, False]), (100.0, 100.0), 6.0, 1.0)
+    s.update(1, blobs, np.array([True, False]), (100.0, 100.0), 6.0, 1.0)
+    assert s.points.tolist() == [[200.0, 50.0]]  # a still speck the gate refuses anyway is no scenery
 
 
 def test_points_follow_the_pose_change():
     s = Scenery(still_px=1.5)
-    s.update(0, at((200.0, 50.0)), (100.0, 100.0), 6.0, 1.0)
+    s.update(0, at((200.0, 50.0)), True, (100.0, 100.0), 6.0, 1.0)
     s.follow_camera(np.array([[1.0, 0.0, -7.0], [0.0, 1.0, 3.0], [0.0, 0.0, 1.0]]))
-    s.update(1, at((193.0, 53.0)), (100.0, 100.0), 6.0, 1.0)  # the camera panned; the thing stayed
+    s.update(1, at((193.0, 53.0)), True, (100.0, 100.0), 6.0, 1.0)  # the camera panned; the thing stayed
     assert np.allclose(s.points, [[193.0, 53.0]])
 
 
