@@ -1,4 +1,4 @@
-"""The camera's translation since the marked frame (camera.compensate, colorpf.camera)."""
+"""The camera's motion since the marked frame, a similarity (camera.compensate, colorpf.camera)."""
 
 import cv2
 import numpy as np
