@@ -70,6 +70,8 @@ class ParticleConfig:
             raise ValueError("particles.n must be at least 1")
         if self.sigma_px <= 0 or self.alpha < 0:
             raise ValueError("particles.sigma_px must be positive and particles.alpha non-negative")
+        if self.rest_roundness < 0:
+            raise ValueError("particles.rest_roundness must be >= 0 (above 1: a single sighting never counts as at rest)")
 
 
 @dataclass(frozen=True)
@@ -184,6 +186,12 @@ class SnapConfig:
     slack_px: float = 1.0  # a box is loose when its samples' ellipse is wider than the ball's blob by more (frame pixels)
     keep_px: float = 1.0  # a drawn centre within this of the ball's stays (frame pixels: a box's corners are integers)
 
+    def __post_init__(self) -> None:
+        if (self.window <= 1 or self.min_contrast <= 0 or not 0 < self.level < 1 or not 0 <= self.min_fill <= 1
+                or self.max_aspect < 1 or self.min_area_px < 1 or self.slack_px < 0 or self.keep_px < 0):
+            raise ValueError("snap: need window > 1, min_contrast > 0, 0 < level < 1, 0 <= min_fill <= 1, max_aspect >= 1, "
+                             "min_area_px >= 1, slack_px >= 0, keep_px >= 0")
+
 
 @dataclass(frozen=True)
 class ValidateConfig:
@@ -211,6 +219,8 @@ class ValidateConfig:
     def __post_init__(self) -> None:
         if self.confirm_frames < 1 or self.gate_sigmas <= 0 or not 0 <= self.min_confidence <= 1 or not 0 <= self.min_fit <= 1:
             raise ValueError("validate: need confirm_frames >= 1, gate_sigmas > 0, 0 <= min_confidence <= 1, 0 <= min_fit <= 1")
+        if self.still_px < 0:
+            raise ValueError("validate.still_px must be >= 0 (0: no still scenery)")
 
 
 @dataclass(frozen=True)

@@ -70,3 +70,12 @@ def test_the_track_starts_on_the_ball_from_a_loose_box(backdrop, draw_ball):
     assert area == pytest.approx(np.pi * 25, rel=0.25)
     drawn, drawn_area = first(GolfConfig(snap=dataclasses.replace(GolfConfig().snap, enabled=False)))
     assert drawn_area > 1.5 * np.pi * 25 or any(np.hypot(s.x - BALL[0], s.y - BALL[1]) >= 1.0 for s in drawn)
+
+
+def test_bad_settings_are_refused():
+    from trackreplay.trackers.golf.config import ParticleConfig, ValidateConfig
+
+    for bad in (lambda: SnapConfig(level=1.5), lambda: SnapConfig(window=1.0), lambda: ValidateConfig(still_px=-1.0),
+                lambda: ParticleConfig(rest_roundness=-0.1)):
+        with pytest.raises(ValueError):
+            bad()
