@@ -183,7 +183,7 @@ class SnapConfig:
     min_fill: float = 0.5  # the ball's blob fills at least this of its bounding box ...
     max_aspect: float = 2.0  # ... which is at most this elongated (a still or slow ball)
     min_area_px: float = 4.0  # ... and has at least this many pixels (one pixel has no size)
-    slack_px: float = 1.0  # a box is loose when its samples' ellipse is wider than the ball's blob by more (frame pixels)
+    slack_px: float = 2.0  # a box is loose when its samples' ellipse is wider than the ball's blob by more (frame pixels): a pixel of blurred rim each side
     keep_px: float = 1.0  # a drawn centre within this of the ball's stays (frame pixels: a box's corners are integers)
 
     def __post_init__(self) -> None:
