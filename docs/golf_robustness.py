@@ -51,19 +51,9 @@ VARIANTS = {  # key: (what it is, how it is made)
     "mark 0.6x": ("the box 0.6x the ball's, same centre", {"box_scale": 0.6}),
     "mark 3 frames late": ("the ball marked 3 frames later (in flight)", {"late": 3}),
 }
-# The same study before this change (commit 8ba91d0): measured, within 5 px, confident wrong (> 25 px), measured while gone.
-BEFORE = {
-    ("iron", "as recorded"): (1.0, 1.0, 0, "0/44"), ("iron", "half resolution"): (1.0, 1.0, 0, "0/44"),
-    ("iron", "half frame rate"): (0.056, 0.056, 0, "0/22"), ("iron", "mirrored"): (1.0, 0.333, 14, "44/44"),
-    ("iron", "darker"): (1.0, 1.0, 0, "0/44"), ("iron", "JPEG q50"): (1.0, 1.0, 0, "2/44"),
-    ("iron", "mark 3 px off"): (0.0, 0.0, 0, "0/44"), ("iron", "mark 1.6x"): (0.0, 0.0, 0, "0/44"),
-    ("iron", "mark 0.6x"): (1.0, 1.0, 0, "0/44"), ("iron", "mark 3 frames late"): (1.0, 1.0, 0, "0/44"),
-    ("approach", "as recorded"): (1.0, 1.0, 0, "0/28"), ("approach", "half resolution"): (0.984, 0.984, 0, "0/28"),
-    ("approach", "half frame rate"): (0.138, 0.011, 12, "0/14"), ("approach", "mirrored"): (1.0, 1.0, 0, "0/28"),
-    ("approach", "darker"): (1.0, 1.0, 0, "0/28"), ("approach", "JPEG q50"): (1.0, 0.995, 0, "0/28"),
-    ("approach", "mark 3 px off"): (0.957, 0.813, 0, "26/28"), ("approach", "mark 1.6x"): (1.0, 1.0, 0, "0/28"),
-    ("approach", "mark 0.6x"): (1.0, 1.0, 0, "0/28"), ("approach", "mark 3 frames late"): (1.0, 1.0, 0, "0/28"),
-}
+# The same script run on the code before this change (commit 8ba91d0, in its own worktree and venv);
+# its rows, as written then: docs/golf_robustness_before.json.
+BEFORE_FILE = HERE / "golf_robustness_before.json"
 
 
 def decoded(video: Path) -> tuple[list[np.ndarray], float]:
@@ -169,14 +159,17 @@ def write_report(rows: list[dict]) -> None:
         "*within 5 px*: `measured` and within 5 px (2.5 px at half resolution); *confident wrong*:",
         "`measured` more than 25 px off; *measured while gone*: `measured` rows after the ball left",
         "the picture (iron, from frame 612) or dropped into the hole (approach, from frame 208).",
-        "*Before*: the same study at commit 8ba91d0, before the changes below.",
+        "*Before*: this script run on the code at commit 8ba91d0, before the changes below",
+        "(`golf_robustness_before.json`).",
         "",
         "| clip | variant | reference frames | measured | within 5 px | confident wrong | measured while gone | before: within 5 px / wrong / while gone |",
         "|---|---|---|---|---|---|---|---|",
     ]
+    before_rows = json.loads(BEFORE_FILE.read_text()) if BEFORE_FILE.is_file() else []
+    earlier = {(b["clip"], b["variant"]): b for b in before_rows}
     for r in rows:
-        b = BEFORE.get((r["clip"], r["variant"]))
-        before = f"{pct(b[1])} / {b[2]} / {b[3]}" if b else "-"
+        b = earlier.get((r["clip"], r["variant"]))
+        before = f"{pct(b['within_5px'])} / {b['confident_wrong']} / {b['measured_while_gone']}" if b else "-"
         lines.append(f"| {r['clip']} | {r['variant']} ({VARIANTS[r['variant']][0]}) | {r['reference_frames']} | {pct(r['measured'])} "
                      f"| {pct(r['within_5px'])} | {r['confident_wrong']} | {r['measured_while_gone']} | {before} |")
     lines += ["", FINDINGS]
@@ -200,9 +193,9 @@ without its fix, in tests/trackers/golf/):
   turf, the ball merged with it in the silhouette and its size was read as 415-2690 px instead of
   ~280. Each mark is now placed on the bright blob it was drawn round before anything learns from
   it (`trackers/golf/snap.py`, `[golf.snap]`): moved to the blob's centroid when more than a pixel
-  off, and given the blob's size when the box's sample ellipse is larger than the blob (a tight
-  box, as the synthetic annotator draws them, is kept as drawn: a ball's dim, shaded side is
-  still the ball).
+  off, and given the blob's size when the box's sample ellipse is larger than the blob plus a pixel
+  of blurred rim each side (a tight box, as the synthetic annotator draws them, is kept as drawn:
+  a ball's dim, shaded side is still the ball).
 - **Iron shot at 30 fps: 1 of 18 reference frames measured.** The one mark is on the launch frame;
   at 30 fps the ball is 40-70 px away on the next. A ball seen lying still and then missed is
   taken to be struck (the samples' velocities open up), but "lying still" needed two sightings.
@@ -210,17 +203,19 @@ without its fix, in tests/trackers/golf/):
   marked in flight is not taken for a ball at rest (tried without that condition: the iron shot
   marked 3 frames late measured a wrong blob 85 px off in the opened gate, 14 rows).
 
-Left as found: the approach at 15 fps (every other frame of a 30 fps broadcast) is lost from the
-frame after its mark (the ball falls 20 px a frame, outside a velocity prior of 3.6 px a frame at
-this frame size), and after 37 frames lost a white patch moving with the camera's pan is confirmed
-and measured (14 rows, 55-117 px off) while the ball rolls on the green: with no encoders a thing
-fixed in the world moves at a constant velocity in the picture, as a ball would. After the ball
-dropped into the cup, the cup's white liner (as large and as round as the zoomed-in ball) is measured
-on 3 of the 28 frames by the mirrored and by the shaky approach (each frame moved up to 2 px, no
-encoders to take it out; 94.1 % of its reference frames within 5 px); after the ball left the
-picture, the iron shot at JPEG q50 measures 2 rows (as before). The approach as recorded now says
-`predicted` on frames 204-206, where ball and liner are one blob (before: `measured` within 5 px): its 8x8 px mark is placed on
-the 5x5 px ball, so the LUT learns from the ball's core rather than its blurred rim.
+Left as found: the approach at 15 fps (every other frame of a 30 fps broadcast) is now followed
+(95.7 % within 5 px; before 1.1 % and 12 wrong rows), but after the ball dropped into the cup the
+cup's white liner, as large and as round as the zoomed-in ball and one frame-step from where the
+ball vanished, is measured on all 14 frames to the end: at 15 fps the ball's disappearance is one
+step, with no frame where the blob visibly changes. Not solved. After the ball
+left the picture, the iron shot at JPEG q50 and the shaky iron shot measure 2 rows (as before).
+
+Measured and changed on the way (this table): a first form of the mark placement also shrank a
+box whose sample ellipse was only a pixel wider than the ball's blob. The approach's 8x8 px mark
+then became the 5x5 px ball's core; frames 204-206 (ball and cup liner one blob) went `predicted`,
+and the mirrored and shaky approach measured the cup's liner on 3 of the 28 frames after the ball
+dropped in (shaky: 94.1 % within 5 px, before 98.9 %). A box now counts as loose only when its
+ellipse exceeds the blob by more than a pixel of blurred rim on each side (`slack_px` 2).
 """
 
 
