@@ -31,8 +31,10 @@ MAX_CORNERS = 200  # fewer (100) measured a worse zoom on otb_crossing (AUC 0.54
 QUALITY = 0.01
 # maxLevel 1: LK starts from the last position, so it searches only the motion since the last
 # frame; coarser levels average a 15 px window over 60-120 px, where one large mover (a passing
-# car) then drags the corners around it
-LK = {"winSize": (15, 15), "maxLevel": 1, "criteria": (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)}
+# car) then drags the corners around it. 10 iterations, not 20: the same robustness table
+# (docs/colorpf_robustness.md, pan/zoom rows within 0.012 AUC) at 0.7x the cost; 11 px windows
+# cost half but lost 0.02-0.04 AUC on the pan and zoom rows
+LK = {"winSize": (15, 15), "maxLevel": 1, "criteria": (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)}
 IDENTITY = np.eye(3)
 HALVE_FROM = 640  # frames at least this wide are measured at half size
 
@@ -42,13 +44,18 @@ def grey(image: np.ndarray) -> np.ndarray:
 
 
 def _similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """Least-squares ``x' = a x - b y + tx, y' = b x + a y + ty`` (3x3)."""
-    n = len(p0)
-    m = np.zeros((2 * n, 4))
-    m[0::2] = np.column_stack([p0[:, 0], -p0[:, 1], np.ones(n), np.zeros(n)])
-    m[1::2] = np.column_stack([p0[:, 1], p0[:, 0], np.zeros(n), np.ones(n)])
-    a, b, tx, ty = np.linalg.lstsq(m, p1.reshape(-1), rcond=None)[0]
-    return np.array([[a, -b, tx], [b, a, ty], [0.0, 0.0, 1.0]])
+    """Least-squares ``x' = a x - b y + tx, y' = b x + a y + ty`` (3x3), in closed form: about the
+    points' means the normal equations separate into ``a`` (dot products) and ``b`` (cross products)."""
+    c0, c1 = p0.mean(axis=0), p1.mean(axis=0)
+    q0, q1 = p0 - c0, p1 - c1
+    spread = float(np.einsum("ij,ij->", q0, q0))
+    if spread <= 0.0:  # all points on one spot: a translation
+        a, b = 1.0, 0.0
+    else:
+        a = float(np.einsum("ij,ij->", q0, q1)) / spread
+        b = float((q0[:, 0] * q1[:, 1] - q0[:, 1] * q1[:, 0]).sum()) / spread
+    t = c1 - np.array([a * c0[0] - b * c0[1], b * c0[0] + a * c0[1]])
+    return np.array([[a, -b, t[0]], [b, a, t[1]], [0.0, 0.0, 1.0]])
 
 
 MIN_BASELINE = 20.0  # px: corners closer than this to the median say little about scale and rotation
@@ -64,8 +71,9 @@ def _median_similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
     scale, angle = 1.0, 0.0
     if far.sum() >= 3:
         scale = float(np.median(n1[far] / n0[far]))
-        turn = np.arctan2(v1[far, 1], v1[far, 0]) - np.arctan2(v0[far, 1], v0[far, 0])
-        angle = float(np.median(np.angle(np.exp(1j * turn))))
+        u0, u1 = v0[far], v1[far]  # the turn from u0 to u1, in (-pi, pi]
+        turn = np.arctan2(u0[:, 0] * u1[:, 1] - u0[:, 1] * u1[:, 0], (u0 * u1).sum(axis=1))
+        angle = float(np.median(turn))
     a, b = scale * np.cos(angle), scale * np.sin(angle)
     linear = np.array([[a, -b], [b, a]])
     t = np.median(p1 - p0 @ linear.T, axis=0)
@@ -78,12 +86,13 @@ def fit_similarity(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarra
     (at least 1 px) and refits by least squares."""
     p0, p1 = np.asarray(p0, np.float64).reshape(-1, 2), np.asarray(p1, np.float64).reshape(-1, 2)
     transform = _median_similarity(p0, p1)
+    kept = None
     for _ in range(rounds):
         r = np.hypot(*(apply(transform, p0) - p1).T)
         keep = r <= max(3.0 * float(np.median(r)), 1.0)
-        if keep.sum() < 3:
-            break
-        transform = _similarity(p0[keep], p1[keep])
+        if keep.sum() < 3 or (kept is not None and np.array_equal(keep, kept)):
+            break  # the same points would give the same fit
+        transform, kept = _similarity(p0[keep], p1[keep]), keep
     return transform
 
 

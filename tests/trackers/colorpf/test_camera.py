@@ -107,3 +107,17 @@ def test_a_wide_frame_is_measured_at_half_size_and_scaled_back():
     assert cam._factor == 2
     assert np.allclose(t[:2, 2], [-0.7 * 19, 0.3 * 19], atol=0.4) and abs(scale_of(t) - 1.0) < 0.003
     assert np.array_equal(snap(s, (700, 480)), IDENTITY)
+
+
+def test_the_closed_form_similarity_is_the_least_squares_fit():
+    from trackreplay.trackers.colorpf.camera import _similarity
+
+    rng = np.random.default_rng(5)
+    p0 = rng.uniform(0, 300, (40, 2))
+    p1 = p0 @ np.array([[0.97, -0.08], [0.08, 0.97]]).T + [4.0, -2.5] + rng.normal(0, 0.7, p0.shape)
+    design = np.zeros((80, 4))  # x' = a x - b y + tx, y' = b x + a y + ty, solved by lstsq
+    design[0::2] = np.column_stack([p0[:, 0], -p0[:, 1], np.ones(40), np.zeros(40)])
+    design[1::2] = np.column_stack([p0[:, 1], p0[:, 0], np.zeros(40), np.ones(40)])
+    a, b, tx, ty = np.linalg.lstsq(design, p1.reshape(-1), rcond=None)[0]
+    assert np.allclose(_similarity(p0, p1), [[a, -b, tx], [b, a, ty], [0, 0, 1]], atol=1e-9)
+    assert np.array_equal(_similarity(np.ones((3, 2)), np.ones((3, 2)) + 2.0)[:2, 2], [2.0, 2.0])  # one spot: a shift
