@@ -39,9 +39,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from trackreplay.trackers.geometry.homography import apply_homography
-from trackreplay.trackers.golf.blobs import STILL, GatedBlobs, roundness, shape_tolerance
+from trackreplay.trackers.golf.blobs import CIRCULARITY, ELONGATED, EXCESS, STILL, GatedBlobs, roundness, shape_tolerance
 from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
+MERGED_SHAPES = (CIRCULARITY, EXCESS, ELONGATED)  # blobs refused for their shape, not their size
 VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
             "ambiguous")
 
@@ -189,7 +190,21 @@ class Validator:
         motion = math.exp(-0.5 * (float(d[k]) / s) ** 2)
         confidence = fit * motion
         verdict = "measured" if confidence >= self.cfg.min_confidence and fit >= self.cfg.min_fit else "low_confidence"
+        if verdict == "measured" and self._merged_nearer(gated, k, d, scale):
+            verdict = "low_confidence"
         return Validation(verdict, confidence, fit, motion, radius, k, np.zeros((0, 3)), in_gate), in_gate, outside
+
+    def _merged_nearer(self, gated: GatedBlobs, k: int, d: np.ndarray, scale: float) -> bool:
+        """A blob refused for its shape alone lies nearer the prediction than candidate ``k`` and has
+        the ball's area more nearly than ``k``: the ball merged with something (a ball rolling over
+        the cup's white liner is one oval with it), so ``k`` (a piece of the liner beside it) is not
+        taken for the ball on a guess."""
+        merged = np.isin(gated.reason, MERGED_SHAPES) & (d < d[k])
+        if not merged.any():
+            return False
+        slack = self.blobs.area_slack_px * scale * scale
+        off = np.abs(np.log((gated.blobs.area + slack) / (float(gated.targets[0]) + slack)))
+        return bool((off[merged] < off[k]).any())
 
     def validate(self, *, index: int, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
                  size: tuple[int, int], scale: float, lost: bool, entry_only: bool = False,

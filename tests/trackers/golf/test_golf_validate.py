@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 
 from trackreplay.trackers.foreground.blobs import measure_blobs
-from trackreplay.trackers.golf.blobs import GatedBlobs
+from trackreplay.trackers.golf.blobs import AREA_LARGE, CIRCULARITY, ELONGATED, OK, GatedBlobs
 from trackreplay.trackers.golf.config import BlobConfig, SearchConfig, ValidateConfig
 from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.validate import Validator
@@ -70,3 +70,33 @@ def test_search_region_reaches_the_next_tentative_point():
     assert reaching(region, np.array([640.0, 400.0]), 5.0, *SIZE) is region  # already inside: unchanged
     edge = reaching(region, np.array([5.0, 5.0]), 40.0, *SIZE)
     assert edge.box[0] == 0.0 and edge.box[1] == 0.0  # clipped to the frame
+
+
+
+def _ball_over_a_liner(refused_as: int) -> tuple[GatedBlobs, int]:
+    """The ball (r 9) on the prediction merged with a flat oval (the cup's white liner) into one blob
+    refused (``refused_as``), and a piece of the liner 30 px off it that the gate accepts."""
+    mask = np.zeros(SIZE[::-1], np.uint8)
+    cv2.circle(mask, (400, 300), 9, 1, -1)
+    cv2.ellipse(mask, (406, 294), (20, 4), 0, 0, 360, 1, -1)
+    cv2.ellipse(mask, (372, 287), (7, 5), 0, 0, 360, 1, -1)  # the liner's piece beside it
+    blobs = measure_blobs(mask)
+    piece = int(np.argmin(blobs.area))
+    reason = np.full(len(blobs.area), refused_as, np.int64)
+    reason[piece] = OK
+    return GatedBlobs(blobs, reason, -1, np.array([254.0, 0.9]), 1.0), piece
+
+
+def test_a_piece_beside_a_ball_merged_with_scenery_is_not_measured():
+    """(The approach clip's frame 208: the ball rolling over the cup's liner is one oval with it, refused
+    as elongated; the liner's left part, smaller and a little farther from the prediction, passed the gate.)"""
+    verdict = {}
+    for refused_as in (ELONGATED, CIRCULARITY, AREA_LARGE):
+        gated, piece = _ball_over_a_liner(refused_as)
+        found, _, _ = Validator(ValidateConfig(), BlobConfig()).seen_in_gate(
+            gated=gated, predicted=np.array([401.0, 298.0]), spread=np.full(2, 8.0), diameter=18.0, size=SIZE,
+            scale=1.0, lost=False)
+        assert found.candidate == piece and found.fit >= ValidateConfig().min_fit
+        verdict[refused_as] = found.verdict
+    assert verdict[ELONGATED] == verdict[CIRCULARITY] == "low_confidence"
+    assert verdict[AREA_LARGE] == "measured"  # a blob refused for its size is no merged ball: the piece stands
