@@ -13,6 +13,7 @@ The step times by N are the defaults'; N = 40 also for the paper's pipeline and 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import subprocess
@@ -29,6 +30,7 @@ sys.path.insert(0, str(HERE.parent))
 
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.trackers.frame import Frame  # noqa: E402
 from trackreplay.replay.reader import LogReader  # noqa: E402
 from trackreplay.replay.config import config_from_dict  # noqa: E402
 from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig  # noqa: E402
@@ -65,18 +67,30 @@ def colorpf_times(frames, n: int, repeats: int = 3, overrides: dict | None = Non
     return np.median(np.array(runs), axis=0)
 
 
+def panned(frame: Frame, dx: float) -> Frame:
+    """``frame`` seen by a camera panned ``dx`` px right (its content ``dx`` px left, the edge repeated)."""
+    if dx == 0.0:
+        return frame
+    image = cv2.warpAffine(frame.image, np.float32([[1, 0, -dx], [0, 1, 0]]), frame.image.shape[1::-1],
+                           flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    return dataclasses.replace(frame, image=image, encoded=None, encoding=None)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("log", type=Path, help="a marked log (e.g. otb_crossing recorded and annotated)")
     ap.add_argument("--csrt-venv", type=Path, default=DEFAULT_VENV)
     ap.add_argument("--out", type=Path, default=HERE / "results" / "colorpf.json")
+    ap.add_argument("--pan", type=float, default=0.0,
+                    help="px per frame: the camera pans right (content shifted left, edge repeated) from the mark on, "
+                         "a moving camera for both sides (results/colorpf_panned.json: --pan 0.5)")
     args = ap.parse_args()
     cv2.setNumThreads(1)
     frames = list(iter_frames(LogReader(args.log), FrameTopics()))
     mark = frames[0].all_hints[0]
-    start = [f for f in frames if f.index >= mark.frame]
-    result = {"machine": describe(), "log": args.log.name, "frames": len(start), "image": list(start[0].image.shape),
-              "load_average_start": list(os.getloadavg())}
+    start = [panned(f, args.pan * (f.index - mark.frame)) for f in frames if f.index >= mark.frame]
+    result = {"machine": describe(), "log": args.log.name, "pan_px_per_frame": args.pan, "frames": len(start),
+              "image": list(start[0].image.shape), "load_average_start": list(os.getloadavg())}
     per_n = {}
     for n in (10, 20, 40, 80, 160, 320):
         t = colorpf_times(start, n)

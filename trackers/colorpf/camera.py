@@ -15,7 +15,9 @@ least-squares similarity refitted on the corners within 3x the median residual (
 minority of the corners; :func:`fit_similarity`). Always against the key frame, not chained frame
 to frame, so a still camera has no drift (chained, otb_crossing's still camera wandered 0.6 px in
 120 frames); LK starts each corner where it was last found (the motion since the last frame is
-small). The key frame is renewed when fewer than half of its corners are still tracked.
+small). The key frame is renewed when fewer than half of its corners are still tracked. A probe of a
+few corners comes first: when they have not moved since last found, the last transform stands (a
+still camera costs the probe alone; docs/colorpf_robustness.md's table is unchanged by it).
 
 :func:`snap`: a transform that moves no pixel of the frame by half a pixel or more through its
 scale and rotation is taken as a translation rounded to whole pixels (a still camera is then
@@ -36,6 +38,8 @@ QUALITY = 0.01
 # cost half but lost 0.02-0.04 AUC on the pan and zoom rows
 LK = {"winSize": (15, 15), "maxLevel": 1, "criteria": (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)}
 IDENTITY = np.eye(3)
+PROBE = 24  # corners followed first: when they have not moved, the full measurement is skipped
+STILL_PX = 0.2  # ... "not moved": their median displacement since last found, well under snap's half pixel
 HALVE_FROM = 640  # frames at least this wide are measured at half size
 
 
@@ -165,6 +169,24 @@ class CameraMotion:
         self._corners = cv2.goodFeaturesToTrack(g, MAX_CORNERS, QUALITY, self.min_distance, mask=mask, blockSize=5)
         self._last = None if self._corners is None else self._corners.copy()
 
+    def _unmoved(self, matched: np.ndarray) -> bool:
+        """Whether a spread-out probe of :data:`PROBE` corners, followed from where they were last
+        found, moved less than :data:`STILL_PX` (median): the scene has not moved since the last
+        measurement, which then stands (a still camera costs a probe, not a measurement). A slow
+        drift adds up against those positions until it shows, so the transform lags it by less than
+        :data:`STILL_PX`, under the half pixel :func:`snap` rounds away."""
+        assert self._corners is not None and self._last is not None
+        if len(self._corners) < 2 * PROBE:
+            return False
+        pick = np.linspace(0, len(self._corners) - 1, PROBE).round().astype(np.int64)
+        last = self._last[pick]
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners[pick], last.copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        ok = status.ravel() == 1
+        if 2 * ok.sum() < PROBE:
+            return False
+        return float(np.median(np.hypot(*(moved[ok, 0] - last[ok, 0]).T))) < STILL_PX
+
     def update(self, image: np.ndarray, box: np.ndarray | None = None) -> np.ndarray:
         """The frame's transform; ``box``: the tracked box's corners (left out of a new key frame's corners)."""
         g = grey(image)
@@ -181,6 +203,8 @@ class CameraMotion:
             return self.transform
         gain = self._key_mean / max(float(g[::4, ::4].mean()), 1.0)
         matched = cv2.convertScaleAbs(g, alpha=gain)  # the key's brightness
+        if self._unmoved(matched):
+            return self.transform
         moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, corners, self._last.copy(),
                                                     flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
         height, width = g.shape

@@ -121,3 +121,31 @@ def test_the_closed_form_similarity_is_the_least_squares_fit():
     a, b, tx, ty = np.linalg.lstsq(design, p1.reshape(-1), rcond=None)[0]
     assert np.allclose(_similarity(p0, p1), [[a, -b, tx], [b, a, ty], [0, 0, 1]], atol=1e-9)
     assert np.array_equal(_similarity(np.ones((3, 2)), np.ones((3, 2)) + 2.0)[:2, 2], [2.0, 2.0])  # one spot: a shift
+
+
+def test_a_still_view_is_checked_by_the_probe_alone_and_a_drift_is_caught_within_a_fifth_of_a_pixel(monkeypatch):
+    from trackreplay.trackers.colorpf import camera as camera_module
+
+    followed: list[int] = []  # corners per LK call
+    lk = cv2.calcOpticalFlowPyrLK
+
+    def counting(prev, nxt, points, *args, **kwargs):
+        followed.append(len(points))
+        return lk(prev, nxt, points, *args, **kwargs)
+
+    monkeypatch.setattr(camera_module.cv2, "calcOpticalFlowPyrLK", counting)
+    world = _world(2)
+    view = lambda dx: cv2.warpAffine(world, np.array([[1.0, 0.0, 20.0 + dx], [0.0, 1.0, 5.0]]), (W, H),
+                                     flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+    cam = CameraMotion()
+    cam.update(view(0.0))
+    assert len(cam._corners) >= 2 * camera_module.PROBE
+    for _ in range(5):
+        assert np.array_equal(cam.update(view(0.0)), IDENTITY)
+    assert followed == [camera_module.PROBE] * 5  # the probe, never the whole measurement
+    followed.clear()
+    shifts = []
+    for i in range(1, 21):  # a drift of 0.05 px a frame
+        shifts.append(-cam.update(view(0.05 * i))[0, 2])
+    assert len(followed) > 20  # measured in full now and then
+    assert np.max(np.abs(np.array(shifts) - 0.05 * np.arange(1, 21))) < camera_module.STILL_PX + 0.05
