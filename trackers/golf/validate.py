@@ -12,6 +12,9 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   ``min_fit`` from the shape alone (a speck a fifth of the ball's area right on the predicted path
   is not the ball: the edge of a cup's liner after the ball merged with it); below, the row is
   ``predicted`` and nothing (targets, EKF, LUTs) learns from the blob;
+- **merged nearer** (verdict ``merged_nearer``): a blob refused for its shape alone that lies nearer
+  the prediction than the candidate and has the ball's area more nearly is the ball merged with
+  something (rolling over the cup's white liner); the candidate beside it is then not ``measured``;
 - **no jumps without evidence**: a shape-accepted blob outside the gate, or any blob once the
   track is lost, or while the prediction has left the picture, starts or extends a *tentative*
   track. Only when it has been seen on ``confirm_frames`` consecutive frames, each within
@@ -44,7 +47,7 @@ from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
 MERGED_SHAPES = (CIRCULARITY, EXCESS, ELONGATED)  # blobs refused for their shape, not their size
 VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
-            "ambiguous")
+            "ambiguous", "merged_nearer")
 
 
 @dataclass(frozen=True, eq=False)
@@ -172,7 +175,7 @@ class Validator:
 
     def seen_in_gate(self, *, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
                      size: tuple[int, int], scale: float, lost: bool) -> tuple[Validation | None, np.ndarray, bool]:
-        """The in-gate blob nearest the prediction as a "measured" or "low_confidence" validation
+        """The in-gate blob nearest the prediction as a "measured", "low_confidence" or "merged_nearer" validation
         (None: no blob in the gate), the in-gate mask and whether the prediction left the picture.
         Changes nothing (the tracker also asks it of the other LUT's silhouette)."""
         width, height = size
@@ -191,7 +194,7 @@ class Validator:
         confidence = fit * motion
         verdict = "measured" if confidence >= self.cfg.min_confidence and fit >= self.cfg.min_fit else "low_confidence"
         if verdict == "measured" and self._merged_nearer(gated, k, d, scale):
-            verdict = "low_confidence"
+            verdict = "merged_nearer"
         return Validation(verdict, confidence, fit, motion, radius, k, np.zeros((0, 3)), in_gate), in_gate, outside
 
     def _merged_nearer(self, gated: GatedBlobs, k: int, d: np.ndarray, scale: float) -> bool:

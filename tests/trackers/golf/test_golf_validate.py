@@ -98,5 +98,5 @@ def test_a_piece_beside_a_ball_merged_with_scenery_is_not_measured():
             scale=1.0, lost=False)
         assert found.candidate == piece and found.fit >= ValidateConfig().min_fit
         verdict[refused_as] = found.verdict
-    assert verdict[ELONGATED] == verdict[CIRCULARITY] == "low_confidence"
+    assert verdict[ELONGATED] == verdict[CIRCULARITY] == "merged_nearer"  # shown in the Rerun view as the reason
     assert verdict[AREA_LARGE] == "measured"  # a blob refused for its size is no merged ball: the piece stands
