@@ -27,6 +27,7 @@ import cv2
 
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
 from trackreplay.trackers.appearance.lut import ColourLut
+from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
 from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
@@ -89,7 +90,7 @@ def top_hat(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float)
         return np.zeros(y.shape, np.uint8)
     side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
     side += 1 - side % 2
-    return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+    return disc_top_hat(y, side)  # OpenCV's MORPH_TOPHAT with the MORPH_ELLIPSE disc, by row segments
 
 
 def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, float]:
