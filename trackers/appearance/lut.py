@@ -122,8 +122,14 @@ def coarse_index(pixels: np.ndarray, bin_: int) -> np.ndarray:
     """Flat index of ``(..., 3)`` uint8 pixels into a C-ordered ``(256/bin_)³`` table (``bin_`` a power of 2)."""
     shift = int(bin_).bit_length() - 1
     bits = 8 - shift
-    c0 = pixels[..., 0].astype(np.int32) >> shift
-    return (c0 << (2 * bits)) | ((pixels[..., 1].astype(np.int32) >> shift) << bits) | (pixels[..., 2].astype(np.int32) >> shift)
+    # Shifted down as uint8 (a quarter of the memory traffic), widened once, combined in place.
+    index = (pixels[..., 0] >> shift).astype(np.int32)
+    index <<= 2 * bits
+    middle = (pixels[..., 1] >> shift).astype(np.int32)
+    middle <<= bits
+    index |= middle
+    index |= pixels[..., 2] >> shift
+    return index
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,7 +149,8 @@ class ColourLut:
 
     def lookup(self, pixels: np.ndarray) -> np.ndarray:
         """Boolean mask (the pixels' leading shape): one fancy index into the coarse table."""
-        return self.coarse.reshape(-1)[coarse_index(pixels, self.bin)]  # bin 1: flat_index's index
+        # bin 1: flat_index's index; ``take`` gathers what fancy indexing does, faster for an int32 index
+        return self.coarse.reshape(-1).take(coarse_index(pixels, self.bin))
 
     @functools.cached_property
     def table(self) -> np.ndarray:

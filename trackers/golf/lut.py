@@ -23,7 +23,7 @@ import numpy as np
 
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
-from trackreplay.trackers.appearance.histogram import colour_histogram
+from trackreplay.trackers.appearance.histogram import colour_histogram, level_counts
 from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut
 from trackreplay.trackers.geometry.box import centre_box, clip_box
 from trackreplay.trackers.golf.config import LutConfig
@@ -282,14 +282,14 @@ class GolfLuts:
         if self._labels is None:
             self._labels = self.luminance_labels()
             self._label_levels = [(i, np.flatnonzero(self._labels == i)) for i, name in enumerate(LUT_NAMES) if name in self.luts]
-        flat = np.asarray(y, dtype=np.uint8).ravel()
+        y = np.asarray(y, dtype=np.uint8)
         # The pixels per LUT: the region's luminance counts summed over each LUT's levels, the same
         # integers (exact in float64 below 2^53) as counting the pixels' labels, divided by the same total.
-        per_lut = np.bincount(self._labels, weights=np.bincount(flat, minlength=256), minlength=len(LUT_NAMES)).tolist()
-        total = max(float(flat.size), 1.0)
+        per_lut = np.bincount(self._labels, weights=level_counts(y), minlength=len(LUT_NAMES)).tolist()
+        total = max(float(y.size), 1.0)
         for i, _ in self._label_levels:
             scores[i] = float(per_lut[i] / total)
-        if not flat.size:
+        if not y.size:
             return (current if current in self.luts else self.names[0]), scores
         best = LUT_NAMES[_nanargmax(scores)]
         if current in self.luts and best != current:

@@ -26,6 +26,7 @@ import numpy as np
 import cv2
 
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
+from trackreplay.trackers.appearance.histogram import level_counts
 from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
@@ -98,7 +99,7 @@ def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, fl
     absolute deviations from it, read off the counts per level: the middle one or two of the
     sorted values (and of the sorted deviations), averaged. The same numbers: every value,
     deviation and mean of two is a multiple of 1/4 far below 2^20, exact in float32 and float64."""
-    counts = np.bincount((values.ravel() - low).astype(np.intp), minlength=levels)
+    counts = level_counts(values, low, levels)
     n = int(values.size)
     middle = np.array([(n - 1) // 2, n // 2])
     lo, hi = (np.searchsorted(np.cumsum(counts), middle, side="right") + low).tolist()

@@ -46,3 +46,16 @@ def test_previous_in_pose_is_the_y_of_to_ycbcr():
     bgr = cv2.warpPerspective(frame, to_crop, (50, 40), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=(255, 255, 255))
     assert np.array_equal(y, to_ycbcr(bgr)[..., 0])
+
+
+def test_median_and_mad_of_images_are_numpys():
+    """The 2-D crops the silhouettes pass (counted by ``cv2.calcHist``): numpy's medians too."""
+    rng = np.random.default_rng(1)
+    for shape in [(1, 1), (3, 7), (43, 43), (320, 320), (150, 69)]:
+        hat = np.minimum(rng.geometric(0.2, shape), 255).astype(np.uint8)
+        med = float(np.median(hat))
+        assert median_and_mad(hat, 0, 256) == (med, float(np.median(np.abs(hat.astype(np.float32) - med))))
+        rise = np.clip(rng.normal(0, 9, shape).round(), -255, 255).astype(np.int16)
+        med = float(np.median(rise))
+        assert median_and_mad(rise, -255, 511) == (med, float(np.median(np.abs(rise - med))))
+
