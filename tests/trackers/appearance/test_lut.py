@@ -129,3 +129,15 @@ def test_coarse_index_is_the_plain_int32_form():
             got = coarse_index(pixels, bin_)
             assert got.dtype == plain.dtype and np.array_equal(got, plain)
 
+
+def test_support_box_is_the_extent_of_numpys_nonzero():
+    from trackreplay.trackers.appearance.lut import support_box
+
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        cube = np.zeros((16, 16, 16))
+        k = rng.integers(1, 20)
+        cube[tuple(rng.integers(0, 16, (3, k)))] = rng.choice([1.0, 0.5, -2.0, np.nan], k)
+        support = np.nonzero(cube)
+        assert support_box(cube) == [(int(a.min()), int(a.max())) for a in support]
+    assert support_box(np.zeros((4, 4, 4))) is None

@@ -59,3 +59,13 @@ def test_median_and_mad_of_images_are_numpys():
         med = float(np.median(rise))
         assert median_and_mad(rise, -255, 511) == (med, float(np.median(np.abs(rise - med))))
 
+
+def test_every_nth_is_the_strided_view():
+    from trackreplay.trackers.golf.lut import every_nth
+
+    rng = np.random.default_rng(2)
+    for shape in [(720, 1280, 3), (1080, 1920, 3), (360, 640, 3), (37, 53, 3), (64, 96, 3), (8, 8, 3), (720, 1280)]:
+        image = rng.integers(0, 256, shape, dtype=np.uint8)
+        for s in (1, 2, 3, 4, 8):
+            got = every_nth(image, s)
+            assert got.flags.c_contiguous and np.array_equal(got, image[::s, ::s])
