@@ -69,3 +69,18 @@ def test_every_nth_is_the_strided_view():
         for s in (1, 2, 3, 4, 8):
             got = every_nth(image, s)
             assert got.flags.c_contiguous and np.array_equal(got, image[::s, ::s])
+
+
+def test_at_least_is_numpys_comparison():
+    from trackreplay.trackers.golf.silhouette import at_least
+
+    rng = np.random.default_rng(3)
+    for shape in [(1, 1), (43, 43), (320, 320), (7, 150)]:
+        images = [rng.integers(0, 256, shape, dtype=np.uint8), rng.integers(-255, 256, shape).astype(np.int16)]
+        images[1].flat[:2] = [-32768, 32767]
+        for values in images:
+            for t in [-40000.0, -255.5, -1.0, -0.5, 0.0, 0.25, 1.0, 15.0, 40.0, 41.3, 254.5, 255.0, 255.5, 300.0,
+                      32766.5, 32767.0, 40000.0, float(rng.normal(20, 30)), np.float64(17.75)]:
+                got = at_least(values, t)
+                assert got.dtype == np.uint8 and got.shape == values.shape
+                assert np.array_equal(got, (values >= t).astype(np.uint8)), (values.dtype, t)
