@@ -6,7 +6,8 @@ disc took ~3 ms on a 320 × 320 crop). A disc is, row by row, a centred segment:
 maximum) over the disc is the minimum over its rows of the minimum over each row's segment. The
 segments' minima of every half-width ``k`` come from those of ``k - 1`` in one elementwise step,
 and the rows combine in one step each, so the cost grows with the width itself: ``3 r`` passes of
-``np.minimum`` / ``np.maximum`` over the padded crop for a disc of radius ``r``. The image is
+``np.minimum`` / ``np.maximum`` over the padded crop for a disc of radius ``r``, in two buffers
+(each row folded in as soon as its half-width is there: the passes stay in cache). The image is
 handled as one flat array (rows laid end to end): a shift by a column is a shift by one element, a
 shift by a row one by the padded width, and the padding (OpenCV's default border: ignored, i.e.
 255 for an erosion, 0 for a dilation) keeps every segment inside its own row.
@@ -23,7 +24,7 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-MIN_SIDE = 9  # below, OpenCV's own loop over the kernel's few points is faster
+MIN_SIDE = 17  # below, OpenCV's own loop over the kernel's points is as fast or faster (measured 43² to 320² crops)
 
 
 @functools.lru_cache(maxsize=64)
@@ -55,28 +56,38 @@ def _by_rows(image: np.ndarray, rows: tuple[int, ...], border: int,
     wp = w + 2 * rx
     # One spare row above and below: every slice below starts and ends inside the array.
     flat = cv2.copyMakeBorder(image, ry + 1, ry + 1, rx, rx, cv2.BORDER_CONSTANT, value=border).reshape(-1)
-    segments = [flat]  # segments[k][i]: the extreme of flat[i : i + 2k + 1] (centred on i + k)
-    if rx >= 1:
-        segments.append(extreme(extreme(flat[:-2], flat[1:-1]), flat[2:]))
-    for _ in range(2, rx + 1):  # [i, i + 2k] = [i, i + 2k - 2] ∪ [i + 2, i + 2k] for k >= 2
-        last = segments[-1]
-        segments.append(extreme(last[:-2], last[2:]))
+    by_width: dict[int, list[int]] = {}
+    for dy, k in zip(range(-ry, ry + 1), rows):
+        if k >= 0:
+            by_width.setdefault(k, []).append(dy)
     start, n = (ry + 1) * wp, h * wp
     out = None
-    for dy, k in zip(range(-ry, ry + 1), rows):
-        if k < 0:
-            continue
-        at = start + dy * wp - k
-        part = segments[k][at:at + n]
-        out = part.copy() if out is None else extreme(out, part, out=out)
+    # segment[i]: the extreme of flat[i : i + 2k + 1] (centred on i + k), for k = 0, 1, ... in turn;
+    # the rows of half-width k are folded in as soon as it is there, so two buffers suffice.
+    segment, spare = flat, np.empty_like(flat)
+    for k in range(rx + 1):
+        if k == 1:
+            segment = extreme(extreme(flat[:-2], flat[1:-1], out=spare[:-2]), flat[2:], out=spare[:-2])
+            spare = np.empty_like(flat)
+        elif k >= 2:  # [i, i + 2k] = [i, i + 2k - 2] ∪ [i + 2, i + 2k]
+            segment, spare = extreme(segment[:-2], segment[2:], out=spare[:len(segment) - 2]), segment.base
+        for dy in by_width.get(k, ()):
+            at = start + dy * wp - k
+            part = segment[at:at + n]
+            out = part.copy() if out is None else extreme(out, part, out=out)
     return out.reshape(h, wp)[:, rx:rx + w]
 
 
 def disc_top_hat(y: np.ndarray, side: int) -> np.ndarray:
     """``cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))``
     of a 2-D uint8 image (OpenCV itself for small discs, even sides and empty images)."""
-    rows = ellipse_rows(side) if side >= MIN_SIDE and y.size else None
-    if rows is None:
-        return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+    if side >= MIN_SIDE and y.size and ellipse_rows(side) is not None:
+        return top_hat_by_rows(y, side)
+    return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+
+
+def top_hat_by_rows(y: np.ndarray, side: int) -> np.ndarray:
+    """:func:`disc_top_hat` by row segments whatever the disc's size (an odd ``side``; non-empty ``y``)."""
+    rows = ellipse_rows(side)
     opened = _by_rows(_by_rows(y, rows, 255, np.minimum), rows, 0, np.maximum)
     return cv2.subtract(y, opened)  # the opening is never above the image: OpenCV's saturating difference, exactly
