@@ -203,14 +203,16 @@ def image_part_histograms(index: np.ndarray, n_bins: int, *, kernel: str = "unif
 # --- counts per level of small integers ------------------------------------------------------------
 
 _CALCHIST_MAX = 1 << 24  # float32 counts are exact integers up to here
+_CALCHIST_MIN = 12_000  # below (~110 x 110 px), np.bincount's cost is less than cv2.calcHist's call (measured)
 
 
 def level_counts(values: np.ndarray, low: int = 0, levels: int = 256) -> np.ndarray:
     """``np.bincount((values.ravel() - low).astype(np.intp), minlength=levels)`` for a 2-D uint8 or
     int16 image whose values lie in ``[low, low + levels)``, counted by ``cv2.calcHist`` (no
-    8-byte index per pixel; its float32 counts are exact below 2^24 pixels). Any other input, or a
-    value outside the range, is counted by ``np.bincount`` itself (the same answer, or its error)."""
-    if values.ndim == 2 and 0 < values.size < _CALCHIST_MAX and levels <= 65536:
+    8-byte index per pixel; its float32 counts are exact below 2^24 pixels). A small image, any
+    other input, or a value outside the range, is counted by ``np.bincount`` itself (the same
+    answer, or its error)."""
+    if values.ndim == 2 and _CALCHIST_MIN <= values.size < _CALCHIST_MAX and levels <= 65536:
         source = None
         if values.dtype == np.uint8 and low == 0:
             source = values

@@ -51,7 +51,7 @@ def test_previous_in_pose_is_the_y_of_to_ycbcr():
 def test_median_and_mad_of_images_are_numpys():
     """The 2-D crops the silhouettes pass (counted by ``cv2.calcHist``): numpy's medians too."""
     rng = np.random.default_rng(1)
-    for shape in [(1, 1), (3, 7), (43, 43), (320, 320), (150, 69)]:
+    for shape in [(1, 1), (3, 7), (43, 43), (320, 320), (150, 69), (200, 90)]:
         hat = np.minimum(rng.geometric(0.2, shape), 255).astype(np.uint8)
         med = float(np.median(hat))
         assert median_and_mad(hat, 0, 256) == (med, float(np.median(np.abs(hat.astype(np.float32) - med))))
