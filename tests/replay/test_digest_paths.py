@@ -44,3 +44,18 @@ def test_golden_golf_frames_hash_as_the_recursive_feed() -> None:
     for step in iter_steps(ReplayRequest(log=GOLDEN / "golf-teeshot-640x360.mcap", tracker="golf")):
         a, b = _both(step.frame.index, (step.intermediates, step.states))
         assert a == b, step.frame.index
+
+
+class _Text(str):
+    pass
+
+
+def test_fast_branches_hash_as_the_recursive_feed() -> None:
+    """A dataclass met again (its fields read without the general dispatch), strings in it and in
+    tuples, and look-alikes that must take the general path (a str subclass, numpy scalars)."""
+    pair = _Pair("s", ("a", "b", _Text("c"), 2.0))
+    for value in ([pair, pair, _Pair(np.float64(1.5), _Text("x")), _Pair(True, None)],
+                  (_Pair(_Pair("a", 1.0), [("x", "y"), "z"]), "", ("",))):
+        for index in (0, 1):
+            a, b = _both(index, value)
+            assert a == b, repr(value)

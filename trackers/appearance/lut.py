@@ -49,13 +49,27 @@ def smooth3(values: np.ndarray, sigma: float) -> np.ndarray:
     if sigma <= 0:
         return values
     r = int(np.ceil(3 * sigma))
-    support = np.nonzero(values)
+    support = support_box(values)
     out = np.zeros_like(values)
-    if not len(support[0]):
+    if support is None:
         return out
-    box = tuple(slice(max(int(a.min()) - r, 0), min(int(a.max()) + r + 1, n)) for a, n in zip(support, values.shape))
+    box = tuple(slice(max(lo - r, 0), min(hi + r + 1, n)) for (lo, hi), n in zip(support, values.shape))
     out[box] = _smooth3_dense(np.ascontiguousarray(values[box]), sigma)
     return out
+
+
+def support_box(values: np.ndarray) -> list[tuple[int, int]] | None:
+    """Per axis, the lowest and highest index of a non-zero value (the min and max of
+    ``np.nonzero(values)``'s indices; None when all are zero), from one occupancy test and a
+    reduction per axis (``np.nonzero`` builds every index of the cube: ~1 ms on 64³)."""
+    occupied = values != 0
+    box = []
+    for axis in range(values.ndim):
+        along = np.flatnonzero(occupied.any(axis=tuple(a for a in range(values.ndim) if a != axis)))
+        if not along.size:
+            return None
+        box.append((int(along[0]), int(along[-1])))
+    return box
 
 
 def _smooth3_dense(values: np.ndarray, sigma: float) -> np.ndarray:
@@ -102,12 +116,12 @@ def two_class_table(foreground: np.ndarray, background: np.ndarray, *, smooth: f
     # by the radius again (every sum the box's cells need, in the same order: the same numbers).
     r = int(np.ceil(3 * smooth))
     out = np.zeros(foreground.shape, bool)
-    support = np.nonzero(foreground)
-    if not len(support[0]):
+    support = support_box(foreground)
+    if support is None:
         return out
     shape = foreground.shape
-    lo = [max(int(a.min()) - r, 0) for a in support]
-    hi = [min(int(a.max()) + r + 1, n) for a, n in zip(support, shape)]
+    lo = [max(a - r, 0) for a, _ in support]
+    hi = [min(b + r + 1, n) for (_, b), n in zip(support, shape)]
     wide_lo, wide_hi = [max(v - r, 0) for v in lo], [min(v + r, n) for v, n in zip(hi, shape)]
     box = tuple(slice(a, b) for a, b in zip(lo, hi))
     inner = tuple(slice(a - w, b - w) for a, b, w in zip(lo, hi, wide_lo))
@@ -122,8 +136,14 @@ def coarse_index(pixels: np.ndarray, bin_: int) -> np.ndarray:
     """Flat index of ``(..., 3)`` uint8 pixels into a C-ordered ``(256/bin_)³`` table (``bin_`` a power of 2)."""
     shift = int(bin_).bit_length() - 1
     bits = 8 - shift
-    c0 = pixels[..., 0].astype(np.int32) >> shift
-    return (c0 << (2 * bits)) | ((pixels[..., 1].astype(np.int32) >> shift) << bits) | (pixels[..., 2].astype(np.int32) >> shift)
+    # Shifted down as uint8 (a quarter of the memory traffic), widened once, combined in place.
+    index = (pixels[..., 0] >> shift).astype(np.int32)
+    index <<= 2 * bits
+    middle = (pixels[..., 1] >> shift).astype(np.int32)
+    middle <<= bits
+    index |= middle
+    index |= pixels[..., 2] >> shift
+    return index
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,7 +163,8 @@ class ColourLut:
 
     def lookup(self, pixels: np.ndarray) -> np.ndarray:
         """Boolean mask (the pixels' leading shape): one fancy index into the coarse table."""
-        return self.coarse.reshape(-1)[coarse_index(pixels, self.bin)]  # bin 1: flat_index's index
+        # bin 1: flat_index's index; ``take`` gathers what fancy indexing does, faster for an int32 index
+        return self.coarse.reshape(-1).take(coarse_index(pixels, self.bin))
 
     @functools.cached_property
     def table(self) -> np.ndarray:

@@ -14,6 +14,7 @@ Projection and back-projection are the pinhole's (:mod:`trackreplay.trackers.geo
 
 from __future__ import annotations
 
+from bisect import bisect_right
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -33,19 +34,51 @@ def intrinsics_at(lens: LensTable, zoom: float, focus: float) -> Intrinsics:
     then along focus. Readings beyond the table clamp to its edge.
     """
     focuses, rows_by_focus = _lens_grid(lens)
+    zoom, focus = float(zoom), float(focus)
+    if zoom != zoom or focus != focus:  # NaN: numpy's own answer
+        return _intrinsics_at_numpy(lens, zoom, focus)
+    rows = [[interp_one(zoom, zooms, column) for column in columns] for zooms, columns in rows_by_focus]
+    values = [np.float64(interp_one(focus, focuses, [row[k] for row in rows])) for k in range(4)]
+    return Intrinsics(*values, lens.width, lens.height)
+
+
+def _intrinsics_at_numpy(lens: LensTable, zoom: float, focus: float) -> Intrinsics:
+    """:func:`intrinsics_at` with ``np.interp`` (the plain form; a NaN reading takes it)."""
+    focuses, rows_by_focus = _lens_grid(lens)
     rows = [[np.interp(zoom, zooms, column) for column in columns] for zooms, columns in rows_by_focus]
     rows_arr = np.array(rows)
     values = [np.interp(focus, focuses, rows_arr[:, k]) for k in range(4)]
     return Intrinsics(*values, lens.width, lens.height)
 
 
+def interp_one(x: float, xs: list[float], ys: list[float]) -> float:
+    """``np.interp(x, xs, ys)`` for one finite ``x`` over finite increasing ``xs``, in Python floats:
+    numpy's own steps (the end value outside, ``ys[j]`` on a knot, else ``slope * (x - xs[j]) +
+    ys[j]`` with ``slope = (ys[j+1] - ys[j]) / (xs[j+1] - xs[j])``), without its per-call cost (a
+    lens table is interpolated eight times a frame)."""
+    if x < xs[0]:
+        return ys[0]
+    if x > xs[-1]:
+        return ys[-1]
+    j = bisect_right(xs, x) - 1
+    if j == len(xs) - 1 or xs[j] == x:
+        return ys[j]
+    slope = (ys[j + 1] - ys[j]) / (xs[j + 1] - xs[j])
+    value = slope * (x - xs[j]) + ys[j]
+    if value != value:  # numpy's retry from the other side (an infinite value)
+        value = slope * (x - xs[j + 1]) + ys[j + 1]
+        if value != value and ys[j] == ys[j + 1]:
+            value = ys[j]
+    return value
+
+
 _GRID: tuple[LensTable, tuple] | None = None  # the last table's grid (a replay passes the same table every frame)
 
 
-def _lens_grid(lens: LensTable) -> tuple[np.ndarray, list[tuple[np.ndarray, tuple[np.ndarray, ...]]]]:
+def _lens_grid(lens: LensTable) -> tuple[list[float], list[tuple[list[float], tuple[list[float], ...]]]]:
     """The table's focus values and, per focus row, its zooms (sorted) and fx, fy, cx, cy columns:
-    what every ``intrinsics_at`` on the table interpolates in, built once per table object (was
-    ~60 µs of a ~90 µs call on a 123-entry table)."""
+    what every ``intrinsics_at`` on the table interpolates in (as Python lists), built once per table
+    object (was ~60 µs of a ~90 µs call on a 123-entry table)."""
     global _GRID
     last = _GRID
     if last is not None and last[0] is lens:
@@ -58,8 +91,8 @@ def _lens_grid(lens: LensTable) -> tuple[np.ndarray, list[tuple[np.ndarray, tupl
     for f in focuses:
         sub = table[table[:, 1] == f]
         sub = sub[np.argsort(sub[:, 0], kind="stable")]
-        rows.append((np.ascontiguousarray(sub[:, 0]), tuple(np.ascontiguousarray(sub[:, k]) for k in range(2, 6))))
-    grid = (focuses, rows)
+        rows.append((sub[:, 0].tolist(), tuple(sub[:, k].tolist() for k in range(2, 6))))
+    grid = (focuses.tolist(), rows)
     _GRID = (lens, grid)
     return grid
 
@@ -67,10 +100,12 @@ def _lens_grid(lens: LensTable) -> tuple[np.ndarray, list[tuple[np.ndarray, tupl
 def rotation_world_from_camera(pan_deg: float, tilt_deg: float) -> np.ndarray:
     """3x3 matrix whose columns are the camera's x (right), y (down), z (forward) in world axes."""
     p, t = np.deg2rad(pan_deg), np.deg2rad(tilt_deg)
-    forward = np.array([np.cos(t) * np.cos(p), np.cos(t) * np.sin(p), np.sin(t)])
-    right = np.array([np.sin(p), -np.cos(p), 0.0])
-    down = np.cross(forward, right)
-    return np.stack([right, down, forward], axis=1)
+    cos_t, sin_t, cos_p, sin_p = float(np.cos(t)), float(np.sin(t)), float(np.cos(p)), float(np.sin(p))
+    fx, fy, fz = cos_t * cos_p, cos_t * sin_p, sin_t  # forward
+    rx, ry, rz = sin_p, -cos_p, 0.0  # right
+    # down = forward x right, in np.cross's steps (each product rounded, then the difference)
+    dx, dy, dz = fy * rz - fz * ry, fz * rx - fx * rz, fx * ry - fy * rx
+    return np.array([[rx, dx, fx], [ry, dy, fy], [rz, dz, fz]])
 
 
 def pan_tilt_towards(direction: np.ndarray) -> tuple[float, float]:

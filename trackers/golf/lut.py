@@ -19,11 +19,12 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
-from trackreplay.trackers.appearance.histogram import colour_histogram
+from trackreplay.trackers.appearance.histogram import colour_histogram, level_counts
 from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut
 from trackreplay.trackers.geometry.box import centre_box, clip_box
 from trackreplay.trackers.golf.config import LutConfig
@@ -87,7 +88,7 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
     # picked): the rows above, the rows beside (left part, right part) and the rows below, copied as
     # blocks of OpenCV's interleaved (Y, Cr, Cb) rather than gathered by a mask, then put in
     # (Y, Cb, Cr) order; rows/columns i with i*s in the guard are ceil(g0/s)..ceil(g1/s)-1.
-    strided = to_ycrcb(image[::s, ::s])
+    strided = to_ycrcb(every_nth(image, s))
     r0, r1, c0, c1 = -(-gy0 // s), -(-gy1 // s), -(-gx0 // s), -(-gx1 // s)
     beside = np.concatenate([strided[r0:r1, :c0], strided[r0:r1, c1:]], axis=1)
     rows = np.concatenate([strided[:r0].reshape(-1, 3), beside.reshape(-1, 3), strided[r1:].reshape(-1, 3)])
@@ -109,6 +110,18 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
     else:
         name = "sky" if score > SKY_SCORE_THRESHOLD else "ground"
     return RegionSamples(name, ball, background, context[:, 0].copy(), score)
+
+
+def every_nth(image: np.ndarray, s: int) -> np.ndarray:
+    """``image[::s, ::s]``, contiguous. When ``s`` is a power of two dividing both sides, OpenCV's
+    nearest-neighbour resize picks exactly those pixels (source ``s x`` for target ``x``: the scale
+    is a power of two, exact in floating point), ~7x faster than numpy's copy of a strided view."""
+    if s == 1:
+        return image
+    h, w = image.shape[:2]
+    if s & (s - 1) == 0 and h % s == 0 and w % s == 0:
+        return cv2.resize(image, (w // s, h // s), interpolation=cv2.INTER_NEAREST)
+    return np.ascontiguousarray(image[::s, ::s])
 
 
 def _ycbcr(pixels: np.ndarray) -> np.ndarray:
@@ -282,14 +295,14 @@ class GolfLuts:
         if self._labels is None:
             self._labels = self.luminance_labels()
             self._label_levels = [(i, np.flatnonzero(self._labels == i)) for i, name in enumerate(LUT_NAMES) if name in self.luts]
-        flat = np.asarray(y, dtype=np.uint8).ravel()
+        y = np.asarray(y, dtype=np.uint8)
         # The pixels per LUT: the region's luminance counts summed over each LUT's levels, the same
         # integers (exact in float64 below 2^53) as counting the pixels' labels, divided by the same total.
-        per_lut = np.bincount(self._labels, weights=np.bincount(flat, minlength=256), minlength=len(LUT_NAMES)).tolist()
-        total = max(float(flat.size), 1.0)
+        per_lut = np.bincount(self._labels, weights=level_counts(y), minlength=len(LUT_NAMES)).tolist()
+        total = max(float(y.size), 1.0)
         for i, _ in self._label_levels:
             scores[i] = float(per_lut[i] / total)
-        if not flat.size:
+        if not y.size:
             return (current if current in self.luts else self.names[0]), scores
         best = LUT_NAMES[_nanargmax(scores)]
         if current in self.luts and best != current:

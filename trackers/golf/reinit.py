@@ -94,20 +94,25 @@ class ReinitPolicy:
             return False
         return bool(np.all(np.hypot(*(recent[:, 1:] - recent[:, 1:].mean(axis=0)).T) <= tolerance_px))
 
-    def centre_search(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int) -> bool:
+    def centre_search(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int,
+                      pose_change: np.ndarray | None = None) -> bool:
         """Whether a lost ball is searched for mid-picture (``lost``: "centre", or "auto" when the
         camera follows the ball, :meth:`follows`)."""
         if self.cfg.lost != "auto":
             return self.cfg.lost == "centre"
-        return self.follows(camera, previous, width, height)
+        return self.follows(camera, previous, width, height, pose_change)
 
-    def follows(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int) -> bool:
+    def follows(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int,
+                pose_change: np.ndarray | None = None) -> bool:
         """Whether an operator's camera follows the ball: its pose (``previous`` -> ``camera``) moved
         the picture's centre by more than half a pixel, or the last measurements were all in the
-        central half of the picture."""
+        central half of the picture. ``pose_change``: ``pose_homography(previous, camera)`` when
+        the caller has it."""
         if camera is not None and previous is not None:
             centre = np.array([[(width - 1) / 2.0, (height - 1) / 2.0]])
-            moved = apply_homography(pose_homography(previous, camera), centre)[0] - centre[0]
+            if pose_change is None:
+                pose_change = pose_homography(previous, camera)
+            moved = apply_homography(pose_change, centre)[0] - centre[0]
             if float(np.hypot(*moved)) > 0.5:
                 return True
         recent = np.array(self.history, float).reshape(-1, 3)[-4:, 1:]

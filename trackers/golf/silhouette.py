@@ -19,6 +19,7 @@ no contrast threshold that the puffs do not, but only it moves against the sky.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,7 +27,9 @@ import numpy as np
 import cv2
 
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
+from trackreplay.trackers.appearance.histogram import level_counts
 from trackreplay.trackers.appearance.lut import ColourLut
+from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
 from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
@@ -78,7 +81,7 @@ def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, s
     med, mad = median_and_mad(hat, 0, 256)
     noise = 1.4826 * mad
     threshold = max(cfg.min_contrast, med + cfg.noise_sigmas * noise)
-    return (hat >= threshold).astype(np.uint8)
+    return at_least(hat, threshold)
 
 
 def top_hat(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float) -> np.ndarray:
@@ -89,7 +92,7 @@ def top_hat(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float)
         return np.zeros(y.shape, np.uint8)
     side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
     side += 1 - side % 2
-    return cv2.morphologyEx(y, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (side, side)))
+    return disc_top_hat(y, side)  # OpenCV's MORPH_TOPHAT with the MORPH_ELLIPSE disc, by row segments
 
 
 def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, float]:
@@ -97,7 +100,7 @@ def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, fl
     absolute deviations from it, read off the counts per level: the middle one or two of the
     sorted values (and of the sorted deviations), averaged. The same numbers: every value,
     deviation and mean of two is a multiple of 1/4 far below 2^20, exact in float32 and float64."""
-    counts = np.bincount((values.ravel() - low).astype(np.intp), minlength=levels)
+    counts = level_counts(values, low, levels)
     n = int(values.size)
     middle = np.array([(n - 1) // 2, n // 2])
     lo, hi = (np.searchsorted(np.cumsum(counts), middle, side="right") + low).tolist()
@@ -106,6 +109,19 @@ def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, fl
     order = np.argsort(deviation, kind="stable")
     a, b = deviation[order[np.searchsorted(np.cumsum(counts[order]), middle, side="right")]].tolist()
     return float(med), (a + b) / 2
+
+
+def at_least(values: np.ndarray, threshold: float) -> np.ndarray:
+    """``(values >= threshold).astype(np.uint8)`` of a 2-D uint8 or int16 image: for integers that is
+    ``values > ceil(threshold) - 1``, one ``cv2.threshold`` (numpy compared each value as a float64)."""
+    if values.ndim != 2 or values.dtype not in (np.uint8, np.int16) or not math.isfinite(threshold):
+        return (values >= threshold).astype(np.uint8)
+    info = np.iinfo(values.dtype)
+    level = math.ceil(threshold) - 1
+    if level < info.min or level >= info.max:  # nothing or everything passes: numpy's answer without OpenCV's edge cases
+        return (values >= threshold).astype(np.uint8)
+    mask = cv2.threshold(values, level, 1, cv2.THRESH_BINARY)[1]
+    return mask if mask.dtype == np.uint8 else mask.astype(np.uint8)
 
 
 def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
@@ -138,4 +154,4 @@ def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, 
     med, mad = median_and_mad(rise, -255, 511)
     noise = 1.4826 * mad
     threshold = max(cfg.moving_min_contrast, med + cfg.noise_sigmas * noise)
-    return (rise >= threshold).astype(np.uint8)
+    return at_least(rise, threshold)

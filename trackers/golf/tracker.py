@@ -241,7 +241,7 @@ class GolfTracker(TrackerBase):
         between adds to the policy's history, only :meth:`_measured` does)."""
         if self._followed is not None and self.reinit.cfg.lost == "auto":
             return self._followed
-        return self.reinit.centre_search(camera, previous, width, height)
+        return self.reinit.centre_search(camera, previous, width, height, self._pose_change)
 
     def _estimate(self) -> np.ndarray:
         """``ParticleFilter.estimate`` (eq. (3)), once per set of samples (a copy: the caller may keep it)."""
@@ -362,7 +362,7 @@ class GolfTracker(TrackerBase):
             self.pf.particles = warp(self.pf.particles, self._pose_change)
         if self.misses == 1 and self._struck(scale):
             self.pf.predict(launch(cfg.particles.launch_velocity_px * scale))
-        followed = self._followed = self.reinit.follows(camera, prev_camera, width, height)
+        followed = self._followed = self.reinit.follows(camera, prev_camera, width, height, self._pose_change)
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 

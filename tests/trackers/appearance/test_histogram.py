@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 
 from trackreplay.trackers.appearance.color import HSV_RANGES, to_hsv, to_ycbcr
 from trackreplay.trackers.appearance.histogram import colour_histogram, intersection, mix
@@ -83,3 +84,24 @@ def test_box_histograms_sampled_grid_known_answer() -> None:
     # two parts: the sampled rows 0 and 2 fall in the top and the bottom band
     hp, _ = box_part_histograms(index, np.array([[0, 0, 4, 4]]), 5, parts=2, max_pixels=4)
     assert np.array_equal(hp[0], [[0.5, 0.0, 0.5, 0.0, 0.0], [0.5, 0.0, 0.0, 0.5, 0.0]])
+
+
+def test_level_counts_are_numpys_bincount() -> None:
+    """Counts by ``cv2.calcHist`` are ``np.bincount``'s, and anything out of range is left to ``np.bincount``."""
+    from trackreplay.trackers.appearance.histogram import level_counts
+
+    rng = np.random.default_rng(11)
+    for shape in [(1, 1), (1, 50), (43, 43), (320, 320), (17, 3), (110, 110), (1, 13000)]:
+        u8 = rng.integers(0, 256, shape, dtype=np.uint8)
+        assert np.array_equal(level_counts(u8), np.bincount(u8.ravel().astype(np.intp), minlength=256))
+        i16 = (rng.integers(-255, 256, shape)).astype(np.int16)
+        expected = np.bincount((i16.ravel() + 255).astype(np.intp), minlength=511)
+        got = level_counts(i16, -255, 511)
+        assert got.dtype == expected.dtype and np.array_equal(got, expected)
+        i16.flat[0] = 300  # beyond the levels: numpy's longer answer
+        assert np.array_equal(level_counts(i16, -255, 511), np.bincount((i16.ravel() + 255).astype(np.intp), minlength=511))
+    view = rng.integers(0, 256, (200, 180), dtype=np.uint8)[5:190, 7:170]  # a strided crop
+    assert np.array_equal(level_counts(view), np.bincount(view.ravel().astype(np.intp), minlength=256))
+    assert np.array_equal(level_counts(np.zeros((0, 4), np.uint8)), np.zeros(256, np.int64))
+    with pytest.raises(ValueError):  # a value below the levels: numpy's error, as before
+        level_counts(np.full((2, 2), -300, np.int16), -255, 511)

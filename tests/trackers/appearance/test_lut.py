@@ -111,3 +111,33 @@ def test_coarse_counts_by_shifts_are_the_counts_by_division():
         plain = np.bincount((c[:, 0] * q + c[:, 1]) * q + c[:, 2], minlength=q**3).astype(np.float64).reshape(q, q, q)
         assert np.array_equal(coarse_counts(px, bin_), plain)
         assert np.array_equal(coarse_counts(px.reshape(50, 100, 3), bin_), plain)
+
+
+def test_coarse_index_is_the_plain_int32_form():
+    """Shifting as uint8 before widening gives the index (and dtype) of widening first."""
+    from trackreplay.trackers.appearance.color import to_ycbcr
+    from trackreplay.trackers.appearance.lut import coarse_index
+
+    rng = np.random.default_rng(5)
+    image = rng.integers(0, 256, (37, 53, 3), dtype=np.uint8)
+    for pixels in (image, image[3:30, 5:40], to_ycbcr(image), image.reshape(-1, 3)):
+        for bin_ in (1, 2, 4, 8, 16, 256):
+            shift = bin_.bit_length() - 1
+            bits = 8 - shift
+            plain = ((pixels[..., 0].astype(np.int32) >> shift) << (2 * bits)) | (
+                (pixels[..., 1].astype(np.int32) >> shift) << bits) | (pixels[..., 2].astype(np.int32) >> shift)
+            got = coarse_index(pixels, bin_)
+            assert got.dtype == plain.dtype and np.array_equal(got, plain)
+
+
+def test_support_box_is_the_extent_of_numpys_nonzero():
+    from trackreplay.trackers.appearance.lut import support_box
+
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        cube = np.zeros((16, 16, 16))
+        k = rng.integers(1, 20)
+        cube[tuple(rng.integers(0, 16, (3, k)))] = rng.choice([1.0, 0.5, -2.0, np.nan], k)
+        support = np.nonzero(cube)
+        assert support_box(cube) == [(int(a.min()), int(a.max())) for a in support]
+    assert support_box(np.zeros((4, 4, 4))) is None

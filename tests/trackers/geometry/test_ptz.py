@@ -75,3 +75,33 @@ def test_intrinsics_of_two_tables_in_turn() -> None:
     doubled = intrinsics_at(other, 50, 5)
     assert doubled.fx == 2 * first.fx and doubled.fy == first.fy
     assert intrinsics_at(copy, 50, 5) == first == intrinsics_at(LENS, 50, 5)
+
+
+def test_interp_one_is_numpys_interp() -> None:
+    """The lens table's scalar interpolation gives ``np.interp``'s floats bit for bit."""
+    from trackreplay.trackers.geometry.ptz import interp_one
+
+    rng = np.random.default_rng(3)
+    for n in (1, 2, 5, 40):
+        xs = np.sort(rng.uniform(-5.0, 50.0, n))
+        ys = rng.normal(0.0, 2000.0, n)
+        points = np.concatenate([rng.uniform(-10.0, 60.0, 400), xs, np.nextafter(xs, np.inf), np.nextafter(xs, -np.inf)])
+        for x in points.tolist():
+            assert interp_one(x, xs.tolist(), ys.tolist()) == float(np.interp(x, xs, ys))  # exactly
+
+
+def test_intrinsics_and_rotation_are_the_numpy_forms() -> None:
+    """``intrinsics_at`` and ``rotation_world_from_camera`` in Python floats give the numpy forms' bits."""
+    from trackreplay.trackers.geometry.ptz import _intrinsics_at_numpy
+
+    rng = np.random.default_rng(4)
+    for zoom, focus in zip(rng.uniform(-10.0, 110.0, 300).tolist(), rng.uniform(-2.0, 12.0, 300).tolist()):
+        fast, plain = intrinsics_at(LENS, zoom, focus), _intrinsics_at_numpy(LENS, zoom, focus)
+        assert (fast.fx, fast.fy, fast.cx, fast.cy) == (plain.fx, plain.fy, plain.cx, plain.cy)
+        assert type(fast.fx) is type(plain.fx)
+    for pan, tilt in zip(rng.uniform(-360.0, 360.0, 300).tolist(), rng.uniform(-90.0, 90.0, 300).tolist()):
+        p, t = np.deg2rad(pan), np.deg2rad(tilt)
+        forward = np.array([np.cos(t) * np.cos(p), np.cos(t) * np.sin(p), np.sin(t)])
+        right = np.array([np.sin(p), -np.cos(p), 0.0])
+        plain = np.stack([right, np.cross(forward, right), forward], axis=1)
+        assert rotation_world_from_camera(pan, tilt).tobytes() == plain.tobytes()  # signed zeros too

@@ -46,3 +46,41 @@ def test_previous_in_pose_is_the_y_of_to_ycbcr():
     bgr = cv2.warpPerspective(frame, to_crop, (50, 40), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=(255, 255, 255))
     assert np.array_equal(y, to_ycbcr(bgr)[..., 0])
+
+
+def test_median_and_mad_of_images_are_numpys():
+    """The 2-D crops the silhouettes pass (counted by ``cv2.calcHist``): numpy's medians too."""
+    rng = np.random.default_rng(1)
+    for shape in [(1, 1), (3, 7), (43, 43), (320, 320), (150, 69), (200, 90)]:
+        hat = np.minimum(rng.geometric(0.2, shape), 255).astype(np.uint8)
+        med = float(np.median(hat))
+        assert median_and_mad(hat, 0, 256) == (med, float(np.median(np.abs(hat.astype(np.float32) - med))))
+        rise = np.clip(rng.normal(0, 9, shape).round(), -255, 255).astype(np.int16)
+        med = float(np.median(rise))
+        assert median_and_mad(rise, -255, 511) == (med, float(np.median(np.abs(rise - med))))
+
+
+def test_every_nth_is_the_strided_view():
+    from trackreplay.trackers.golf.lut import every_nth
+
+    rng = np.random.default_rng(2)
+    for shape in [(720, 1280, 3), (1080, 1920, 3), (360, 640, 3), (37, 53, 3), (64, 96, 3), (8, 8, 3), (720, 1280)]:
+        image = rng.integers(0, 256, shape, dtype=np.uint8)
+        for s in (1, 2, 3, 4, 8):
+            got = every_nth(image, s)
+            assert got.flags.c_contiguous and np.array_equal(got, image[::s, ::s])
+
+
+def test_at_least_is_numpys_comparison():
+    from trackreplay.trackers.golf.silhouette import at_least
+
+    rng = np.random.default_rng(3)
+    for shape in [(1, 1), (43, 43), (320, 320), (7, 150)]:
+        images = [rng.integers(0, 256, shape, dtype=np.uint8), rng.integers(-255, 256, shape).astype(np.int16)]
+        images[1].flat[:2] = [-32768, 32767]
+        for values in images:
+            for t in [-40000.0, -255.5, -1.0, -0.5, 0.0, 0.25, 1.0, 15.0, 40.0, 41.3, 254.5, 255.0, 255.5, 300.0,
+                      32766.5, 32767.0, 40000.0, float(rng.normal(20, 30)), np.float64(17.75)]:
+                got = at_least(values, t)
+                assert got.dtype == np.uint8 and got.shape == values.shape
+                assert np.array_equal(got, (values >= t).astype(np.uint8)), (values.dtype, t)
