@@ -39,6 +39,7 @@ from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig  # noqa: E4
 VARIANTS = {"paper": PAPER, "defaults": {}, "defaults, camera taken as fixed": {"camera": {"compensate": False}},
             "all switches": {"likelihood": {"parts": 2}, "motion": {"model": "constant_velocity"},
                              "refine": {"mode": "meanshift"}, "size": {"no_plane": "random_walk"}}}
+from trackreplay.trackers.colorpf.camera import shift_image  # noqa: E402
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker  # noqa: E402
 
 DEFAULT_VENV = Path.home() / ".cache" / "trackreplay" / "csrt-venv"
@@ -71,9 +72,7 @@ def panned(frame: Frame, dx: float) -> Frame:
     """``frame`` seen by a camera panned ``dx`` px right (its content ``dx`` px left, the edge repeated)."""
     if dx == 0.0:
         return frame
-    image = cv2.warpAffine(frame.image, np.float32([[1, 0, -dx], [0, 1, 0]]), frame.image.shape[1::-1],
-                           flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-    return dataclasses.replace(frame, image=image, encoded=None, encoding=None)
+    return dataclasses.replace(frame, image=shift_image(frame.image, np.array([-dx, 0.0])), encoded=None, encoding=None)
 
 
 def main() -> None:

@@ -131,7 +131,7 @@ def warp(image: np.ndarray, transform: np.ndarray) -> np.ndarray:
 
 
 def shift_image(image: np.ndarray, offset: np.ndarray) -> np.ndarray:
-    """``image`` moved by the whole-pixel ``offset`` ``(dx, dy)``."""
+    """``image`` moved by ``offset`` ``(dx, dy)`` (whole pixels copied exactly, fractions bilinear; the edge repeated)."""
     dx, dy = (float(v) for v in offset)
     return warp(image, np.array([[1.0, 0.0, dx], [0.0, 1.0, dy], [0.0, 0.0, 1.0]]))
 
