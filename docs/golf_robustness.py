@@ -210,7 +210,10 @@ ball, where the ball was last seen as one blob with it) is measured on 5 of the 
 At 15 fps the ball goes from rolling over the liner to gone in one step: the last blob holding it is
 ball and liner together (2.8x the ball's area, inside the area tolerance), and the size the tracker
 expects grows towards it. Not solved. After the ball left the picture, the iron shot at JPEG q50 and
-the shaky iron shot measure 2 rows (as before).
+the shaky iron shot measured 2 rows (as before) until 2026-11-27: the ball's last blobs at the top
+edge, cut by it and smeared, taught the size and colour tables, which then took a speck for the ball.
+A blob within one ball diameter of the picture's edge now teaches neither (`GolfTracker._at_border`):
+0 of 44 on both, the other rows unchanged.
 
 "Gone" on the approach counts from frame 217 (2026-11-27; before: 208). Checked by eye on 2x crops of
 frames 206-221: the ball rolls over the cup's liner from 208 and drops on 216, so frames 207-216

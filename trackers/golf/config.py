@@ -266,6 +266,14 @@ class ReinitConfig:
     """Where the particles start again (§2.3 and ours); ``[golf.reinit]``."""
 
     landing: bool = True  # paper §2.3: at the EKF's predicted landing (False: never, for comparison)
+    # Ours: for this many frames after the EKF's predicted landing, a ball missed on the frame before is
+    # searched for around the 3-D filter's own prediction (it bounces at every contact; the image motion
+    # model cannot follow a bounce), spread as the filter's uncertainty there; a landing predicted while
+    # the ball is being measured (found on the frame before) re-initialises nothing then: the contact
+    # can be a frame or more early (tens of metres at the landing's grazing angle), and samples moved
+    # to it miss a ball still found where it is (seed 0's shot: a 0.4 px blob refused, the contact 52 px
+    # off). 0: the paper alone, at the contact point at once.
+    after_landing_frames: int = 30
     min_sigma_px: float = 12.0  # particle spread after a landing re-initialisation
     velocity_sigma_px: float = 8.0
     # Without encoders: an image-space parabola through the last measurements.
@@ -279,6 +287,8 @@ class ReinitConfig:
     lost: str = "auto"
 
     def __post_init__(self) -> None:
+        if self.after_landing_frames < 0:
+            raise ValueError("reinit.after_landing_frames must be >= 0")
         if self.lost not in ("centre", "stay", "auto"):
             raise ValueError("reinit.lost must be 'centre', 'stay' or 'auto'")
 

@@ -6,6 +6,11 @@ Checked in this order before each frame's select + predict; the first that appli
    (:meth:`BallisticEkf.advance`); the samples are spread around the contact point projected into
    this frame, as wide as the EKF's own uncertainty there and wide enough to still cover where the
    samples had the ball (a contact predicted a few frames early must not lose it).
+   **After the landing** (ours, ``after_landing_frames``): a landing predicted while the ball is being
+   measured re-initialises nothing (a ball still found where the motion model expects it has not
+   been lost to it); for that many frames after it, a ball missed on the frame before (not yet lost)
+   is searched for around the 3-D filter's own prediction, which bounces (a hop the image motion model
+   cannot follow), until the ball is measured at the end of such a gap.
 2. **Image parabola** (ours, no encoders: no 3-D filter): once the ball has been missed for a few
    frames while descending, a parabola ``y(t)`` and a line ``x(t)`` through the last measurements
    bracket where it met the ground and bounced (:func:`image_parabola_landing`). Once per loss.
@@ -36,7 +41,7 @@ NAN2 = np.full(2, np.nan)
 class Reinit:
     """The re-initialisation stage's intermediates (also what the particles are reset to)."""
 
-    kind: str  # "", "start", "ekf_landing", "image_parabola" or "lost_centre"
+    kind: str  # "", "start", "ekf_landing", "after_landing", "image_parabola" or "lost_centre"
     point: np.ndarray  # (2,) centre of the new samples (NaN: none this frame)
     sigma: np.ndarray  # (2,) their position spread in x and y (NaN: none)
 
@@ -80,11 +85,15 @@ class ReinitPolicy:
         self.lost_after = lost_after
         self.history: deque = deque(maxlen=cfg.parabola_history)  # (frame, x, y) of past measurements
         self.parabola_used = False
+        self.landed_at: int | None = None  # the frame of the last predicted landing (after_landing_frames)
+        self.followed_landing = False  # the samples were sent after the 3-D filter since the landing
 
     def measured(self, index: int, x: float, y: float) -> None:
         """The ball was measured at ``(x, y)`` in frame ``index``."""
         self.history.append((index, x, y))
         self.parabola_used = False
+        if self.followed_landing:  # found again after a gap the landing's search bridged: later misses are not the landing's
+            self.landed_at, self.followed_landing = None, False
 
     def at_rest(self, frames: int, tolerance_px: float) -> bool:
         """The last ``frames`` measurements were on consecutive frames and all within
@@ -121,6 +130,31 @@ class ReinitPolicy:
         centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
         return bool(np.all(np.abs(recent - centre) <= 0.25 * np.array([width, height])))
 
+    def _landing_now(self, index: int, misses: int, landing: np.ndarray | None) -> np.ndarray | None:
+        """The contact point to re-initialise at on this frame (None: none): a new landing's, unless the
+        ball was measured on the frame before and ``after_landing_frames`` is on."""
+        if landing is None:
+            return None
+        self.landed_at, self.followed_landing = index, False
+        return None if misses == 0 and self.cfg.after_landing_frames > 0 else landing
+
+    def _after_landing(self, index: int, size: tuple[int, int], scale: float, misses: int, camera: PtzCamera | None,
+                       ekf: BallisticEkf) -> Reinit | None:
+        """``after_landing_frames``: around the 3-D filter's prediction, projected into this frame, while
+        the ball is missed (not yet lost) after a landing (None: not now, or the prediction is outside
+        the picture)."""
+        if (self.landed_at is None or not 0 < misses <= self.lost_after or camera is None or not ekf.initialised
+                or index - self.landed_at > self.cfg.after_landing_frames):  # once lost: the fallbacks below
+            return None
+        centre = camera.project_points(ekf.kf.x[:3].reshape(1, 3))[0]
+        width, height = size
+        if not (np.all(np.isfinite(centre)) and 0 <= centre[0] <= width - 1 and 0 <= centre[1] <= height - 1):
+            return None
+        sigma = np.sqrt(np.maximum(np.diag(ekf.image_covariance(camera)), 0.0))
+        sigma = np.clip(sigma, self.cfg.min_sigma_px * scale, filling_sigma(self.search.max_px * scale, self.search))
+        self.followed_landing = True
+        return Reinit("after_landing", centre, sigma)
+
     def choose(self, *, index: int, size: tuple[int, int], scale: float, misses: int, landing: np.ndarray | None,
                camera: PtzCamera | None, previous: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
         """The re-initialisation for frame ``index`` of ``size`` (w, h) px, or ``Reinit.none()``.
@@ -130,6 +164,7 @@ class ReinitPolicy:
         """
         cfg = self.cfg
         width, height = size
+        landing = self._landing_now(index, misses, landing)
         if landing is not None and camera is not None and cfg.landing:
             centre = camera.project_points(landing.reshape(1, 3))[0]
             if np.all(np.isfinite(centre)):
@@ -138,6 +173,10 @@ class ReinitPolicy:
                 sigma = np.maximum(np.sqrt(np.maximum(np.diag(cov), 0.0)), 0.5 * np.abs(estimate - centre))
                 sigma = np.clip(sigma, cfg.min_sigma_px * scale, filling_sigma(self.search.max_px * scale, self.search))
                 return Reinit("ekf_landing", centre, sigma)
+        if cfg.landing:
+            after = self._after_landing(index, size, scale, misses, camera, ekf)
+            if after is not None:
+                return after
         if cfg.landing and not ekf.initialised and not self.parabola_used and misses >= cfg.parabola_misses:
             found = image_parabola_landing(np.array(self.history, float).reshape(-1, 3), float(index))
             if found is not None:

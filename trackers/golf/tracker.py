@@ -325,6 +325,7 @@ class GolfTracker(TrackerBase):
         self._sightings = 0
         self.validator.reset()
         self.scenery.reset()  # the user says where the ball is
+        self.reinit.landed_at, self.reinit.followed_landing = None, False  # a landing before the mark is not this track's
         name, self.lut_name = self.luts.start_names(frame.image, region)
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
         ycc, offset, mask = box_silhouette(frame.image, box, self.luts.lut(self.lut_name))
@@ -349,6 +350,7 @@ class GolfTracker(TrackerBase):
             self.validator.reset()
             self.scenery.reset()
             self.ekf.forget()
+            self.reinit.landed_at, self.reinit.followed_landing = None, False
             steps = 1
         landing = self.ekf.advance(dt)
         height, width = frame.image.shape[:2]
@@ -366,6 +368,12 @@ class GolfTracker(TrackerBase):
         self.pf.predict(motion(cfg.particles, scale, damp=self.misses > 0, steps=steps, followed=followed))
         return reinit
 
+    def _at_border(self, bbox: np.ndarray, shape: tuple[int, ...]) -> bool:
+        """Whether a blob's box ``x0, y0, w, h`` comes within one target diameter of the picture's edge."""
+        margin = self.targets.diameter
+        x0, y0, w, h = (float(v) for v in bbox)
+        return x0 < margin or y0 < margin or x0 + w > shape[1] - margin or y0 + h > shape[0] - margin
+
     def _measured(self, frame: Frame, camera: PtzCamera | None, gated: GatedBlobs, ycc: np.ndarray,
                   sil: LutSilhouette, confidence: float) -> tuple[float, float, float, float]:
         """The ball was seen: targets follow it, a confident one teaches the LUT of its background;
@@ -373,8 +381,12 @@ class GolfTracker(TrackerBase):
         blobs, k, offset = gated.blobs, gated.selected, sil.offset
         x, y = (float(v) for v in blobs.centroid[k])
         w, h = (float(v) for v in blobs.size[k])
-        self.targets = self.targets.follow(float(blobs.area[k]), float(roundness(blobs)[k]), self.config.blobs.target_rate)
-        if confidence >= self.config.lut.learn_confidence:
+        # a blob at the picture's edge teaches nothing: the edge may cut it (its shape), and what is seen
+        # there is a ball leaving or entering the picture, often a smear (its colours)
+        teaches = not self._at_border(blobs.bbox[k], frame.image.shape)
+        if teaches:
+            self.targets = self.targets.follow(float(blobs.area[k]), float(roundness(blobs)[k]), self.config.blobs.target_rate)
+        if teaches and confidence >= self.config.lut.learn_confidence:
             side = max(w, h, 2.0)  # the core ellipse (lut.core) of this box: ball pixels, not its blurred rim
             region = InitRegion(frame.index, frame.t_ns, x, y, side, side, "track")
             self.luts.learn_from_track(frame.image, region, float(blobs.area[k]), ycc)

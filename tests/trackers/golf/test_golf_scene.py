@@ -67,8 +67,8 @@ def test_tee_shot_detection_landing_and_reacquisition(teeshot):
     assert rate >= 0.65, rate  # the climb right after the launch is a blurred streak: not detectable
     assert np.median(errors) < 1.0
     assert all(inter.notice == "" for _, _, inter in out)  # encoders present: no notice
-    # The EKF's ground contact re-initialises the particles at the landing ...
-    landings = [f.index for f, _, inter in out if inter.reinit.kind == "ekf_landing"]
+    # The EKF's ground contact, then its bounce, re-initialise the particles once the ball is missed at the landing ...
+    landings = [f.index for f, _, inter in out if inter.reinit.kind in ("ekf_landing", "after_landing")]
     assert any(abs(k - summary.landing_frame) <= 3 for k in landings), (landings, summary.landing_frame)
     # ... and the ball is followed again once it rolls: nearly every frame from a second after it.
     after = set(range(summary.landing_frame + int(summary.fps), summary.frames))

@@ -9,7 +9,7 @@ import pytest
 from trackreplay.replay.digest import ReplayDigest
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
-from trackreplay.trackers.golf.config import EkfConfig
+from trackreplay.trackers.golf.config import EkfConfig, ReinitConfig
 from trackreplay.trackers.golf.notices import NO_ENCODER_NOTICE, NO_HINTS_NOTICE
 
 BIG = 0.4  # m, the ball of the PTZ sequence (see conftest)
@@ -70,7 +70,8 @@ def test_same_inputs_and_seed_give_identical_intermediates(image_sequence):
 
 def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
     world, uv, landing, frames = ptz_sequence()
-    cfg = GolfConfig(ball_diameter_m=BIG, ekf=EkfConfig(drag_k=0.0))
+    # the paper's re-initialisation at the predicted landing itself (the ball is measured throughout here)
+    cfg = GolfConfig(ball_diameter_m=BIG, ekf=EkfConfig(drag_k=0.0), reinit=ReinitConfig(after_landing_frames=0))
     tracker = GolfTracker(cfg, np.random.default_rng(0))
     tracker.prepare([(frames[r.frame].image, [r]) for r in frames[0].all_hints])
     results = run(tracker, frames)
@@ -120,3 +121,48 @@ def test_each_stage_gets_its_own_table():
     assert tracker.reinit.cfg is cfg.reinit and tracker.reinit.search is cfg.search
     for part in (tracker.luts, tracker.ekf, tracker.range, tracker.reinit):
         assert not any(isinstance(v, GolfConfig) for v in vars(part).values())
+
+
+def _landing_run(frames, after_landing_frames: int):
+    cfg = GolfConfig(ball_diameter_m=BIG, ekf=EkfConfig(drag_k=0.0), reinit=ReinitConfig(after_landing_frames=after_landing_frames))
+    tracker = GolfTracker(cfg, np.random.default_rng(0))
+    tracker.prepare([(frames[r.frame].image, [r]) for r in frames[0].all_hints])
+    return run(tracker, frames)
+
+
+def test_a_landing_predicted_while_the_ball_is_measured_moves_no_samples(ptz_sequence):
+    world, uv, landing, frames = ptz_sequence()
+    at_once = _landing_run(frames, 0)
+    fired = next(k for k, (_, inter) in enumerate(at_once) if inter.reinit.kind == "ekf_landing")
+    followed = _landing_run(frames, 30)  # the ball is found on every frame: the landing never lost it
+    assert all(inter.reinit.kind not in ("ekf_landing", "after_landing") for _, inter in followed)
+    assert all(states[0].status == "measured" for states, _ in followed[fired - 3:fired + 6])
+
+
+def test_a_ball_missed_after_the_landing_is_searched_for_where_the_3d_filter_predicts_it(ptz_sequence):
+    world, uv, landing, frames = ptz_sequence()
+    fired = next(k for k, (_, inter) in enumerate(_landing_run(frames, 0)) if inter.reinit.kind == "ekf_landing")
+    gone = list(frames)
+    for k in (fired + 2, fired + 3):
+        gone[k] = dataclasses.replace(frames[k], image=_without_ball(frames, uv, k))
+    results = _landing_run(gone, 30)
+    kinds = [inter.reinit.kind for _, inter in results]
+    assert kinds[:fired + 3].count("after_landing") == 0 and "ekf_landing" not in kinds
+    assert kinds[fired + 3] == kinds[fired + 4] == "after_landing"  # each frame after a miss
+    for k in (fired + 3, fired + 4):
+        reinit = results[k][1].reinit
+        assert np.hypot(*(reinit.point - uv[k])) < 3.0 * np.hypot(*reinit.sigma)
+    assert results[fired + 4][0][0].status == "measured"  # found again where the filter said
+    assert kinds[fired + 5:].count("after_landing") == 0  # measured again: later misses are not the landing's
+    # without it: the samples follow the image motion model through the two missing frames
+    assert "after_landing" not in [inter.reinit.kind for _, inter in _landing_run(gone, 0)]
+
+
+def _without_ball(frames, uv: np.ndarray, k: int) -> np.ndarray:
+    """Frame ``k``'s picture with its ball painted over from frame ``k - 30`` (same backdrop, the ball far away)."""
+    image, other = frames[k].image.copy(), frames[k - 30].image
+    assert np.hypot(*(uv[k] - uv[k - 30])) > 60
+    ys, xs = np.mgrid[0:image.shape[0], 0:image.shape[1]]
+    near = np.hypot(xs - uv[k][0], ys - uv[k][1]) < 30
+    image[near] = other[near]
+    return image
