@@ -191,7 +191,7 @@ def landing_events(log: Path, config: GolfConfig, gt: pl.DataFrame, info: dict) 
     for step in iter_steps(ReplayRequest(log=log, tracker="golf", config=config)):
         index, im = step.frame.index, step.intermediates
         statuses[index] = step.states[0].status if step.states else None
-        if im.reinit.kind in ("ekf_landing", "image_parabola"):
+        if im.reinit.kind in ("ekf_landing", "after_landing", "image_parabola"):
             t = truth.get(index)
             d = None
             if t is not None and t["x"] is not None:
@@ -458,21 +458,28 @@ def findings(results: dict[str, dict]) -> str:
         "  Since tentative tracks are extrapolated in the latest pose's pixels (the camera's sweep taken out) and",
         "  the search region reaches the longest one's next point, a ball found again while the operator is",
         "  still swinging after it is confirmed up to 4 frames sooner.",
-        "- **The paper's claim (landing re-initialisation recovers the ball after the bounce) is not",
-        "  reproduced on these shots.** The EKF's predicted ground contact is good: the particles are",
-        f"  re-initialised {span(dist, '.0f')} px from the true ball in the landing frame in every run with encoders (table",
-        "  above). But on the bouncing shots the ball cannot be extracted in the frames that follow (streak,",
-        "  then out of the picture), and the re-initialised cloud at the contact point is no better placed",
-        "  than the diffused one when the ball comes back: with the paper's mechanism alone (`stay`),",
-        f"  re-initialisation shortens the re-acquisition by {min(gain_s):+d} to {max(gain_s):+d} frames over the {len(bouncing)} bouncing runs",
-        f"  (R+S: {span([results[k]['per']['R+S'][0]['reacquire'] or 999 for k in bouncing], 'd')} frames; the largest gain is `{bouncing[int(np.argmax(gain_s))]}`). "
-        + ("It does help where the ball does not hop:" if (nb['R+S'][0]['reacquire'] or 999) < (nb['-+S'][0]['reacquire'] or 999)
-           else "Where the ball does not hop it makes no difference either:"),
+        "- **The landing re-initialisation (the paper's claim) and the search after it.** The EKF's",
+        "  predicted contact came one frame before the true one on the shots read frame by frame (seed 0:",
+        "  180 vs 181; `launch2`: 115 vs 116), while the ball was still found where it was: the paper's",
+        "  re-initialisation at the contact then moved the particles 52 px away and the ball still measured",
+        "  there was refused (seed 0, frame 180). So ours moves nothing while the ball is measured; after a",
+        "  miss the particles go where the EKF, which bounces at the contact, predicts the ball. The first",
+        f"  re-initialisation lands {span(dist, '.0f')} px from the true ball in the runs with encoders (table above).",
+        f"  With `stay`, the mechanism changes the re-acquisition by {-max(gain_s):+d} to {-min(gain_s):+d} frames over the {len(bouncing)} bouncing runs",
+        f"  (R+S: {span([results[k]['per']['R+S'][0]['reacquire'] or 999 for k in bouncing], 'd')} frames; the largest gain is `{bouncing[int(np.argmax(gain_s))]}`, whose hop stays in",
+        "  the picture and is followed by the EKF's bounce within a few pixels"
+        + (f"; the largest loss is `{bouncing[int(np.argmin(gain_s))]}`: the search followed the hop to the edge of the"
+           " picture it left by, and `stay` keeps diffusing there once the ball is lost, while it comes back down"
+           " to the middle" if min(gain_s) < 0 else "") + "). On the 20x shots the hop crosses",
+        "  the picture as a faint streak at ~110 px/frame and leaves its top (or the EKF's bounce, a frame early,",
+        "  runs ~100 px ahead of it), so nothing is found until it comes down again. "
+        + ("Where the ball does not hop it helps:" if (nb['R+S'][0]['reacquire'] or 999) < (nb['-+S'][0]['reacquire'] or 999)
+           else "Where the ball does not hop it makes no difference:"),
         f"  `bounce=False`, {reac(nb['R+S'][0]['reacquire'])} frames with it vs {reac(nb['-+S'][0]['reacquire'])} without",
-        f"  (stay). What actually recovers the ball is our centre search ({span([results[k]['per']['R+C'][0]['reacquire'] or 999 for k in results], 'd')} frames on every",
-        "  run, with or without re-initialisation): the operator brings the ball back to the middle of the",
-        "  picture. How much of this is the simulation (operator lag, blur model, hop height vs zoom) and how",
-        "  much would hold on real broadcast footage we cannot say from synthetic data.",
+        f"  (stay). On those shots what recovers the ball is our centre search ({span([results[k]['per']['R+C'][0]['reacquire'] or 999 for k in results], 'd')} frames",
+        "  over all runs with it): the operator brings the ball back to the middle of the picture. How much of",
+        "  this is the simulation (operator lag, blur model, hop height vs zoom) and how much would hold on real",
+        "  broadcast footage we cannot say from synthetic data.",
         f"- **Variants.** The camera cut at 4 s (3x zoom-out, ball thrown off-centre): runs not measured within",
         f"  {DETECT_PX:g} px {runs_of(results['cut']['per']['R+C'][1])}. Behind the tree (`occlusion`) the tracker reports `measured`",
         f"  on {occl['false_measured']} of the {occl['hidden']} frames where the ball is not visible (hidden, or out of the picture)"
@@ -583,7 +590,9 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
         "## 2. Landing re-initialisation and lost search: frames to re-acquire after the first bounce",
         "",
         "`R` = `landing_reinit=True` (paper §2.3: the 3-D EKF's predicted ground contact re-initialises the",
-        "particles), `-` = off; `C` = `lost_search=\"centre\"` (ours: once lost, respread the particles over",
+        "particles; ours, `reinit.after_landing_frames`: a landing predicted while the ball is measured waits",
+        "for a miss, and each frame after a miss the particles are spread where the EKF, which bounces, predicts",
+        "the ball), `-` = off; `C` = `lost_search=\"centre\"` (ours: once lost, respread the particles over",
         "the picture's centre every frame), `S` = `\"stay\"` (paper only: keep diffusing where the ball was",
         "last predicted). **R+S vs -+S is the test of the paper's claim**; R+C vs -+C is the same test with",
         "our extra recovery in place.",
@@ -600,8 +609,9 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
     L += [
         "",
         "Where the landing re-initialisation fired (stepping the same tracker with the same seed and",
-        "reading its intermediates; the per-frame status is checked equal to the replay's): frame,",
-        "distance from the re-initialisation point to the true ball in that frame, and the distance on",
+        "reading its intermediates; the per-frame status is checked equal to the replay's): frame, kind",
+        "(`ekf landing`: the paper's, at the contact point; `after landing`: ours, at the EKF's prediction after",
+        "a miss), distance from the re-initialisation point to the true ball in that frame, and the distance on",
         "the ground between the EKF's last predicted contact point before the landing and the true one.",
         "",
         "| run | landing frame | R+C: re-inits (frame: px from ball) | R+S: re-inits (frame: px from ball) | EKF contact error before landing (m) |",

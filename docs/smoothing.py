@@ -272,7 +272,11 @@ def write(store: dict) -> None:
           "  likelihood over `q` the smoother followed the raw mean's wander as members hide and show, so `q` is",
           "  the EKF's own.",
           "- Golf: the RMSE is dominated by a few `predicted` frames after the launch and after the bounce that the",
-          "  smoother leaves alone (it interpolates between observations, never extrapolates).",
+          "  smoother leaves alone (it interpolates between observations, never extrapolates). Across a bounce its",
+          "  constant-velocity model is wrong: where the ball is measured just before the hop and again as it comes",
+          "  down (seed0, occl since the landing waits for a miss, 2026-11-27) the smoothed gap is a straight line",
+          "  through a hop and worse than the causal predictions (the `landing ±15` rows); where the hop itself is",
+          "  measured (launch2) the smoother is far better there.",
           "- Standard deviations come from one `q` per track; too small in gaps that contain a manoeuvre."]
     (HERE / "smoothing.md").write_text("\n".join(L) + "\n")
 
