@@ -84,3 +84,22 @@ def test_at_least_is_numpys_comparison():
                 got = at_least(values, t)
                 assert got.dtype == np.uint8 and got.shape == values.shape
                 assert np.array_equal(got, (values >= t).astype(np.uint8)), (values.dtype, t)
+
+
+def test_ekf_substep_matrices_per_interval_are_the_rebuilt_ones():
+    """The substep Q and F kept per interval: the same predictions as building them every time."""
+    from trackreplay.trackers.golf.config import EkfConfig
+    from trackreplay.trackers.golf.landing import BallisticEkf
+
+    cached, rebuilt = BallisticEkf(EkfConfig(), 0.02), BallisticEkf(EkfConfig(), 0.02)
+    for ekf in (cached, rebuilt):
+        ekf.kf.x = np.array([0.0, 0.0, 0.5, 40.0, 3.0, 20.0])
+        ekf.kf.P = np.diag([1.0, 1.0, 1.0, 25.0, 25.0, 25.0])
+        ekf.initialised = True
+    rng = np.random.default_rng(4)
+    for dt in rng.choice([33333333, 33333334, 33333333, 66666667, 20000000], 60) / 1e9:
+        rebuilt._substeps.clear()
+        cached.predict(dt)
+        rebuilt.predict(dt)
+        assert cached.kf.x.tobytes() == rebuilt.kf.x.tobytes() and cached.kf.P.tobytes() == rebuilt.kf.P.tobytes()
+    assert len(cached._substeps) <= 16
