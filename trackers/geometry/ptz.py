@@ -145,7 +145,7 @@ class PtzCamera:
     def line_of_sight(self, pixels: np.ndarray) -> np.ndarray:
         """Unit world vectors from the camera through image points ``(N, 2)`` (u, v)."""
         rays = self.intrinsics.back_project(pixels) @ self.R.T
-        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+        return rays / np.sqrt(np.add.reduce(rays * rays, axis=1, keepdims=True))  # np.linalg.norm's own steps
 
     def project_directions(self, directions: np.ndarray) -> np.ndarray:
         """Image points ``(N, 2)`` of world directions; NaN for directions behind the camera."""

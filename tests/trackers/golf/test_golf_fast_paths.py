@@ -103,3 +103,32 @@ def test_ekf_substep_matrices_per_interval_are_the_rebuilt_ones():
         rebuilt.predict(dt)
         assert cached.kf.x.tobytes() == rebuilt.kf.x.tobytes() and cached.kf.P.tobytes() == rebuilt.kf.P.tobytes()
     assert len(cached._substeps) <= 16
+
+
+def test_sky_score_of_planes_is_the_reshaped_one():
+    """sky_score sums the crop's planes where they lie: the numbers of the (N, 3) reshape's column sums."""
+    from trackreplay.trackers.golf.lut import sky_score
+
+    rng = np.random.default_rng(5)
+    assert sky_score(np.zeros((0, 0, 3), np.uint8)) == 0.0
+    for shape in [(1, 1), (7, 3), (64, 48), (201, 333)]:
+        bgr = rng.integers(0, 256, (*shape, 3), dtype=np.uint8)
+        for ycc in (to_ycbcr(bgr), np.ascontiguousarray(to_ycbcr(bgr)), to_ycbcr(bgr).reshape(-1, 3)):
+            c = ycc.reshape(-1, 3)
+            n = len(c)
+            y, cb, cr = (int(c[:, i].sum(dtype=np.int64)) for i in range(3))
+            plain = float((cb - cr) / n + 0.25 * (y / n - 128.0)) if n else 0.0
+            assert sky_score(ycc) == plain
+
+
+def test_line_of_sight_norm_is_numpys():
+    from trackreplay.trackers.geometry.pinhole import Intrinsics
+    from trackreplay.trackers.geometry.ptz import PtzCamera
+
+    rng = np.random.default_rng(6)
+    for _ in range(50):
+        camera = PtzCamera(rng.normal(0, 5, 3), rng.uniform(-180, 180), rng.uniform(-30, 60),
+                           Intrinsics(*rng.uniform(500, 9000, 2), *rng.uniform(300, 900, 2), 1280, 720))
+        pixels = rng.uniform(-100, 1400, (int(rng.integers(1, 20)), 2))
+        rays = camera.intrinsics.back_project(pixels) @ camera.R.T
+        assert camera.line_of_sight(pixels).tobytes() == (rays / np.linalg.norm(rays, axis=1, keepdims=True)).tobytes()
