@@ -132,3 +132,54 @@ def test_line_of_sight_norm_is_numpys():
         pixels = rng.uniform(-100, 1400, (int(rng.integers(1, 20)), 2))
         rays = camera.intrinsics.back_project(pixels) @ camera.R.T
         assert camera.line_of_sight(pixels).tobytes() == (rays / np.linalg.norm(rays, axis=1, keepdims=True)).tobytes()
+
+
+def test_project_point_is_project_points():
+    from trackreplay.trackers.geometry.pinhole import Intrinsics
+    from trackreplay.trackers.geometry.ptz import PtzCamera
+
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        camera = PtzCamera(rng.normal(0, 5, 3), rng.uniform(-180, 180), rng.uniform(-30, 60),
+                           Intrinsics(*rng.uniform(500, 9000, 2), *rng.uniform(300, 900, 2), 1280, 720))
+        point = rng.normal(0, 200, 3)
+        assert camera.project_point(point).tobytes() == camera.project_points(point.reshape(1, 3))[0].tobytes()
+    camera = PtzCamera(np.zeros(3), 0.0, 0.0, Intrinsics(1000.0, 1000.0, 640.0, 360.0, 1280, 720))
+    for point in ([-5.0, 0.0, 0.0], [np.nan, 1.0, 1.0], [10.0, 0.0, 0.0], [1e-12, 0.0, 0.0]):
+        point = np.array(point)
+        assert camera.project_point(point).tobytes() == camera.project_points(point.reshape(1, 3))[0].tobytes()
+
+
+def test_trail_in_image_with_every_line_of_sight_is_the_masked_form():
+    from trackreplay.trackers.geometry.pinhole import Intrinsics
+    from trackreplay.trackers.geometry.ptz import PtzCamera
+    from trackreplay.trackers.golf.trail import Trail
+
+    rng = np.random.default_rng(8)
+    camera = PtzCamera(np.zeros(3), 10.0, 5.0, Intrinsics(2000.0, 2000.0, 640.0, 360.0, 1280, 720))
+    for n in (1, 5, 40, 130):
+        trail = Trail(60)
+        for _ in range(n):
+            los = rng.normal(0, 1, 3)
+            trail.add((float(rng.uniform(0, 1280)), float(rng.uniform(0, 720))), los / np.linalg.norm(los), None)
+        rows = trail.image.ordered()
+        plain = rows[:, :2].copy()
+        has = np.isfinite(rows[:, 2])
+        plain[has] = camera.project_directions(rows[has, 2:5])
+        assert trail.in_image(camera).tobytes() == plain.tobytes()
+
+
+def test_single_candidate_likelihood_is_the_plain_form():
+    """Eq. (2) against one candidate in one buffer: numpy's temporaries' numbers."""
+    from trackreplay.trackers.golf.particles import likelihood
+
+    rng = np.random.default_rng(9)
+    for n in (0, 1, 7, 1000, 4099):
+        particles = rng.normal(300, 80, (n, 4))
+        particles[: n // 10, :2] = [[310.0, 295.0]]  # on the candidate: d² = 0
+        for sigma, alpha in ((6.0, 0.01), (0.37, 1e-6), (25.0, 0.0)):
+            cx, cy = np.array([[310.0, 295.0]])[0]
+            out = np.full(n, alpha, dtype=np.float64)
+            d2 = (particles[:, 0] - cx) ** 2 + (particles[:, 1] - cy) ** 2
+            out += np.exp(-d2 / (2.0 * sigma * sigma)) / (np.sqrt(2.0 * np.pi) * sigma)
+            assert likelihood(np.array([[310.0, 295.0]]), sigma, alpha)(particles).tobytes() == out.tobytes()
