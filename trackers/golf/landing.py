@@ -134,10 +134,10 @@ def measurement_jacobian(camera: PtzCamera, p: np.ndarray) -> tuple[np.ndarray, 
     c = max(c, 1e-6)
     r = math.sqrt(float(rel.dot(rel)))  # np.linalg.norm of a vector
     h = np.array([fx * a / c + k.cx, fy * b / c + k.cy, r])
-    d_uv = np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt
-    H = np.zeros((3, 6))
-    H[:2, :3] = d_uv
-    H[2, :3] = rel / max(r, 1e-9)
+    (u0, u1, u2), (v0, v1, v2) = (np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt).tolist()
+    x, y, z = rel.tolist()
+    n = max(r, 1e-9)  # rel / n, element by element: numpy's divisions
+    H = np.array([[u0, u1, u2, 0.0, 0.0, 0.0], [v0, v1, v2, 0.0, 0.0, 0.0], [x / n, y / n, z / n, 0.0, 0.0, 0.0]])
     return h, H
 
 
@@ -293,7 +293,8 @@ class BallisticEkf:
         h, H = measurement_jacobian(camera, self.kf.x[:3])
         sigma_r = rel_sigma * h[2]
         z = np.array([uv[0], uv[1], range_m])
-        R = np.diag([self.config.pixel_sigma**2, self.config.pixel_sigma**2, sigma_r**2])
+        pixel_var = self.config.pixel_sigma**2
+        R = np.array([[pixel_var, 0.0, 0.0], [0.0, pixel_var, 0.0], [0.0, 0.0, float(sigma_r**2)]])  # np.diag's matrix
         PHT = np.dot(self.kf.P, H.T)  # innovation()'s S, formed once for the gate and the update
         S = np.dot(H, PHT) + R
         self.last_nis = Innovation(z - h, S).nis

@@ -183,3 +183,28 @@ def test_single_candidate_likelihood_is_the_plain_form():
             d2 = (particles[:, 0] - cx) ** 2 + (particles[:, 1] - cy) ** 2
             out += np.exp(-d2 / (2.0 * sigma * sigma)) / (np.sqrt(2.0 * np.pi) * sigma)
             assert likelihood(np.array([[310.0, 295.0]]), sigma, alpha)(particles).tobytes() == out.tobytes()
+
+
+def test_measurement_jacobian_is_the_plain_form():
+    import math
+
+    from trackreplay.trackers.geometry.pinhole import Intrinsics
+    from trackreplay.trackers.geometry.ptz import PtzCamera
+    from trackreplay.trackers.golf.landing import measurement_jacobian
+
+    rng = np.random.default_rng(10)
+    for _ in range(300):
+        camera = PtzCamera(rng.normal(0, 5, 3), rng.uniform(-180, 180), rng.uniform(-30, 60),
+                           Intrinsics(*rng.uniform(500, 9000, 2), *rng.uniform(300, 900, 2), 1280, 720))
+        p = camera.position + rng.normal(0, 100, 3) * (rng.random() < 0.95)  # now and then at the camera: r = 0
+        k, Rt = camera.intrinsics, camera.R.T
+        fx, fy = float(k.fx), float(k.fy)
+        rel = p - camera.position
+        a, b, c = (Rt @ rel).tolist()
+        c = max(c, 1e-6)
+        r = math.sqrt(float(rel.dot(rel)))
+        H = np.zeros((3, 6))
+        H[:2, :3] = np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt
+        H[2, :3] = rel / max(r, 1e-9)
+        h, got = measurement_jacobian(camera, p)
+        assert got.tobytes() == H.tobytes() and h.tobytes() == np.array([fx * a / c + k.cx, fy * b / c + k.cy, r]).tobytes()
