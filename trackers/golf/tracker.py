@@ -98,8 +98,8 @@ class GolfTracker(TrackerBase):
 
     def step(self, frame: Frame) -> list[TrackState]:
         cfg, camera = self.config, frame.camera
-        if frame.all_hints is not self._all_hints:  # the log's marks: one tuple, the same every frame
-            self.marks.remember(frame.all_hints)
+        if frame.all_hints is not self._all_hints or not isinstance(frame.all_hints, tuple):
+            self.marks.remember(frame.all_hints)  # the log's marks: one tuple, the same every frame (once)
             self._all_hints = frame.all_hints
         self.marks.remember(frame.hints)
         self.marks.place(frame.image, frame.index)
