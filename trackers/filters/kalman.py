@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import scipy.linalg
 from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
 
 
@@ -42,3 +43,30 @@ class MotionModelEkf(ExtendedKalmanFilter):
 
     def predict_x(self, u: float = 0.0) -> None:
         self.x = self.fx(self.x, u)
+
+    def update_linearised(self, z: np.ndarray, H: np.ndarray, hx: np.ndarray, R: np.ndarray,
+                          PHT: np.ndarray | None = None, S: np.ndarray | None = None) -> None:
+        """filterpy's ``update(z, lambda x: H, lambda x: hx, R=R)`` (Joseph form) in its own numpy
+        operations, so the same ``x`` and ``P``; ``PHT = P Hᵀ`` and ``S = H PHT + R`` when the caller
+        formed them already (a gate before the update). Without filterpy's bookkeeping (a deep copy
+        of ``z``, the posterior copies), which cost more than the 3 x 6 algebra itself."""
+        if PHT is None:
+            PHT = np.dot(self.P, H.T)
+        if S is None:
+            S = np.dot(H, PHT) + R
+        self.S = S
+        self.SI = inverse(S)
+        self.K = PHT.dot(self.SI)
+        self.y = np.subtract(z, hx)
+        self.x = self.x + np.dot(self.K, self.y)
+        I_KH = self._I - np.dot(self.K, H)
+        self.P = np.dot(I_KH, self.P).dot(I_KH.T) + np.dot(self.K, R).dot(self.K.T)
+        self._log_likelihood = self._likelihood = self._mahalanobis = None
+
+
+def inverse(a: np.ndarray) -> np.ndarray:
+    """``scipy.linalg.inv(a)`` as filterpy calls it; a finite matrix skips scipy's own finiteness
+    check (``np.asarray_chkfinite`` and its wrapping: two thirds of the call on a 3 x 3)."""
+    if np.isfinite(a).all():
+        return scipy.linalg.inv(a, check_finite=False)
+    return scipy.linalg.inv(a)  # raises as filterpy's call does

@@ -8,6 +8,7 @@ particles: no Python loop over them.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -105,8 +106,9 @@ class ParticleFilter:
         lik = np.asarray(likelihood(self.particles), dtype=np.float64)
         weighted = self.weights * lik
         total = weighted.sum()
-        if total > 0 and np.isfinite(total):
-            self.weights = weighted / total
+        if total > 0 and math.isfinite(total):
+            weighted /= total  # a new array: the old weights may be kept (intermediates)
+            self.weights = weighted
         return lik
 
     def estimate(self) -> np.ndarray:

@@ -145,7 +145,7 @@ class PtzCamera:
     def line_of_sight(self, pixels: np.ndarray) -> np.ndarray:
         """Unit world vectors from the camera through image points ``(N, 2)`` (u, v)."""
         rays = self.intrinsics.back_project(pixels) @ self.R.T
-        return rays / np.linalg.norm(rays, axis=1, keepdims=True)
+        return rays / np.sqrt(np.add.reduce(rays * rays, axis=1, keepdims=True))  # np.linalg.norm's own steps
 
     def project_directions(self, directions: np.ndarray) -> np.ndarray:
         """Image points ``(N, 2)`` of world directions; NaN for directions behind the camera."""
@@ -154,6 +154,16 @@ class PtzCamera:
     def project_points(self, points: np.ndarray) -> np.ndarray:
         """Image points of world points ``(N, 3)``."""
         return self.project_directions(np.atleast_2d(points) - self.position)
+
+    def project_point(self, point: np.ndarray) -> np.ndarray:
+        """``project_points(point.reshape(1, 3))[0]`` for one world point: the same rotation (one
+        matmul), then the pinhole's divide, scale and shift in Python floats (numpy's elementwise
+        steps, without a dozen calls' overhead)."""
+        x, y, z = ((np.asarray(point, dtype=np.float64).reshape(1, 3) - self.position) @ self.R)[0].tolist()
+        if not z > 1e-9:  # behind the camera (or NaN)
+            return np.array([np.nan, np.nan])
+        (fx, _, cx), (_, fy, cy), _ = self.K.tolist()  # as Intrinsics.project reads them from K
+        return np.array([(x / z) * fx + cx, (y / z) * fy + cy])
 
     def in_image(self, pixels: np.ndarray) -> np.ndarray:
         return self.intrinsics.in_image(pixels)

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackreplay.trackers.filters.gating import innovation
+from trackreplay.trackers.filters.gating import Innovation
 from trackreplay.trackers.filters.kalman import MotionModelEkf
 from trackreplay.trackers.geometry.ptz import PtzCamera
 from trackreplay.trackers.golf.config import EkfConfig
@@ -32,6 +32,7 @@ from trackreplay.trackers.golf.config import EkfConfig
 NIS_GATE = 30.0  # chi-square, 3 dof: beyond 99.999 %; a selected blob that far is not our ball
 MAX_REJECTIONS = 3  # consecutive gated measurements before the filter restarts from the measurement
 MAX_SUBSTEP_S = 1.0 / 60.0
+SUBSTEP_CACHE = 16  # substep lengths whose Q and F are kept (a steady log has two or three)
 
 
 @dataclass(frozen=True)
@@ -69,12 +70,12 @@ def _substep_jacobian(v: np.ndarray, k: float, h: float, F0: np.ndarray) -> np.n
     nk = -k
     txy, txz, tyz = vx * vy / speed, vx * vz / speed, vy * vz / speed
     oxy, oxz, oyz = 0.0 + h * (nk * (0.0 + txy)), 0.0 + h * (nk * (0.0 + txz)), 0.0 + h * (nk * (0.0 + tyz))
-    return np.array([[1.0, 0.0, 0.0, h, 0.0, 0.0],
-                     [0.0, 1.0, 0.0, 0.0, h, 0.0],
-                     [0.0, 0.0, 1.0, 0.0, 0.0, h],
-                     [0.0, 0.0, 0.0, 1.0 + h * (nk * (speed + vx * vx / speed)), oxy, oxz],
-                     [0.0, 0.0, 0.0, oxy, 1.0 + h * (nk * (speed + vy * vy / speed)), oyz],
-                     [0.0, 0.0, 0.0, oxz, oyz, 1.0 + h * (nk * (speed + vz * vz / speed))]])
+    return np.array((1.0, 0.0, 0.0, h, 0.0, 0.0,  # one flat sequence: numpy reads it faster than nested rows
+                     0.0, 1.0, 0.0, 0.0, h, 0.0,
+                     0.0, 0.0, 1.0, 0.0, 0.0, h,
+                     0.0, 0.0, 0.0, 1.0 + h * (nk * (speed + vx * vx / speed)), oxy, oxz,
+                     0.0, 0.0, 0.0, oxy, 1.0 + h * (nk * (speed + vy * vy / speed)), oyz,
+                     0.0, 0.0, 0.0, oxz, oyz, 1.0 + h * (nk * (speed + vz * vz / speed)))).reshape(6, 6)
 
 
 def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
@@ -133,10 +134,10 @@ def measurement_jacobian(camera: PtzCamera, p: np.ndarray) -> tuple[np.ndarray, 
     c = max(c, 1e-6)
     r = math.sqrt(float(rel.dot(rel)))  # np.linalg.norm of a vector
     h = np.array([fx * a / c + k.cx, fy * b / c + k.cy, r])
-    d_uv = np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt
-    H = np.zeros((3, 6))
-    H[:2, :3] = d_uv
-    H[2, :3] = rel / max(r, 1e-9)
+    (u0, u1, u2), (v0, v1, v2) = (np.array([[fx / c, 0.0, -fx * a / (c * c)], [0.0, fy / c, -fy * b / (c * c)]]) @ Rt).tolist()
+    x, y, z = rel.tolist()
+    n = max(r, 1e-9)  # rel / n, element by element: numpy's divisions
+    H = np.array([[u0, u1, u2, 0.0, 0.0, 0.0], [v0, v1, v2, 0.0, 0.0, 0.0], [x / n, y / n, z / n, 0.0, 0.0, 0.0]])
     return h, H
 
 
@@ -155,7 +156,7 @@ class BallisticEkf:
         self.landed = False  # set when the flight's landing fired: from then on the ball may be rolling
         self.rejections = 0
         self.last_nis = math.nan
-        self._substep: tuple = (None, None, None)  # substep h, its Q and its F without the drag term
+        self._substeps: dict[float, tuple[np.ndarray, np.ndarray]] = {}  # substep h: its Q and its F without the drag term
 
     @property
     def x(self) -> np.ndarray | None:
@@ -199,20 +200,29 @@ class BallisticEkf:
             return
         steps = max(1, int(math.ceil(dt / MAX_SUBSTEP_S)))
         h = dt / steps
-        if self._substep[0] != h:  # the frame interval: the same every frame of a steady log
-            G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
-            F = np.eye(6)
-            F[:3, 3:] = h * np.eye(3)
-            Q = cfg.accel_noise**2 * G @ G.T
-            Q.flags.writeable = F.flags.writeable = False  # shared by every substep (the EKF only reads them)
-            self._substep = (h, Q, F)
-        _, Q, F0 = self._substep
+        Q, F0 = self._substep_matrices(h)
         kf = self.kf
         kf.Q = Q
         for _ in range(steps):
             kf.F = _substep_jacobian(kf.x[3:], cfg.drag_k, h, F0)
             kf.predict(u=h)
         kf.P = 0.5 * (kf.P + kf.P.T)
+
+    def _substep_matrices(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """``Q`` and ``F`` (without the drag term) of a substep of ``h`` seconds, built once per ``h``: a
+        log's frame intervals take a few values (nanosecond stamps of 1/30 s round two ways), so the
+        last one alone missed on two frames in three."""
+        cached = self._substeps.get(h)
+        if cached is None:
+            G = np.concatenate([0.5 * h * h * np.eye(3), h * np.eye(3)])
+            F = np.eye(6)
+            F[:3, 3:] = h * np.eye(3)
+            Q = self.config.accel_noise**2 * G @ G.T
+            Q.flags.writeable = F.flags.writeable = False  # shared by every substep (the EKF only reads them)
+            if len(self._substeps) >= SUBSTEP_CACHE:
+                self._substeps.clear()
+            cached = self._substeps[h] = (Q, F)
+        return cached
 
     def ground_contact(self, previous: np.ndarray) -> GroundContact | None:
         """The contact point if the state went from above the contact height to at/below it."""
@@ -283,8 +293,11 @@ class BallisticEkf:
         h, H = measurement_jacobian(camera, self.kf.x[:3])
         sigma_r = rel_sigma * h[2]
         z = np.array([uv[0], uv[1], range_m])
-        R = np.diag([self.config.pixel_sigma**2, self.config.pixel_sigma**2, sigma_r**2])
-        self.last_nis = innovation(self.kf.P, H, R, z, h).nis
+        pixel_var = self.config.pixel_sigma**2
+        R = np.array([[pixel_var, 0.0, 0.0], [0.0, pixel_var, 0.0], [0.0, 0.0, float(sigma_r**2)]])  # np.diag's matrix
+        PHT = np.dot(self.kf.P, H.T)  # innovation()'s S, formed once for the gate and the update
+        S = np.dot(H, PHT) + R
+        self.last_nis = Innovation(z - h, S).nis
         if self.last_nis > NIS_GATE:
             if not may_restart:
                 return False
@@ -293,7 +306,7 @@ class BallisticEkf:
                 self.initialise(camera, uv, range_m, rel_sigma)
             return False
         self.rejections = 0
-        self.kf.update(z, lambda _x: H, lambda _x: h, R=R)  # Joseph form (filterpy)
+        self.kf.update_linearised(z, H, h, R, PHT, S)  # filterpy's update (Joseph form)
         if self.kf.x[2] >= self.config.landing_arm_height_m + self.contact_z:
             self.armed = True
         return True
@@ -334,7 +347,7 @@ class EkfState:
         if prediction is not None:
             seconds, world = prediction
             if camera is not None:
-                image = camera.project_points(world.reshape(1, 3))[0]
+                image = camera.project_point(world)
         x = ekf.x.copy() if ekf.initialised else np.full(6, np.nan)
         P = ekf.P.copy() if ekf.initialised else np.full((6, 6), np.nan)
         return cls(x, P, float(ekf.last_nis), np.asarray(world, float), np.asarray(image, float), float(seconds))

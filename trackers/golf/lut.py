@@ -55,16 +55,17 @@ class RegionSamples:
 
 
 def sky_score(context_ycc: np.ndarray) -> float:
-    c = context_ycc.reshape(-1, 3)
-    if not len(c):
+    n = context_ycc.size // 3
+    if not n:
         return 0.0
-    if c.dtype == np.uint8:
+    if context_ycc.dtype == np.uint8:
         # The float64 means of integers are their exact integer sums divided once by the count
         # (every partial sum is an integer far below 2^53), so the same numbers come from int sums.
-        n = len(c)
-        y, cb, cr = (int(c[:, i].sum(dtype=np.int64)) for i in range(3))
+        # Summed channel by channel where they lie: a crop's (Y, Cb, Cr) are planes (to_ycbcr), which
+        # a reshape to (N, 3) would copy.
+        y, cb, cr = (int(context_ycc[..., i].sum(dtype=np.int64)) for i in range(3))
         return float((cb - cr) / n + 0.25 * (y / n - 128.0))
-    c = c.astype(np.float64)
+    c = context_ycc.reshape(-1, 3).astype(np.float64)
     return float(np.mean(c[:, 1] - c[:, 2]) + 0.25 * (np.mean(c[:, 0]) - 128.0))
 
 

@@ -105,18 +105,34 @@ def likelihood(candidates: np.ndarray, sigma: float, alpha: float) -> Likelihood
     candidates = np.asarray(candidates, dtype=np.float64).reshape(-1, 2)
 
     def weigh(particles: np.ndarray) -> np.ndarray:
-        out = np.full(len(particles), alpha, dtype=np.float64)
         if len(candidates) == 1:  # the usual single candidate: a sum over one column is that column
-            cx, cy = candidates[0]
-            d2 = (particles[:, 0] - cx) ** 2 + (particles[:, 1] - cy) ** 2
-            out += np.exp(-d2 / (2.0 * sigma * sigma)) / (SQRT_2PI * sigma)
-        elif len(candidates):
+            return _single(particles, candidates[0], sigma, alpha)
+        out = np.full(len(particles), alpha, dtype=np.float64)
+        if len(candidates):
             # d² = dx² + dy² (what summing the last axis of the squared differences adds, without the reduction)
             d2 = (particles[:, 0:1] - candidates[None, :, 0]) ** 2 + (particles[:, 1:2] - candidates[None, :, 1]) ** 2
             out += np.exp(-d2 / (2.0 * sigma * sigma)).sum(axis=1) / (SQRT_2PI * sigma)
         return out
 
     return weigh
+
+
+def _single(particles: np.ndarray, candidate: np.ndarray, sigma: float, alpha: float) -> np.ndarray:
+    """Eq. (2) against one candidate, ``alpha + exp(-d² / 2σ²) / (√(2π) σ)``, in one buffer: the
+    operations of the plain form (``(x - cx) ** 2`` is ``np.square``, ``alpha + t`` is ``t + alpha``),
+    without its eight temporary arrays."""
+    cx, cy = candidate
+    d2 = particles[:, 0] - cx
+    np.square(d2, out=d2)
+    dy = particles[:, 1] - cy
+    np.square(dy, out=dy)
+    d2 += dy
+    np.negative(d2, out=d2)
+    d2 /= 2.0 * sigma * sigma
+    np.exp(d2, out=d2)
+    d2 /= SQRT_2PI * sigma
+    d2 += alpha
+    return d2
 
 
 @dataclass(frozen=True, eq=False)

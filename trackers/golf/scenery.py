@@ -63,7 +63,7 @@ class Scenery:
             return
         radius = self.still_px * scale
         centroids = np.asarray(blobs.centroid, float).reshape(-1, 2)
-        kept = self.points[_holds(blobs.bbox, self.points, radius).any(axis=0)]
+        kept = self.points[_holds(blobs.bbox, self.points, radius).any(axis=0)] if len(self.points) else self.points[:0]
         if ball is not None and self._previous_index == index - 1 and len(centroids):
             still = _near(centroids, self._previous, radius)
             away = np.hypot(centroids[:, 0] - ball[0], centroids[:, 1] - ball[1]) > diameter + radius

@@ -86,6 +86,7 @@ class GolfTracker(TrackerBase):
         self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
         self._followed: bool | None = None  # this frame's ReinitPolicy.follows answer, once _predict asked
         self._pose_change: np.ndarray | None = None  # this frame's pose homography from the last frame's
+        self._all_hints: tuple | None = None  # the frame bundle's all_hints last remembered
 
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
@@ -97,7 +98,10 @@ class GolfTracker(TrackerBase):
 
     def step(self, frame: Frame) -> list[TrackState]:
         cfg, camera = self.config, frame.camera
-        self.marks.remember(frame.all_hints + frame.hints)
+        if frame.all_hints is not self._all_hints or not isinstance(frame.all_hints, tuple):
+            self.marks.remember(frame.all_hints)  # the log's marks: one tuple, the same every frame (once)
+            self._all_hints = frame.all_hints
+        self.marks.remember(frame.hints)
         self.marks.place(frame.image, frame.index)
         self.luts.learn(frame.image, self.marks.on(frame.index))
         notice = self.notices.check(camera is not None, bool(self.marks))

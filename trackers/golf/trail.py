@@ -56,11 +56,14 @@ class Trail:
         if not len(self.image):
             return np.zeros((0, 2))
         trail = self.image.ordered()
+        if camera is None:
+            return trail[:, :2].copy()
+        has = np.isfinite(trail[:, 2])
+        if has.all():  # every point has its line of sight (the usual case with encoders): all projected
+            return camera.project_directions(np.ascontiguousarray(trail[:, 2:5]))  # the rows trail[has, 2:5] copies
         out = trail[:, :2].copy()
-        if camera is not None:
-            has = np.isfinite(trail[:, 2])
-            if has.any():
-                out[has] = camera.project_directions(trail[has, 2:5])
+        if has.any():
+            out[has] = camera.project_directions(trail[has, 2:5])
         return out
 
 

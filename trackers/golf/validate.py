@@ -202,7 +202,10 @@ class Validator:
         the ball's area more nearly than ``k``: the ball merged with something (a ball rolling over
         the cup's white liner is one oval with it), so ``k`` (a piece of the liner beside it) is not
         taken for the ball on a guess."""
-        merged = np.isin(gated.reason, MERGED_SHAPES) & (d < d[k])
+        nearer = d < d[k]
+        if not nearer.any():  # the usual frame: nothing nearer, no np.isin (~60 % of this stage's cost)
+            return False
+        merged = np.isin(gated.reason, MERGED_SHAPES) & nearer
         if not merged.any():
             return False
         slack = self.blobs.area_slack_px * scale * scale

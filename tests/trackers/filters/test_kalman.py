@@ -42,3 +42,41 @@ def test_gaussian_density_integrates_to_one() -> None:
     cov = np.array([[2.0, 0.6], [0.6, 1.0]])
     total = gaussian_density(grid, np.array([0.5, -0.5]), cov).sum() * (xs[1] - xs[0]) ** 2
     assert abs(total - 1.0) < 1e-3
+
+
+def test_update_linearised_is_filterpys_update_bit_for_bit() -> None:
+    """The golf EKF's update: filterpy's Joseph-form update, with ``P Hᵀ`` and ``S`` from the gate or not."""
+    import scipy.linalg
+
+    from trackreplay.trackers.filters.kalman import inverse
+
+    rng = np.random.default_rng(3)
+    for trial in range(200):
+        A = rng.normal(0, 3, (6, 6))
+        P = A @ A.T + np.eye(6) * rng.uniform(0.01, 5)
+        H = rng.normal(0, 50, (3, 6)) * (rng.random((3, 6)) < 0.7)
+        R = np.diag(rng.uniform(0.1, 400, 3))
+        x, z, hx = rng.normal(0, 30, 6), rng.normal(0, 500, 3), rng.normal(0, 500, 3)
+        plain, fast = MotionModelEkf(6, 3, lambda s, dt: s), MotionModelEkf(6, 3, lambda s, dt: s)
+        for f in (plain, fast):
+            f.x, f.P = x.copy(), P.copy()
+        plain.update(z, lambda _x: H, lambda _x: hx, R=R)
+        if trial % 2:
+            fast.update_linearised(z, H, hx, R)
+        else:
+            PHT = np.dot(P, H.T)
+            S = np.dot(H, PHT) + R
+            assert S.tobytes() == innovation(P, H, R, z, hx).S.tobytes()  # the gate's S is filterpy's
+            fast.update_linearised(z, H, hx, R, PHT, S)
+        for name in ("x", "P", "S", "SI", "K", "y"):
+            assert getattr(fast, name).tobytes() == getattr(plain, name).tobytes(), name
+        assert inverse(plain.S).tobytes() == scipy.linalg.inv(plain.S).tobytes()
+
+
+def test_inverse_of_a_non_finite_matrix_raises_as_scipys() -> None:
+    import pytest
+
+    from trackreplay.trackers.filters.kalman import inverse
+
+    with pytest.raises(ValueError, match="infs or NaNs"):
+        inverse(np.array([[1.0, np.nan], [0.0, 1.0]]))
