@@ -144,24 +144,27 @@ class ExcludingMedianBackground(MedianBackground):
 
     def model(self) -> np.ndarray | None:
         """Per pixel the median (the upper middle value, as :meth:`MedianBackground.model`) of the
-        frames that leave it in; of all the frames where none does. The plain median everywhere,
-        then the frames sorted per pixel with the left-out values last (:func:`sort_frames`)."""
-        median = super().model()
-        if median is None:
+        frames that leave it in; of all the frames where none does. One :func:`sort_frames` of the
+        frames with the left-out values last (and the plain median only where every frame leaves a pixel out)."""
+        if not self._frames:
             return None
         stack = np.stack(self._frames)  # (F, H, W[, C])
         height, width = stack.shape[1:3]
         out = self._inside(0, 0, width, height)  # (F, H, W)
-        some = out.any(axis=0) & ~out.all(axis=0)  # left out of some frames, not of all
+        every = out.all(axis=0)  # left out of every frame: the plain median
+        some = out.any(axis=0) & ~every  # left out of some frames, not of all
+        plain = super().model() if every.any() or not some.any() else None
         if not some.any():
-            return median
+            return plain
         # a left-out value becomes the dtype's largest: sorted, the kept values come first (a kept
-        # value equal to it is the same number), so the k-th of the kept ones is the k-th of all
-        left_out = out if stack.ndim == 3 else out[..., None]
-        ranked = sort_frames(np.where(left_out, _largest(stack.dtype), stack))
+        # value equal to it is the same number), so the k-th of the kept ones is the k-th of all; a
+        # pixel no frame leaves out sorts its own values, its plain median
+        stack[out] = _largest(stack.dtype)
+        ranked = sort_frames(stack)
         k = ((~out).sum(axis=0) // 2).reshape(1, height, width, *([1] * (stack.ndim - 3)))
-        picked = np.take_along_axis(ranked, np.broadcast_to(k, (1, *stack.shape[1:])), axis=0)[0]
-        median[some] = picked[some]
+        median = np.take_along_axis(ranked, np.broadcast_to(k, (1, *stack.shape[1:])), axis=0)[0]
+        if plain is not None:
+            median[every] = plain[every]
         return median
 
     def clear(self) -> None:

@@ -117,3 +117,15 @@ def test_the_medians_equal_the_plain_forms_with_extreme_values(frames):
     k = (~out).sum(axis=0) // 2
     expected[some] = np.take_along_axis(ranked, k[None, ..., None].repeat(3, -1), axis=0)[0][some]
     assert np.array_equal(median.model(), expected)
+
+
+def test_pixels_every_frame_leaves_out_take_the_plain_median():
+    rng = np.random.default_rng(11)
+    median = ExcludingMedianBackground(30)
+    for _ in range(6):
+        median.add(rng.integers(0, 256, (10, 12, 3), dtype=np.uint8))
+        median.leave_out(np.array([2, 2, 7, 6]) + rng.integers(0, 2, 4))  # all cover x 3-6, y 3-5
+    stack = np.stack(median._frames)
+    got = median.model()
+    assert np.array_equal(got[3:6, 3:7], np.partition(stack, 3, axis=0)[3][3:6, 3:7])
+    assert np.array_equal(got[8:, :], np.partition(stack, 3, axis=0)[3][8:, :])  # left in by every frame
