@@ -64,8 +64,8 @@ def _similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
 
 def median(values: np.ndarray) -> float:
     """``float(np.median(values))`` of a 1-D float array: the same partition and the same mean of the
-    two middle values, without np.median's per-call overhead (the fit takes ~10 medians of ~120
-    values a frame)."""
+    two middle values in the array's precision, without np.median's per-call overhead (the fit takes
+    ~10 medians of ~120 values a frame)."""
     n = len(values)
     if n == 0:
         return float("nan")
@@ -73,7 +73,7 @@ def median(values: np.ndarray) -> float:
     part = np.partition(values, (half - 1, half, n - 1) if n % 2 == 0 else (half, n - 1))
     if np.isnan(part[-1]):  # np.median: NaN in, NaN out
         return float("nan")
-    return float(part[half]) if n % 2 else (float(part[half - 1]) + float(part[half])) / 2.0
+    return float(part[half]) if n % 2 else float((part[half - 1] + part[half]) / 2)
 
 
 def _column_medians(xy: np.ndarray) -> np.ndarray:
@@ -170,6 +170,7 @@ class CameraMotion:
         self._key_transform = IDENTITY.copy()  # in the measured (possibly halved) frame's pixels
         self._transform = IDENTITY.copy()
         self._factor = 1
+        self._probed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # this frame's probe: picks, LK's answer
 
     @property
     def transform(self) -> np.ndarray:
@@ -201,10 +202,30 @@ class CameraMotion:
         last = self._last[pick]
         moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners[pick], last.copy(),
                                                     flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        self._probed = (pick, moved, status)
         ok = status.ravel() == 1
         if 2 * ok.sum() < PROBE:
             return False
-        return float(np.median(np.hypot(*(moved[ok, 0] - last[ok, 0]).T))) < STILL_PX
+        return median(np.hypot(*(moved[ok, 0] - last[ok, 0]).T)) < STILL_PX
+
+    def _follow(self, matched: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """LK of every corner from where it was last found: (n, 1, 2) positions and (n, 1) status. LK
+        follows each point on its own (the same images and first guess give the same answer in any
+        call), so the probe's corners are taken from the probe and only the others are followed."""
+        assert self._corners is not None and self._last is not None
+        if self._probed is None:
+            moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners, self._last.copy(),
+                                                        flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+            return moved, status
+        pick, probe_moved, probe_status = self._probed
+        rest = np.ones(len(self._corners), bool)
+        rest[pick] = False
+        moved = np.empty((len(self._corners), 1, 2), np.float32)
+        status = np.empty((len(self._corners), 1), np.uint8)
+        moved[pick], status[pick] = probe_moved.reshape(-1, 1, 2), probe_status.reshape(-1, 1)
+        moved[rest], status[rest], _ = cv2.calcOpticalFlowPyrLK(
+            self._key, matched, self._corners[rest], self._last[rest], flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        return moved, status
 
     def update(self, image: np.ndarray, box: np.ndarray | None = None) -> np.ndarray:
         """The frame's transform; ``box``: the tracked box's corners (left out of a new key frame's corners)."""
@@ -222,10 +243,10 @@ class CameraMotion:
             return self.transform
         gain = self._key_mean / max(float(g[::4, ::4].mean()), 1.0)
         matched = cv2.convertScaleAbs(g, alpha=gain)  # the key's brightness
+        self._probed = None
         if self._unmoved(matched):
             return self.transform
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, corners, self._last.copy(),
-                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        moved, status = self._follow(matched)
         height, width = g.shape
         inside = ((moved[:, 0, 0] >= 0) & (moved[:, 0, 0] <= width - 1) & (moved[:, 0, 1] >= 0)
                   & (moved[:, 0, 1] <= height - 1))

@@ -4,8 +4,8 @@ import cv2
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.colorpf.camera import (IDENTITY, CameraMotion, apply, fit_similarity, median, scale_of, shift_image,
-                                                 snap)
+from trackreplay.trackers.colorpf.camera import (IDENTITY, LK, CameraMotion, apply, fit_similarity, median, scale_of,
+                                                 shift_image, snap)
 from trackreplay.trackers.colorpf.config import CameraConfig, ColorPfConfig
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker
 from trackreplay.trackers.frame import Frame
@@ -159,6 +159,7 @@ def test_median_is_numpys_median():
         if n % 3 == 0:
             values = np.round(values)  # ties
         assert median(values) == float(np.median(values))
+        assert median(values.astype(np.float32)) == float(np.median(values.astype(np.float32)))  # float32's own mean
         assert np.isnan(median(np.append(values, np.nan)))
     assert np.isnan(median(np.zeros(0)))
 
@@ -195,3 +196,24 @@ def test_fit_similarity_is_its_plain_form_bit_for_bit():
         p1 = (apply(t, p0) + rng.normal(0, 0.3, (n, 2))).astype(np.float32).reshape(-1, 1, 2)
         p1[: n // 5] += 15.0  # other movers
         assert np.array_equal(fit_similarity(p0, p1), _plain_fit(p0, p1))
+
+
+class _PlainCameraMotion(CameraMotion):
+    """CameraMotion following every corner in one LK call (the form the probe's reuse replaced)."""
+
+    def _follow(self, matched: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners, self._last.copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        return moved, status
+
+
+def test_the_probes_corners_are_not_followed_twice_and_the_transforms_are_the_same_bits():
+    world = _world(2)
+    fast, plain = CameraMotion(), _PlainCameraMotion()
+    probed = 0
+    for i in range(40):
+        m = np.array([[1.0 + 0.001 * i, 0.0, 0.6 * i], [0.0, 1.0 + 0.001 * i, 5.0 + 0.3 * (i % 7)]])
+        view = cv2.warpAffine(world, m, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+        assert np.array_equal(fast.update(view), plain.update(view))
+        probed += fast._probed is not None
+    assert probed > 20  # the reuse was exercised
