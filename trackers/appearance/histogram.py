@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -62,8 +63,19 @@ def hs_index(hsv: np.ndarray, bins: Sequence[int], ranges: Sequence[tuple[float,
     indices equals ``colour_histogram(hsv, bins[:2], ranges[:2])`` flattened.
     """
     nh, ns = int(bins[0]), int(bins[1])
-    lut = (_axis_lut(nh, *ranges[0])[:, None] * ns + _axis_lut(ns, *ranges[1])[None, :]).astype(np.int32)
+    lut = _hs_lut(nh, ns, (float(ranges[0][0]), float(ranges[0][1])), (float(ranges[1][0]), float(ranges[1][1])))
+    if hsv.dtype == np.uint8:  # one flat look-up at h * 256 + s: the same entries as lut[h, s], ~1.5x cheaper
+        return np.take(lut.reshape(-1), (hsv[..., 0].astype(np.uint16) << 8) | hsv[..., 1]), nh * ns
     return lut[hsv[..., 0], hsv[..., 1]], nh * ns
+
+
+@lru_cache(maxsize=16)
+def _hs_lut(nh: int, ns: int, range_h: tuple[float, float], range_s: tuple[float, float]) -> np.ndarray:
+    """:func:`hs_index`'s (256, 256) int32 table of H-S bins, built once per binning (it costs more
+    than looking up a box's pixels in it); read-only."""
+    lut = (_axis_lut(nh, *range_h)[:, None] * ns + _axis_lut(ns, *range_s)[None, :]).astype(np.int32)
+    lut.flags.writeable = False
+    return lut
 
 
 def hs_v_index(hsv: np.ndarray, bins: Sequence[int], ranges: Sequence[tuple[float, float]], *,
@@ -149,7 +161,7 @@ def box_part_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *, ke
     and the (K,) number of pixels counted per box. One ``np.bincount`` over all boxes and parts.
 
     The boxes' pixels are gathered as one (K, rows, columns) block padded to the largest box
-    (boxes of one tracker differ in size by tens of per cent), the padding counted into a spare bin.
+    (boxes of one tracker differ in size by tens of per cent), the padding weighted 0.
     """
     boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
     k = len(boxes)
@@ -164,16 +176,17 @@ def box_part_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *, ke
     if k == 0 or n.max(initial=0) == 0:
         return np.zeros((k, parts, n_bins)), n
     rows, cols = np.arange(int(ny.max())), np.arange(int(nx.max()))
-    inside = (rows[None, :, None] < ny[:, None, None]) & (cols[None, None, :] < nx[:, None, None])
     s = stride[:, None, None]
-    flat = (y0 * index.shape[1] + x0)[:, None, None] + s * (rows[None, :, None] * index.shape[1] + cols[None, None, :])
-    weight, part = kernel_and_part(s * rows[None, :, None] + 0.5, s * cols[None, None, :] + 0.5,
-                                   h[:, None, None], w[:, None, None], kernel, parts)
-    slot = np.arange(k)[:, None, None] * parts + part  # (box, part)
-    bins = index.reshape(-1)[np.where(inside, flat, 0)] + slot * n_bins
-    spare = k * parts * n_bins
-    weight = np.where(inside, weight, 0.0).reshape(-1)
-    counts = np.bincount(np.where(inside, bins, spare).reshape(-1), weights=weight, minlength=spare + 1)[:-1]
+    dy, dx = s * rows[None, :, None] + 0.5, s * cols[None, None, :] + 0.5  # (K, R, 1), (K, 1, C)
+    weight, part = kernel_and_part(dy, dx, h[:, None, None], w[:, None, None], kernel, parts)
+    if kernel == "uniform":
+        weight = ((rows[None, :, None] < ny[:, None, None]) & (cols[None, None, :] < nx[:, None, None])).astype(np.float64)
+    # else the padding (dy >= h + 1/2 or dx >= w + 1/2: r > 1) already weighs +0.0: it reads any pixel
+    # (np.take clips), and adding +0.0 to its box's bin leaves the sums in the same order, the same bits
+    flat = ((y0 * index.shape[1] + x0)[:, None, None] + s * rows[None, :, None] * index.shape[1]) + s * cols[None, None, :]
+    slot = np.arange(k)[:, None, None] * parts + part[:, :, :1]  # (box, part): a part is a band of rows
+    bins = np.take(index.reshape(-1), flat, mode="clip") + slot * n_bins
+    counts = np.bincount(bins.reshape(-1), weights=weight.reshape(-1), minlength=k * parts * n_bins)
     counts = counts.reshape(k, parts, n_bins)
     total = counts.sum(axis=2, keepdims=True)
     return np.where(total > 0, counts / np.where(total > 0, total, 1.0), 0.0), n

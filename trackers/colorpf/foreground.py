@@ -36,6 +36,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from trackreplay.trackers.colorpf.camera import median
 from trackreplay.trackers.colorpf.likelihood import box_corners
 from trackreplay.trackers.foreground.background import foreground_mask
 
@@ -62,7 +63,7 @@ def brightness_gain(image: np.ndarray, background: np.ndarray) -> float:
     other movers are a small part of the frame, so the median is the scene's."""
     gi, gb = _grey(image[::SCENE_STEP, ::SCENE_STEP]), _grey(background[::SCENE_STEP, ::SCENE_STEP])
     ok = gb > 8
-    return float(np.median(gi[ok] / gb[ok])) if ok.any() else 1.0
+    return median((gi[ok] / gb[ok]).reshape(-1)) if ok.any() else 1.0
 
 
 def _mask(image: np.ndarray, background: np.ndarray, threshold: float, open_px: int, gain: float) -> np.ndarray:

@@ -103,9 +103,12 @@ def box_corners(states: np.ndarray, width: int, height: int) -> np.ndarray:
     lo = np.floor(s[:, :2] - half + 0.5)
     hi = np.floor(s[:, :2] + half + 0.5)
     limit = np.array([width, height], dtype=np.float64)
-    lo = np.clip(lo, 0, limit)
-    hi = np.clip(np.maximum(hi, lo), 0, limit)
-    return np.concatenate([lo, hi], axis=1).astype(np.int64)
+    # np.clip(v, 0, limit) is minimum(maximum(v, 0), limit) (NaN kept), without np.clip's wrapper (called ~7x a frame)
+    out = np.empty((len(s), 4), dtype=np.int64)
+    lo = np.minimum(np.maximum(lo, 0.0), limit)
+    out[:, :2] = lo
+    out[:, 2:] = np.minimum(np.maximum(np.maximum(hi, lo), 0.0), limit)
+    return out
 
 
 @dataclass(frozen=True, eq=False)

@@ -44,6 +44,8 @@ def standing_box(xy: np.ndarray, h0: float | np.ndarray, model: WeakPerspectiveS
     """
     xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     h = np.broadcast_to(np.asarray(h0, dtype=np.float64), (len(xy),)).copy()
+    if plane is None:  # every distance is NaN whatever h: each substitution repeats the first
+        iterations = min(iterations, 1)
     for _ in range(iterations):
         distance = ground_distance(plane, foot_points(xy, h), side)
         area = model.areas_for(distance, omega)

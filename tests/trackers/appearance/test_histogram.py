@@ -105,3 +105,58 @@ def test_level_counts_are_numpys_bincount() -> None:
     assert np.array_equal(level_counts(np.zeros((0, 4), np.uint8)), np.zeros(256, np.int64))
     with pytest.raises(ValueError):  # a value below the levels: numpy's error, as before
         level_counts(np.full((2, 2), -300, np.int16), -255, 511)
+
+
+def _plain_box_part_histograms(index, boxes, n_bins, kernel, parts, max_pixels):
+    """box_part_histograms as first written: padding masked out and counted into a spare bin."""
+    from trackreplay.trackers.appearance.histogram import kernel_and_part
+    boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
+    k = len(boxes)
+    x0, y0 = boxes[:, 0], boxes[:, 1]
+    w, h = np.maximum(boxes[:, 2] - x0, 0), np.maximum(boxes[:, 3] - y0, 0)
+    stride = np.ones(k, dtype=np.int64)
+    if max_pixels is not None:
+        stride = np.maximum(np.ceil(np.sqrt(w * h / float(max_pixels))).astype(np.int64), 1)
+    nx, ny = -(-w // stride), -(-h // stride)
+    rows, cols = np.arange(int(ny.max())), np.arange(int(nx.max()))
+    inside = (rows[None, :, None] < ny[:, None, None]) & (cols[None, None, :] < nx[:, None, None])
+    s = stride[:, None, None]
+    flat = (y0 * index.shape[1] + x0)[:, None, None] + s * (rows[None, :, None] * index.shape[1] + cols[None, None, :])
+    weight, part = kernel_and_part(s * rows[None, :, None] + 0.5, s * cols[None, None, :] + 0.5,
+                                   h[:, None, None], w[:, None, None], kernel, parts)
+    slot = np.arange(k)[:, None, None] * parts + part
+    bins = index.reshape(-1)[np.where(inside, flat, 0)] + slot * n_bins
+    spare = k * parts * n_bins
+    weight = np.where(inside, weight, 0.0).reshape(-1)
+    counts = np.bincount(np.where(inside, bins, spare).reshape(-1), weights=weight, minlength=spare + 1)[:-1]
+    counts = counts.reshape(k, parts, n_bins)
+    total = counts.sum(axis=2, keepdims=True)
+    return np.where(total > 0, counts / np.where(total > 0, total, 1.0), 0.0), nx * ny
+
+
+@pytest.mark.parametrize("kernel", ["uniform", "epanechnikov"])
+@pytest.mark.parametrize("parts", [1, 2, 3])
+@pytest.mark.parametrize("max_pixels", [None, 50, 1024])
+def test_box_part_histograms_equal_their_plain_form_bit_for_bit(kernel, parts, max_pixels):
+    rng = np.random.default_rng(parts)
+    index = rng.integers(0, 100, (90, 70)).astype(np.int32)
+    for k in (1, 7, 40):
+        corners = np.sort(rng.integers(0, 71, (k, 2, 2)), axis=1)  # x0 <= x1, y0 <= y1 (some empty)
+        boxes = np.column_stack([corners[:, 0, 0], corners[:, 0, 1], corners[:, 1, 0], corners[:, 1, 1]])
+        boxes[:, [1, 3]] = np.minimum(boxes[:, [1, 3]] + rng.integers(0, 20, (k, 1)), 90)
+        got, n = box_part_histograms(index, boxes, 100, kernel=kernel, parts=parts, max_pixels=max_pixels)
+        want, n_want = _plain_box_part_histograms(index, boxes, 100, kernel, parts, max_pixels)
+        assert np.array_equal(got, want) and np.array_equal(n, n_want)
+
+
+def test_hs_index_is_the_plain_table_look_up():
+    from trackreplay.trackers.appearance.histogram import _axis_lut, hs_index
+    rng = np.random.default_rng(8)
+    hsv = to_hsv(rng.integers(0, 256, (37, 23, 3), dtype=np.uint8))
+    for bins in ((10, 10), (8, 4), (16, 16)):
+        lut = (_axis_lut(bins[0], *HSV_RANGES[0])[:, None] * bins[1]
+               + _axis_lut(bins[1], *HSV_RANGES[1])[None, :]).astype(np.int32)
+        got, n = hs_index(hsv, bins, HSV_RANGES)
+        want = lut[hsv[..., 0], hsv[..., 1]]
+        assert got.dtype == want.dtype and np.array_equal(got, want) and n == bins[0] * bins[1]
+        assert np.array_equal(hs_index(hsv.astype(np.int64), bins, HSV_RANGES)[0], want)  # not uint8: the 2-D look-up

@@ -4,7 +4,8 @@ import cv2
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.colorpf.camera import IDENTITY, CameraMotion, fit_similarity, scale_of, shift_image, snap
+from trackreplay.trackers.colorpf.camera import (IDENTITY, LK, CameraMotion, apply, fit_similarity, median, scale_of,
+                                                 shift_image, snap)
 from trackreplay.trackers.colorpf.config import CameraConfig, ColorPfConfig
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker
 from trackreplay.trackers.frame import Frame
@@ -149,3 +150,70 @@ def test_a_still_view_is_checked_by_the_probe_alone_and_a_drift_is_caught_within
         shifts.append(-cam.update(view(0.05 * i))[0, 2])
     assert len(followed) > 20  # measured in full now and then
     assert np.max(np.abs(np.array(shifts) - 0.05 * np.arange(1, 21))) < camera_module.STILL_PX + 0.05
+
+
+def test_median_is_numpys_median():
+    rng = np.random.default_rng(9)
+    for n in range(1, 60):
+        values = rng.normal(0, 10, n)
+        if n % 3 == 0:
+            values = np.round(values)  # ties
+        assert median(values) == float(np.median(values))
+        assert median(values.astype(np.float32)) == float(np.median(values.astype(np.float32)))  # float32's own mean
+        assert np.isnan(median(np.append(values, np.nan)))
+    assert np.isnan(median(np.zeros(0)))
+
+
+def _plain_fit(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarray:
+    """fit_similarity with np.median throughout (the form it replaced)."""
+    from trackreplay.trackers.colorpf.camera import MIN_BASELINE, _similarity
+    p0, p1 = np.asarray(p0, np.float64).reshape(-1, 2), np.asarray(p1, np.float64).reshape(-1, 2)
+    v0, v1 = p0 - np.median(p0, axis=0), p1 - np.median(p1, axis=0)
+    n0, n1 = np.hypot(*v0.T), np.hypot(*v1.T)
+    far = n0 >= MIN_BASELINE
+    scale, angle = 1.0, 0.0
+    if far.sum() >= 3:
+        scale = float(np.median(n1[far] / n0[far]))
+        u0, u1 = v0[far], v1[far]
+        angle = float(np.median(np.arctan2(u0[:, 0] * u1[:, 1] - u0[:, 1] * u1[:, 0], (u0 * u1).sum(axis=1))))
+    a, b = scale * np.cos(angle), scale * np.sin(angle)
+    t = np.median(p1 - p0 @ np.array([[a, -b], [b, a]]).T, axis=0)
+    transform, kept = np.array([[a, -b, t[0]], [b, a, t[1]], [0.0, 0.0, 1.0]]), None
+    for _ in range(rounds):
+        r = np.hypot(*(apply(transform, p0) - p1).T)
+        keep = r <= max(3.0 * float(np.median(r)), 1.0)
+        if keep.sum() < 3 or (kept is not None and np.array_equal(keep, kept)):
+            break
+        transform, kept = _similarity(p0[keep], p1[keep]), keep
+    return transform
+
+
+def test_fit_similarity_is_its_plain_form_bit_for_bit():
+    rng = np.random.default_rng(4)
+    for n in (3, 20, 119, 120):
+        p0 = rng.uniform(0, 360, (n, 1, 2)).astype(np.float32)
+        t = np.array([[1.01, -0.02, 3.3], [0.02, 1.01, -1.7], [0, 0, 1]])
+        p1 = (apply(t, p0) + rng.normal(0, 0.3, (n, 2))).astype(np.float32).reshape(-1, 1, 2)
+        p1[: n // 5] += 15.0  # other movers
+        assert np.array_equal(fit_similarity(p0, p1), _plain_fit(p0, p1))
+
+
+class _PlainCameraMotion(CameraMotion):
+    """CameraMotion following every corner in one LK call (the form the probe's reuse replaced)."""
+
+    def _follow(self, matched: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners, self._last.copy(),
+                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        return moved, status
+
+
+def test_the_probes_corners_are_not_followed_twice_and_the_transforms_are_the_same_bits():
+    world = _world(2)
+    fast, plain = CameraMotion(), _PlainCameraMotion()
+    probed = 0
+    for i in range(40):
+        m = np.array([[1.0 + 0.001 * i, 0.0, 0.6 * i], [0.0, 1.0 + 0.001 * i, 5.0 + 0.3 * (i % 7)]])
+        view = cv2.warpAffine(world, m, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP)
+        assert np.array_equal(fast.update(view), plain.update(view))
+        probed += fast._probed is not None
+    assert probed > 20  # the reuse was exercised

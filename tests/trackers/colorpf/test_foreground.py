@@ -56,3 +56,13 @@ def test_grey_is_the_float32_mean_of_the_channels():
     image = np.random.default_rng(3).integers(0, 256, (37, 53, 3), dtype=np.uint8)
     for view in (image, image[::4, ::3], image[5:20, 7:40]):
         assert np.array_equal(_grey(view), view.astype(np.float32).mean(axis=-1))
+
+
+def test_brightness_gain_is_its_np_median_form():
+    from trackreplay.trackers.colorpf.foreground import SCENE_STEP, _grey, brightness_gain
+    rng = np.random.default_rng(12)
+    for shape in ((240, 360, 3), (61, 83, 3), (40, 40)):
+        image, background = rng.integers(0, 256, shape, dtype=np.uint8), rng.integers(0, 256, shape, dtype=np.uint8)
+        gi, gb = _grey(image[::SCENE_STEP, ::SCENE_STEP]), _grey(background[::SCENE_STEP, ::SCENE_STEP])
+        ok = gb > 8
+        assert brightness_gain(image, background) == float(np.median(gi[ok] / gb[ok]))

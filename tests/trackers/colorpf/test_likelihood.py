@@ -4,7 +4,7 @@ import numpy as np
 
 from trackreplay.trackers.appearance.color import to_hsv
 from trackreplay.trackers.colorpf.config import LikelihoodConfig
-from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, measure
+from trackreplay.trackers.colorpf.likelihood import ColourModel, box_corners, box_histogram, measure
 
 
 def _two_colour_image() -> np.ndarray:
@@ -93,3 +93,17 @@ def test_pooled_similarity_ignores_where_in_the_box_the_colours_are():
     red, whole = (box_histogram(one, img, np.array([9.5, y, 20.0, h])) for y, h in ((9.5, 20.0), (19.5, 40.0)))
     assert one.pooled_similarity(red, whole) == one.similarity(red, whole)  # one part: the same
     assert np.isclose(one.similarity(red, whole), 0.5)
+
+
+def test_box_corners_is_its_plain_clip_form():
+    rng = np.random.default_rng(2)
+    states = np.column_stack([rng.normal(150, 250, (500, 2)), np.abs(rng.normal(0, 80, (500, 2)))])
+    states[::7, :2] = np.round(states[::7, :2]) + 0.5  # on a pixel boundary
+    s = states
+    half = s[:, 2:4] / 2.0
+    lo, hi = np.floor(s[:, :2] - half + 0.5), np.floor(s[:, :2] + half + 0.5)
+    limit = np.array([360, 240], dtype=np.float64)
+    lo = np.clip(lo, 0, limit)
+    expected = np.concatenate([lo, np.clip(np.maximum(hi, lo), 0, limit)], axis=1).astype(np.int64)
+    assert np.array_equal(box_corners(states, 360, 240), expected)
+    assert np.array_equal(box_corners(states[3], 360, 240), expected[3:4])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from trackreplay.trackers.foreground.background import ExcludingMedianBackground, MedianBackground
+from trackreplay.trackers.foreground.background import ExcludingMedianBackground, MedianBackground, sort_frames
 
 FLOOR = 60
 
@@ -89,3 +89,43 @@ def test_the_excluding_median_equals_the_per_pixel_definition():
     assert np.array_equal(median.model(), expected)
     median.clear()
     assert len(median) == 0 and median.model() is None
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.uint16, np.float64])
+def test_sort_frames_is_numpys_sort_along_the_frames(dtype):
+    rng = np.random.default_rng(5)
+    for n in range(1, 41):
+        stack = rng.integers(0, 6 if n % 2 else 256, (n, 5, 7, 3)).astype(dtype)  # few levels: many ties
+        assert np.array_equal(sort_frames(stack), np.sort(stack, axis=0))
+        assert np.array_equal(sort_frames(stack[..., 0].transpose(0, 2, 1)), np.sort(stack[..., 0].transpose(0, 2, 1), axis=0))
+
+
+@pytest.mark.parametrize("frames", [1, 2, 5, 8, 25, 30])
+def test_the_medians_equal_the_plain_forms_with_extreme_values(frames):
+    rng = np.random.default_rng(frames)
+    median = ExcludingMedianBackground(30)
+    for i in range(frames):
+        median.add(rng.choice(np.array([0, 1, 254, 255], np.uint8), (9, 11, 3)))  # 255: the left-out stand-in
+        if i % 3:
+            median.leave_out(rng.integers(0, 11, 4))
+    stack, out = np.stack(median._frames), median._inside(0, 0, 11, 9)
+    plain = np.partition(stack, frames // 2, axis=0)[frames // 2]
+    assert np.array_equal(MedianBackground.model(median), plain)
+    expected = plain.copy()
+    some = out.any(axis=0) & ~out.all(axis=0)
+    ranked = np.sort(np.where(out[..., None], np.uint16(256), stack.astype(np.uint16)), axis=0)  # the former form
+    k = (~out).sum(axis=0) // 2
+    expected[some] = np.take_along_axis(ranked, k[None, ..., None].repeat(3, -1), axis=0)[0][some]
+    assert np.array_equal(median.model(), expected)
+
+
+def test_pixels_every_frame_leaves_out_take_the_plain_median():
+    rng = np.random.default_rng(11)
+    median = ExcludingMedianBackground(30)
+    for _ in range(6):
+        median.add(rng.integers(0, 256, (10, 12, 3), dtype=np.uint8))
+        median.leave_out(np.array([2, 2, 7, 6]) + rng.integers(0, 2, 4))  # all cover x 3-6, y 3-5
+    stack = np.stack(median._frames)
+    got = median.model()
+    assert np.array_equal(got[3:6, 3:7], np.partition(stack, 3, axis=0)[3][3:6, 3:7])
+    assert np.array_equal(got[8:, :], np.partition(stack, 3, axis=0)[3][8:, :])  # left in by every frame
