@@ -104,6 +104,12 @@ class LutConfig:
     context: float = 4.0  # reference luminance histogram: window this many box sizes, min search.min_px
     hist_bins: int = 32  # context luminance histogram bins
     switch_margin: float = 0.2  # hysteresis: switch when the other LUT fits 60 % of the region
+    # Over open sky a small ball's blurred rim mixes with the sky, so the sky LUT keeps scattered core pixels: on the
+    # synthetic shots its blob was a quarter of the ball's area, in pieces on a third of the frames
+    # (the ground LUT: 1.3x, 0.5 %), so the area target shrank and the whole ball was refused as
+    # too large once the ground LUT took over. Not the ground's: the clutter beside a ball on the
+    # ground (a cup's liner) would join it.
+    sky_close_px: int = 3  # ours: the sky silhouette closed with a square this wide (px; 0 or 1: off)
     # Learning from the track (ours): a confidently measured ball is added to the LUT of the
     # background it is over when that LUT does not exist yet, or when the ball's area changed by
     # this factor since that LUT last learned it (zoom); at most ``learn_max`` boxes per LUT.
@@ -114,6 +120,8 @@ class LutConfig:
     def __post_init__(self) -> None:
         if self.bin < 1 or 256 % self.bin:
             raise ValueError("lut.bin must divide 256")
+        if self.sky_close_px < 0:
+            raise ValueError("lut.sky_close_px must be >= 0 (0: the sky silhouette as the LUT gives it)")
 
 
 @dataclass(frozen=True)

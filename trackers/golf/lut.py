@@ -29,7 +29,8 @@ from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut
 from trackreplay.trackers.geometry.box import centre_box, clip_box
 from trackreplay.trackers.golf.config import LutConfig
 
-LUT_NAMES = ("sky", "ground")
+SKY, GROUND = "sky", "ground"
+LUT_NAMES = (SKY, GROUND)
 SKY_SCORE_THRESHOLD = 8.0  # (Cb - Cr) + (Y - 128)/4 of the context: blue sky ~ +50, grass ~ -10
 
 

@@ -2,7 +2,9 @@
 
 The search region's pixels are converted to (Y, Cb, Cr) (only the crop: the HD frame is never
 converted whole), the sky or ground LUT is chosen from the crop's luminance histogram
-(:meth:`GolfLuts.choose`), and one lookup gives the binary silhouette.
+(:meth:`GolfLuts.choose`), and one lookup gives the binary silhouette. Ours: the sky's is closed
+with a small square (``lut.sky_close_px``), which joins the pieces a small, blurred ball leaves
+over sky into one blob of its size.
 
 Ours, when neither LUT finds the ball near the prediction: :func:`contrast_silhouette`, the pixels
 clearly brighter than their local background (a white top-hat of the luminance, the opening's
@@ -32,7 +34,7 @@ from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
-from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
+from trackreplay.trackers.golf.lut import LUT_NAMES, SKY, GolfLuts
 
 CONTRAST = "contrast"  # lut_name of a contrast silhouette
 
@@ -52,10 +54,20 @@ class LutSilhouette:
         return cls("", np.full(len(LUT_NAMES), np.nan), np.zeros((0, 0), np.uint8), np.zeros(2, np.int64))
 
 
-def box_silhouette(image: np.ndarray, box: np.ndarray, lut: ColourLut | None) -> tuple[np.ndarray, tuple[int, int], np.ndarray]:
-    """The (Y, Cb, Cr) pixels of ``box`` (x0, y0, w, h), their offset in the frame and their silhouette under ``lut``."""
+def named_silhouette(ycc: np.ndarray, luts: GolfLuts, name: str) -> np.ndarray:
+    """§2.1's ``I_c`` of the crop ``ycc`` under the LUT ``name``; the sky's closed with a
+    ``lut.sky_close_px`` square (the pieces of one small ball joined, :class:`~.config.LutConfig`)."""
+    mask = silhouette(ycc, luts.lut(name))
+    side = luts.config.sky_close_px
+    if name == SKY and side > 1 and mask.size:
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, np.ones((side, side), np.uint8))
+    return mask
+
+
+def box_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, name: str) -> tuple[np.ndarray, tuple[int, int], np.ndarray]:
+    """The (Y, Cb, Cr) pixels of ``box`` (x0, y0, w, h), their offset in the frame and their silhouette under the LUT ``name``."""
     ycc, offset = crop_pixels(image, box, to_ycbcr)
-    return ycc, offset, silhouette(ycc, lut)
+    return ycc, offset, named_silhouette(ycc, luts, name)
 
 
 def lut_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, current: str) -> tuple[LutSilhouette, np.ndarray]:
@@ -63,8 +75,7 @@ def lut_silhouette(image: np.ndarray, box: np.ndarray, luts: GolfLuts, current: 
     another fits clearly better), and the crop's (Y, Cb, Cr) pixels."""
     ycc, offset = crop_pixels(image, box, to_ycbcr)
     name, scores = luts.choose(ycc[..., 0], current)
-    mask = silhouette(ycc, luts.lut(name))
-    return LutSilhouette(name, scores, mask, np.array(offset, np.int64)), ycc
+    return LutSilhouette(name, scores, named_silhouette(ycc, luts, name), np.array(offset, np.int64)), ycc
 
 
 def contrast_silhouette(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float,

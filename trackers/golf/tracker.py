@@ -47,8 +47,7 @@ from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
-                                                  moving_silhouette, previous_in_pose, top_hat)
-from trackreplay.trackers.foreground.silhouette import silhouette
+                                                  moving_silhouette, named_silhouette, previous_in_pose, top_hat)
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
 from trackreplay.trackers.golf.validate import Validator
 
@@ -147,7 +146,7 @@ class GolfTracker(TrackerBase):
             # The background changed under the ball faster than the luminance switch (tree line, horizon):
             # the ball may pass the other LUT; take it only if that finds the ball in the gate.
             for name in (n for n in self.luts.names if n != sil.lut_name):
-                other = LutSilhouette(name, sil.lut_scores, silhouette(ycc, self.luts.lut(name)), sil.offset)
+                other = LutSilhouette(name, sil.lut_scores, named_silhouette(ycc, self.luts, name), sil.offset)
                 alt = self._select(other.mask, other.offset, search.centre, scale, False, motion)
                 seen_alt = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
                                                        diameter=diameter, size=(width, height), scale=scale, lost=lost)
@@ -332,7 +331,7 @@ class GolfTracker(TrackerBase):
         self.reinit.landed_at, self.reinit.followed_landing = None, False  # a landing before the mark is not this track's
         name, self.lut_name = self.luts.start_names(frame.image, region)
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
-        ycc, offset, mask = box_silhouette(frame.image, box, self.luts.lut(self.lut_name))
+        ycc, offset, mask = box_silhouette(frame.image, box, self.luts, self.lut_name)
         found = start_targets(mask, offset, np.array([region.x, region.y]), cfg.blobs, scale)
         self.targets = found or BlobTargets(math.pi / 4.0 * region.w * region.h, cfg.blobs.initial_circularity)
         if found is not None:

@@ -2,16 +2,19 @@ import numpy as np
 import pytest
 
 from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.appearance.color import to_ycbcr
+from trackreplay.trackers.appearance.lut import ColourLut
+from trackreplay.trackers.foreground.blobs import measure_blobs
+from trackreplay.trackers.foreground.silhouette import crop_pixels
 from trackreplay.trackers.golf.config import LutConfig
 from trackreplay.trackers.golf.lut import build_luts, region_samples
-from trackreplay.trackers.golf.silhouette import box_silhouette, lut_silhouette
+from trackreplay.trackers.golf.silhouette import lut_silhouette, named_silhouette
 
 CONTEXT_PX = 64.0 * 720 / 1080  # the smallest search region on these 720-line images
 
 
 def crop_ycc(image, box):
-    ycc, offset, _ = box_silhouette(image, box, None)
-    return ycc, offset
+    return crop_pixels(image, box, to_ycbcr)
 
 
 def disc_mask(shape, centre, radius):
@@ -96,3 +99,35 @@ def test_scores_from_luminance_counts_are_the_labels_counted(marked, backdrop):
         per_lut = np.bincount(luts.luminance_labels()[flat], minlength=2)  # the plain form
         _, scores = luts.choose(ycc[..., 0], "")
         assert scores.tolist() == [float(per_lut[0] / flat.size), float(per_lut[1] / flat.size)]
+
+
+class OneColourLuts:
+    """Both LUTs say "ball" for one (Y, Cb, Cr) colour only (what ``named_silhouette`` asks of a GolfLuts)."""
+
+    def __init__(self, colour, config):
+        table = np.zeros((256, 256, 256), bool)
+        table[colour] = True
+        self.table, self.config = ColourLut(table), config
+
+    def lut(self, name):
+        return self.table
+
+
+@pytest.mark.parametrize("name, pieces", [("sky", 1), ("ground", 9)])
+def test_the_sky_silhouette_joins_the_pieces_of_one_ball(name, pieces):
+    """A small ball over sky passes the sky LUT on scattered core pixels (a pixel in four here, 1 px
+    apart): the sky's silhouette is closed into one blob the ball's size; the ground's is left as
+    the LUT gives it (clutter beside a ball on the ground would join it)."""
+    ycc = np.full((21, 21, 3), (150, 160, 110), np.uint8)
+    ycc[6:11:2, 6:11:2] = (240, 128, 128)  # 9 ball pixels on a 5x5 lattice
+    mask = named_silhouette(ycc, OneColourLuts((240, 128, 128), LutConfig()), name)
+    blobs = measure_blobs(mask, moments=False)
+    assert len(blobs.area) == pieces
+    assert blobs.area.sum() == (25 if name == "sky" else 9)
+    off = named_silhouette(ycc, OneColourLuts((240, 128, 128), LutConfig(sky_close_px=0)), "sky")
+    assert len(measure_blobs(off, moments=False).area) == 9
+
+
+def test_a_negative_closing_is_refused():
+    with pytest.raises(ValueError, match="sky_close_px"):
+        LutConfig(sky_close_px=-1)
