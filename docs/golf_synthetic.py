@@ -77,6 +77,8 @@ PREVIOUS = [
     ("seed0", "issue 10, first step (67ad786)", 0.560, 0.563, 0.995, "0 of 10", 99),
     ("occl", "before issue 10 (818fc94)", 0.838, 0.898, 0.933, "14 of 55", 17),
     ("occl", "issue 10, first step (67ad786)", 0.771, 0.771, 1.000, "0 of 55", None),
+    ("seed0", "before the sky silhouette's closing (8c31e27)", 0.886, 0.891, 0.994, "0 of 10", 15),
+    ("occl", "before the sky silhouette's closing (8c31e27)", 0.847, 0.860, 0.985, "0 of 55", 15),
 ]
 # (key, label, landing_reinit, lost_search); the first one is the default configuration.
 CONFIGS = [
@@ -574,17 +576,17 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
                  + f" | {pct((after - missed + causes['before the first mark']) / after) if after else '–'} |")
     L += [
         "",
-        "Earlier versions on the same logs (issue 10: honest status; numbers as their commits measured them):",
+        "Earlier versions on the same logs (numbers as their commits measured them):",
         "",
         "| run | version | detected ≤5 px | measured | precision ≤5 px | `measured` while not visible | re-acquire |",
         "|---|---|---|---|---|---|---|",
     ]
-    for key, version, det, mea, prec, hidden, rea in PREVIOUS:
-        L.append(f"| {results[key]['desc']} | {version} | {pct(det)} | {pct(mea)} | {pct(prec)} | {hidden} | {reac(rea) if rea is not None else '–'} |")
-        if version.startswith("issue 10, first"):
-            m = results[key]["per"]["R+C"][0]
-            L.append(f"| {results[key]['desc']} | **this page** | {pct(m['detected'])} | {pct(m['measured_share'])} | "
-                     f"{pct(m['precision'])} | {m['false_measured']} of {m['hidden']} | {reac(m['reacquire'])} |")
+    for run in dict.fromkeys(p[0] for p in PREVIOUS):  # each run's versions, oldest first, then this page
+        for key, version, det, mea, prec, hidden, rea in (p for p in PREVIOUS if p[0] == run):
+            L.append(f"| {results[key]['desc']} | {version} | {pct(det)} | {pct(mea)} | {pct(prec)} | {hidden} | {reac(rea) if rea is not None else '–'} |")
+        m = results[run]["per"]["R+C"][0]
+        L.append(f"| {results[run]['desc']} | **this page** | {pct(m['detected'])} | {pct(m['measured_share'])} | "
+                 f"{pct(m['precision'])} | {m['false_measured']} of {m['hidden']} | {reac(m['reacquire'])} |")
     L += [
         "",
         "## 2. Landing re-initialisation and lost search: frames to re-acquire after the first bounce",
