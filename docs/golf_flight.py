@@ -212,7 +212,9 @@ def write(results: list[dict], commit: str, dirty: bool) -> None:
           "  holding the tee frames leaves the launch point free along the line of sight in its refit.",
           "- The shot beside the tee is not solved: its track starts in the air (frame 89, near the apex, the",
           "  marks were over the sky), so no frame shows the launch; the fit settles in a wrong basin (RMS ~5 px,",
-          "  launch point and time far off) and the landing is 13 % of carry off (the fit of 84a9a4e: 9 %).",
+          "  launch point and time far off) and the landing is "
+          + next((f"{100 * r['fit_land_err'] / r['carry']:.0f} %" for r in results if r['key'] == 'beside' and r.get('fit_land_err') is not None), "far")
+          + " of carry off (the fit of 84a9a4e: 9 %).",
           "  Until a guard was added the new launch bound took its first frame for a tee frame (20 %). A launch",
           "  extrapolated back from the first frames' apparent-size ranges was tried as the start and was worse",
           "  (31 %): the sizes of a 6 px ball are too noisy. It needs a start from the ground phase backwards.",
