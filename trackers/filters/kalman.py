@@ -28,6 +28,32 @@ def linear_kalman(x: np.ndarray, P: np.ndarray, F: np.ndarray, Q: np.ndarray, H:
     return kf
 
 
+def predict(kf: KalmanFilter) -> None:
+    """filterpy's ``kf.predict()`` (no control input) in its own numpy operations, in its order: the
+    same ``x`` and ``P``. The prior is kept as filterpy keeps it, by reference rather than a copy
+    (``x`` and ``P`` are replaced, never written in place)."""
+    kf.x = np.dot(kf.F, kf.x)
+    kf.P = kf._alpha_sq * np.dot(np.dot(kf.F, kf.P), kf.F.T) + kf.Q
+    kf.x_prior, kf.P_prior = kf.x, kf.P
+
+
+def update(kf: KalmanFilter, z: np.ndarray) -> None:
+    """filterpy's ``kf.update(z)`` for a column ``z`` of ``dim_z`` rows (Joseph form) in its own numpy
+    operations, in its order: the same ``x`` and ``P``. Without its bookkeeping (a deep copy of ``z``,
+    the posterior copies: kept by reference), which costs as much as the algebra of a 3-state filter."""
+    H, R = kf.H, kf.R
+    kf._log_likelihood = kf._likelihood = kf._mahalanobis = None
+    kf.y = z - np.dot(H, kf.x)
+    PHT = np.dot(kf.P, H.T)
+    kf.S = np.dot(H, PHT) + R
+    kf.SI = kf.inv(kf.S)
+    kf.K = np.dot(PHT, kf.SI)
+    kf.x = kf.x + np.dot(kf.K, kf.y)
+    I_KH = kf._I - np.dot(kf.K, H)
+    kf.P = np.dot(np.dot(I_KH, kf.P), I_KH.T) + np.dot(np.dot(kf.K, R), kf.K.T)
+    kf.z, kf.x_post, kf.P_post = z, kf.x, kf.P
+
+
 class MotionModelEkf(ExtendedKalmanFilter):
     """filterpy's EKF with the state prediction ``x ← fx(x, dt)`` passed in.
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
+from trackreplay.trackers.filters import kalman
 from trackreplay.trackers.filters.kalman import linear_kalman
 
 
@@ -43,12 +44,12 @@ class AxisFilters:
     def predict(self) -> None:
         """Propagation, eq. 19–20."""
         for kf in self.filters:
-            kf.predict()
+            kalman.predict(kf)
 
     def update(self, position: np.ndarray, velocity: np.ndarray) -> None:
         """Gain and update, eq. 16–18, with ``z = (position, velocity)`` per axis."""
         for axis, kf in enumerate(self.filters):
-            kf.update(np.array([[position[axis]], [velocity[axis]]]))
+            kalman.update(kf, np.array([[position[axis]], [velocity[axis]]]))
 
     @property
     def state(self) -> np.ndarray:
