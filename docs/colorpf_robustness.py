@@ -100,6 +100,10 @@ def perturbations(images, gt) -> dict:
     out["zoom"] = (f, g, mark(g), 30)
     for name, gain in (("bright_ramp", 0.6 + 0.7 * t / (n - 1)), ("bright_step", np.where(t < 50, 1.0, 0.6))):
         out[name] = ([cv2.convertScaleAbs(im, alpha=float(a)) for im, a in zip(images, gain)], gt, mark(gt), 30)
+    out["bright1.3"] = ([cv2.convertScaleAbs(im, alpha=1.3) for im in images], gt, mark(gt), 30)
+    noise = np.random.default_rng(11)
+    out["noise"] = ([np.clip(im + noise.normal(0.0, 4.0, im.shape), 0, 255).astype(np.uint8) for im in images], gt, mark(gt), 30)
+    out["blur"] = ([cv2.GaussianBlur(im, (0, 0), 1.2) for im in images], gt, mark(gt), 30)
     x, y, w, h = mark(gt)
     for name, box in (("shift+3", (x + 3, y + 3, w, h)), ("shift-3", (x - 3, y - 3, w, h)),
                       ("scale0.8", (x + 0.1 * w, y + 0.1 * h, 0.8 * w, 0.8 * h)),
