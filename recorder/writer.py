@@ -18,6 +18,7 @@ from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.atomic import partial_path
+from trackreplay.recorder.interrupts import deferred_interrupts
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.schemas.errors import OutputError
 
@@ -116,13 +117,14 @@ class LogWriter:
         """Finish the log (summary, footer) and give it its final name."""
         if self._closed:
             return
-        with self._failing_as_output_error():
-            self._writer.finish()
-            self._fh.flush()
-            os.fsync(self._fh.fileno())
-        self._closed = True
-        self._fh.close()
-        os.replace(self.partial, self.path)
+        with deferred_interrupts():  # finished and renamed, or not begun: never a summary without its name
+            with self._failing_as_output_error():
+                self._writer.finish()
+                self._fh.flush()
+                os.fsync(self._fh.fileno())
+            self._closed = True
+            self._fh.close()
+            os.replace(self.partial, self.path)
 
     def _abandon(self) -> None:
         """After a failed write: stop, keeping ``NAME.partial`` (every flushed chunk) for ``recover``."""
@@ -144,15 +146,24 @@ class LogWriter:
 
 class _OutputGuard:
     """Turns an OSError while writing (disk full, quota, file too large) into one sentence, and
-    abandons the writer so that nothing more is attempted on the damaged file."""
+    abandons the writer so that nothing more is attempted on the damaged file. Ctrl-C and SIGTERM
+    wait for the guarded write to finish (:mod:`.interrupts`): a log is cut between records."""
 
     def __init__(self, log: LogWriter) -> None:
         self.log = log
+        self._deferred = deferred_interrupts()
 
     def __enter__(self) -> None:
+        self._deferred.__enter__()
         return None
 
     def __exit__(self, exc_type, exc, tb) -> bool:
+        try:
+            return self._handle(exc)
+        finally:
+            self._deferred.__exit__(None, None, None)  # a kept interrupt is raised here, after the write
+
+    def _handle(self, exc: BaseException | None) -> bool:
         if exc is None or not isinstance(exc, OSError):
             return False
         self.log._abandon()

@@ -11,6 +11,7 @@ import sys
 import traceback
 
 import trackreplay
+from trackreplay.recorder.interrupts import interrupt
 from trackreplay.recorder.provenance import command_line
 from trackreplay.schemas.errors import OutputError, TrackreplayError
 
@@ -27,7 +28,11 @@ class Terminated(KeyboardInterrupt):
 
 
 def _terminate(signum, frame) -> None:
-    raise Terminated()
+    interrupt(Terminated())  # raised now, or once the log write under way is complete
+
+
+def _interrupted(signum, frame) -> None:
+    interrupt(KeyboardInterrupt())  # Ctrl-C, likewise
 
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
 VERBS = ("record", "synth", "info", "recover", "annotate", "frame", "filter", "replay_cmd", "config_cmd", "batch", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
@@ -50,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
     """Run one verb; every failure becomes one sentence on stderr and a documented exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    previous = signal.signal(signal.SIGTERM, _terminate) if _main_thread() else None
+    previous = (signal.signal(signal.SIGTERM, _terminate), signal.signal(signal.SIGINT, _interrupted)) if _main_thread() else None
     # Logs written by this verb record the command line in their provenance.
     token = command_line.set(shlex.join(["trackreplay", *(sys.argv[1:] if argv is None else argv)]))
     try:
@@ -86,7 +91,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         command_line.reset(token)
         if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
+            signal.signal(signal.SIGTERM, previous[0])
+            signal.signal(signal.SIGINT, previous[1])
 
 
 def _main_thread() -> bool:
