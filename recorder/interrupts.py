@@ -9,6 +9,7 @@ the exception is kept and raised when the section ends, so a log is cut between 
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -18,8 +19,13 @@ _pending: BaseException | None = None
 
 @contextmanager
 def deferred_interrupts() -> Iterator[None]:
-    """A section an interrupt may not cut: :func:`interrupt`'s exception is raised at its end."""
+    """A section an interrupt may not cut: :func:`interrupt`'s exception is raised at its end. Only
+    the main thread's sections count: Python runs signal handlers there, and a log written by
+    another thread neither delays the main thread's interrupt nor has it raised in its own thread."""
     global _depth, _pending
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     _depth += 1
     try:
         yield

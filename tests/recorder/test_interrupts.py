@@ -82,3 +82,28 @@ def test_without_the_deferral_the_same_interrupt_breaks_the_log(tmp_path: Path, 
     write_until_interrupted(tmp_path / "broken.mcap", monkeypatch)
     with pytest.raises(Exception):
         assert messages_in(tmp_path / "broken.mcap") == 6
+
+
+def test_a_section_in_another_thread_neither_delays_nor_takes_the_interrupt() -> None:
+    import threading
+
+    inside, release, seen = threading.Event(), threading.Event(), []
+
+    def worker() -> None:
+        try:
+            with deferred_interrupts():
+                inside.set()
+                release.wait(10)
+        except BaseException as exc:  # the main thread's interrupt must not surface here
+            seen.append(exc)
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    inside.wait(10)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            interrupt(KeyboardInterrupt())  # the main thread is in no section: raised at once
+    finally:
+        release.set()
+        thread.join(10)
+    assert seen == []
