@@ -44,6 +44,24 @@ def _join(prefix: str, key: str) -> str:
     return f"{prefix}.{key}" if prefix else key
 
 
+SCALARS = {int: "an integer", float: "a number", bool: "true or false", str: "a string"}
+
+
+def _scalar_mismatch(hint: Any, value: Any) -> str | None:
+    """What a scalar field of type ``hint`` (``int``, ``float``, ``bool``, ``str``, or one of them
+    ``| None``) needs, when ``value`` is not that (None: it fits, or the field is no plain scalar).
+    An integer is a number; true/false is neither (TOML keeps them apart, Python does not)."""
+    options = [a for a in typing.get_args(hint) if a is not type(None)] \
+        if typing.get_origin(hint) in (typing.Union, types.UnionType) else [hint]
+    if len(options) != 1 or options[0] not in SCALARS or value is None:
+        return None
+    want = options[0]
+    fits = (isinstance(value, bool) if want is bool else
+            isinstance(value, int | float) and not isinstance(value, bool) if want is float else
+            isinstance(value, want) and not isinstance(value, bool))
+    return None if fits else SCALARS[want]
+
+
 def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "config", prefix: str = "") -> C:
     """Build ``cls`` from ``values`` (nested mappings for nested config dataclasses).
 
@@ -62,6 +80,8 @@ def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "con
     hints = typing.get_type_hints(cls)
     clean: dict[str, Any] = {}
     for key, value in values.items():
+        if (want := _scalar_mismatch(hints.get(key), value)) is not None:
+            raise TrackreplayError(f"{source}: {_join(prefix, key)} must be {want}, not {value!r}")
         inner = _dataclass_of(hints.get(key))
         if inner is None or value is None or isinstance(value, inner):
             clean[key] = _tuples(value)

@@ -102,3 +102,19 @@ def test_missing_or_malformed_files_are_one_sentence_errors(tmp_path: Path) -> N
     bad.write_text("fov = \n")
     with pytest.raises(TrackreplayError, match="is not valid TOML"):
         load_config(FlowConfig, bad)
+
+
+@pytest.mark.parametrize("values, message", [
+    ({"particles": {"n": 2.5}}, "particles.n must be an integer, not 2.5"),
+    ({"particles": {"n": True}}, "particles.n must be an integer, not True"),
+    ({"particles": {"sigma_px": "6"}}, "particles.sigma_px must be a number, not '6'"),
+])
+def test_a_value_of_the_wrong_type_names_its_key(values, message) -> None:
+    """One sentence naming the key, not a TypeError deep in a tracker (a float particle count
+    reached numpy as an array size)."""
+    with pytest.raises(TrackreplayError, match=f"^cfg: {message}$"):
+        config_from_dict(Nested, values, "cfg")
+
+
+def test_an_integer_is_a_number() -> None:
+    assert config_from_dict(Nested, {"particles": {"sigma_px": 6}}, "cfg").particles.sigma_px == 6
