@@ -168,4 +168,6 @@ class FlowTracker(TrackerBase):
             raw_velocity=np.full(2, np.nan), filtered_velocity=self._kf.velocity, kalman_x=self._kf.state,
             kalman_P=self._kf.covariance, centroid=np.full(2, np.nan), residual=float("nan"), moving_pixels=0,
         )
-        return [TrackState(1, x=start[0], y=start[1], w=self._extent[0], h=self._extent[1], status="measured")]
+        # Only a mark is a sighting; a configured point or the image centre is where the search starts
+        status = "measured" if hint is not None else "predicted"
+        return [TrackState(1, x=start[0], y=start[1], w=self._extent[0], h=self._extent[1], status=status)]

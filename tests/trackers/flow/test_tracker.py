@@ -110,13 +110,21 @@ def test_start_without_a_hint(scene) -> None:
     tracker = FlowTracker(FlowConfig(), np.random.default_rng(0))
     first = tracker.step(still)[0]
     assert (first.x, first.y) == (127.5, 127.5)
+    assert first.status == "predicted"  # where the search starts, not a sighting
+
+
+def test_only_a_mark_makes_the_first_row_measured(scene) -> None:
+    mark = InitRegion(0, 0, 100.0, 90.0, 11.0, 11.0, "target")
+    tracker = FlowTracker(FlowConfig(init_center=(60.0, 60.0)), np.random.default_rng(0))
+    first = tracker.step(Frame(0, 0, scene.background(), hints=(mark,)))[0]
+    assert (first.x, first.y, first.status) == (100.0, 90.0, "measured")
 
 
 def test_nothing_moving_predicts_then_is_lost(scene) -> None:
     frames = [Frame(t, t, scene.background()) for t in range(8)]
     outs, inters = _run(frames, FlowConfig(lost_after=4, init_center=(128.0, 128.0)))
     statuses = [o[0].status for o in outs]
-    assert statuses == ["measured", "predicted", "predicted", "predicted", "lost", "lost", "lost", "lost"]
+    assert statuses == ["predicted", "predicted", "predicted", "predicted", "lost", "lost", "lost", "lost"]
     assert all(o[0].x is None and o[0].y is None for o in outs[4:])  # lost rows carry no position
     assert all(i.moving_pixels == 0 for i in inters)
 
