@@ -17,11 +17,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mcap.reader import make_reader
 
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.log_summary import read_summary, topic_counts
-from trackreplay.recorder.mcap_copy import McapCopy
+from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -41,6 +40,7 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
     """Write ``out``: ``src``'s ``topics`` (all when None) with ``start_ns <= log_time < end_ns``
     (absolute ns); ``image_topic`` is the topic marks count frames on (default: /camera/image)."""
     summary = read_summary(src)
+    require_intact(src)
     present = topic_counts(summary)
     for topic in topics or ():
         if topic not in present:
@@ -52,8 +52,8 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
     image_topic = image_topic or T.CAMERA_IMAGE
     report = FilterReport()
 
-    with open(src, "rb") as fh:
-        reader = make_reader(fh)
+    with open(src, "rb") as fh, damage_is_an_error(src):
+        reader = checked_reader(fh)
         # Pass 1: the last state message before the range, and which images are kept (for marks).
         last_state: dict[int, tuple] = {}
         first_image = None
@@ -68,8 +68,8 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
             elif msg.log_time < lo and schema is not None and schema.name in STATE_SCHEMAS:
                 last_state[channel.id] = (msg.log_time, msg.sequence)
 
-    with replace_when_done(out) as dst, open(src, "rb") as fh:
-        reader = make_reader(fh)
+    with replace_when_done(out) as dst, open(src, "rb") as fh, damage_is_an_error(src):
+        reader = checked_reader(fh)
         copy = McapCopy(reader, dst)
         writer = copy.writer
         for schema, channel, msg in reader.iter_messages(log_time_order=True):

@@ -3,11 +3,56 @@ theirs are copied, and its attachments and metadata (used by ``annotate`` and ``
 
 from __future__ import annotations
 
+import struct
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
 from typing import BinaryIO
 
-from mcap.reader import McapReader
+import zstandard
+from mcap.exceptions import McapError
+from mcap.reader import McapReader, make_reader
 from mcap.records import Channel, Schema
 from mcap.writer import Writer
+
+from trackreplay.schemas.errors import TruncatedLogError
+
+# the decompressors' own errors too: a flipped byte inside a compressed chunk (lz4 raises RuntimeError)
+READ_ERRORS = (McapError, ValueError, EOFError, struct.error, zstandard.ZstdError, RuntimeError)
+
+
+def checked_reader(fh: BinaryIO) -> McapReader:
+    """An MCAP reader that checks every chunk's CRC: a copy must not pass damaged bytes on as clean."""
+    return make_reader(fh, validate_crcs=True)
+
+
+def require_intact(src: Path) -> None:
+    """Walk ``src`` record by record, every chunk's CRC checked (:func:`.mcap_scan.scan`, as
+    ``recover`` does), and refuse it at the first damage. mcap's own reader skips a chunk whose
+    header is zeroed without a word, so its CRC checks alone would let such a copy lose frames."""
+    from trackreplay.recorder.mcap_scan import Damage, open_mapped, scan
+
+    data = open_mapped(src)
+    try:
+        for item in scan(data):
+            if isinstance(item, Damage):
+                raise TruncatedLogError(f"{src} is damaged ({item.reason} at bytes {item.start}-{item.end}); nothing "
+                                        f"was written: run `trackreplay recover {src} FIXED.mcap` to salvage every "
+                                        "intact chunk, then use FIXED.mcap")
+    finally:
+        if hasattr(data, "close"):
+            data.close()
+
+
+@contextmanager
+def damage_is_an_error(src: Path) -> Iterator[None]:
+    """A damaged or truncated ``src`` met while copying it: one sentence (nothing is written: the
+    copy's ``replace_when_done`` discards its partial output)."""
+    try:
+        yield
+    except READ_ERRORS as err:
+        raise TruncatedLogError(f"{src} is damaged ({type(err).__name__}: {err}); nothing was written: run "
+                       f"`trackreplay recover {src} FIXED.mcap` to salvage every intact chunk, then use FIXED.mcap") from None
 
 
 class McapCopy:

@@ -12,7 +12,8 @@ class LogError(TrackreplayError):
 
 
 class TruncatedLogError(LogError):
-    """The log ends before its summary: readable up to the last complete chunk."""
+    """The log is truncated (it ends before its summary) or damaged (a chunk fails its CRC): readable
+    up to, or around, the damage; `trackreplay recover` salvages it."""
 
     exit_code = 3
 

@@ -103,3 +103,35 @@ def test_replay_is_right_or_says_so(damaged, flow_sim1, tmp_path, capsys) -> Non
             assert (got["digest"], got["frames"]) == (intact["digest"], intact["frames"]), (name, err)
         else:
             one_line(err)
+
+
+def test_copying_verbs_never_pass_damage_on(damaged, flow_sim1, tmp_path, capsys) -> None:
+    """`filter` and `annotate` copy a log record for record: a damaged one is refused (exit 3, naming
+    `recover`) and nothing is written; `--in-place` leaves the damaged original as it was. An exit 0
+    means the copy holds the intact log's images, byte for byte."""
+    def images(path: Path) -> list[bytes]:
+        with open(path, "rb") as fh:
+            return [msg.data for _, ch, msg in make_reader(fh).iter_messages(log_time_order=True) if ch.topic == "/camera/image"]
+
+    intact = images(flow_sim1)
+    for name, path in damaged:
+        for verb, out in (("filter", tmp_path / f"{name}.filtered.mcap"), ("annotate", tmp_path / f"{name}.marked.mcap")):
+            args = [verb, str(path), str(out)] if verb == "filter" else \
+                [verb, str(path), "--frame", "0", "--box", "10,10,8,8", "--out", str(out)]
+            before = path.read_bytes()
+            code = main(args)
+            _, err = capsys.readouterr()
+            assert code in DAMAGED_OK and code != INTERNAL_ERROR, (verb, name, code, err)
+            if code == 0:
+                assert images(out) == intact, (verb, name)
+            else:
+                one_line(err)
+                assert not out.exists() and path.read_bytes() == before, (verb, name)
+            if code == 3:
+                assert "recover" in err, (verb, name, err)
+        original = tmp_path / f"{name}.inplace.mcap"
+        original.write_bytes(path.read_bytes())
+        code = main(["annotate", str(original), "--frame", "0", "--box", "10,10,8,8", "--in-place"])
+        capsys.readouterr()
+        if code != 0:
+            assert original.read_bytes() == path.read_bytes(), name
