@@ -8,8 +8,9 @@ time window to stay usable on their own:
   message before ``start`` is kept, at its own time, so the cut log is still calibrated;
 - **PTZ encoders**: readings up to 1 s either side of the range are kept, so frames at its edges
   still have a reading on each side to interpolate between (as ``replay --start`` reads them);
-- **marks** (``/annotations/init``): frame numbers count images from the log's start, so they are
-  renumbered to the cut log's images; marks on frames outside it are dropped.
+- **marks** (``/annotations/init``) and **ground truth**: frame numbers count images from the log's
+  start, so they are renumbered to the cut log's images; marks on frames outside it are dropped (and
+  counted), wherever in time the mark message itself was written.
 """
 
 from __future__ import annotations
@@ -81,16 +82,22 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
                 inside = lo - ENCODER_MARGIN_NS <= t < hi + ENCODER_MARGIN_NS
             elif name in STATE_SCHEMAS and t < lo:
                 inside = last_state.get(channel.id) == (t, msg.sequence)
+            elif name == "trackreplay.InitAnnotations":
+                # Marks are kept by the frames they mark, not by when they were written (annotate
+                # writes them at the first frame's time): renumbered below, at the cut's start at the earliest
+                inside, t = True, min(max(t, lo), hi - 1)
             else:
                 inside = lo <= t < hi
             if not inside:
                 continue
             data = msg.data
-            if channel.topic == T.ANNOTATIONS_INIT and name == "trackreplay.InitAnnotations":
+            if name == "trackreplay.InitAnnotations":
                 data, dropped = _renumber_marks(data, first_image or 0, kept_images)
                 report.marks_dropped += dropped
                 if data is None:
                     continue
+            elif name == "trackreplay.GroundTruthFrame" and first_image:
+                data = _renumber_truth(data, first_image)  # it counts frames as marks do
             writer.add_message(copy.channel_id(schema, channel), t, data, msg.publish_time, msg.sequence)
             report.kept[channel.topic] = report.kept.get(channel.topic, 0) + 1
         copy.copy_attachments_and_metadata(reader)
@@ -111,3 +118,10 @@ def _renumber_marks(data: bytes, first: int, count: int) -> tuple[bytes | None, 
         region.CopyFrom(r)
         region.frame = r.frame - first
     return out.SerializeToString(), dropped
+
+
+def _renumber_truth(data: bytes, first: int) -> bytes:
+    pb = m.GroundTruthFrame()
+    pb.ParseFromString(data)
+    pb.frame -= first
+    return pb.SerializeToString()

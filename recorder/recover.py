@@ -21,6 +21,8 @@ from mcap.writer import CompressionType, Writer
 
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.mcap_scan import MCAP_MAGIC, ChunkRecords, Damage, open_mapped, scan, summary_definitions
+from trackreplay.schemas import messages as m
+from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import LogError
 
 # `trackreplay recover` exit statuses
@@ -36,6 +38,7 @@ class RecoverReport:
     metadata_saved: int = 0
     damage: tuple[Damage, ...] = field(default_factory=tuple)  # byte ranges skipped
     messages_orphaned: int = 0  # intact messages whose channel definition was lost with no summary to recover it
+    marks_dropped: int = 0  # marks (and ground-truth frames) whose image was lost with a damaged chunk
 
     @property
     def exit_code(self) -> int:
@@ -72,8 +75,14 @@ def recover(broken: str | Path, out: str | Path) -> RecoverReport:
 class _Copy:
     """The output writer and the id maps from source to output schemas and channels."""
 
-    def __init__(self, dst: BinaryIO, summary: tuple[dict[int, Schema], dict[int, Channel]]) -> None:
+    def __init__(self, dst: BinaryIO, summary: tuple[dict[int, Schema], dict[int, Channel]],
+                 frames: dict[int, int] | None = None) -> None:
         self.writer = Writer(dst, compression=CompressionType.ZSTD)
+        # With images lost: each surviving image's log time -> its new number, for the records that
+        # count frames (marks, ground truth); None when nothing was lost (every record as it was)
+        self.frames = frames
+        self.topics: dict[int, str] = {}
+        self.dropped = 0
         self.summary_schemas, self.summary_channels = summary
         self.started = False
         self.schemas: dict[int, int] = {}
@@ -96,6 +105,7 @@ class _Copy:
                 if lost is None:
                     return None  # its schema was lost: the channel's messages cannot be decoded
                 self.schema(lost)
+            self.topics[record.id] = record.topic
             self.channels[record.id] = self.writer.register_channel(
                 record.topic, record.message_encoding, self.schemas.get(record.schema_id, 0), dict(record.metadata))
         return self.channels[record.id]
@@ -107,8 +117,37 @@ class _Copy:
         if cid is None:
             self.orphaned += 1
             return
-        self.writer.add_message(cid, record.log_time, record.data, record.publish_time, record.sequence)
+        data = record.data
+        if self.frames is not None and self.topics.get(record.channel_id) in (T.ANNOTATIONS_INIT, T.GROUNDTRUTH):
+            data = self._renumbered(self.topics[record.channel_id], data)
+            if data is None:
+                return
+        self.writer.add_message(cid, record.log_time, data, record.publish_time, record.sequence)
         self.messages += 1
+
+    def _renumbered(self, topic: str, data: bytes) -> bytes | None:
+        """Marks and ground truth count images from the log's start: after lost images, each is
+        renumbered to the image at its own time, and dropped when that image was lost."""
+        assert self.frames is not None
+        if topic == T.GROUNDTRUTH:
+            gt = m.GroundTruthFrame()
+            gt.ParseFromString(data)
+            if gt.t_ns not in self.frames:
+                self.dropped += 1
+                return None
+            gt.frame = self.frames[gt.t_ns]
+            return gt.SerializeToString()
+        marks = m.InitAnnotations()
+        marks.ParseFromString(data)
+        out = m.InitAnnotations(timestamp=marks.timestamp)
+        for region in marks.regions:
+            if region.t_ns not in self.frames:
+                self.dropped += 1
+                continue
+            kept = out.regions.add()
+            kept.CopyFrom(region)
+            kept.frame = self.frames[region.t_ns]
+        return out.SerializeToString() if out.regions else None
 
     def add(self, record) -> None:
         if isinstance(record, Header):
@@ -129,8 +168,28 @@ class _Copy:
             self.metadata += 1
 
 
+def _surviving_frames(data, summary: tuple[dict[int, Schema], dict[int, Channel]]) -> dict[int, int] | None:
+    """Each intact image's log time -> its number among the intact images, when a damaged stretch
+    lost any record; None for an intact file."""
+    channels = {cid: ch.topic for cid, ch in summary[1].items()}
+    times: list[int] = []
+    damaged = False
+    for item in scan(data):
+        if isinstance(item, Damage):
+            damaged = True
+        for record in item.records if isinstance(item, ChunkRecords) else (item,):
+            if isinstance(record, Channel):
+                channels[record.id] = record.topic
+            elif isinstance(record, Message) and channels.get(record.channel_id) == T.CAMERA_IMAGE:
+                times.append(record.log_time)
+    if not damaged:
+        return None
+    return {t: k for k, t in enumerate(sorted(times))}
+
+
 def _rewrite(data, dst: BinaryIO) -> RecoverReport:
-    copy = _Copy(dst, summary_definitions(data))
+    summary = summary_definitions(data)
+    copy = _Copy(dst, summary, _surviving_frames(data, summary))
     damage: list[Damage] = []
     ended = False
     for item in scan(data):
@@ -154,4 +213,8 @@ def _rewrite(data, dst: BinaryIO) -> RecoverReport:
         error = f"the file ends without a footer after byte {len(data)}"
     if copy.orphaned:
         error = (error + "; " if error else "") + f"{copy.orphaned} intact message(s) dropped: their channel definition was lost"
-    return RecoverReport(copy.messages, error is None, error, copy.attachments, copy.metadata, tuple(damage), copy.orphaned)
+    if copy.dropped:
+        error = (error + "; " if error else "") + (f"{copy.dropped} mark(s) or ground-truth frame(s) dropped with their "
+                                                   "lost images (the rest renumbered to the images kept)")
+    return RecoverReport(copy.messages, error is None, error, copy.attachments, copy.metadata, tuple(damage), copy.orphaned,
+                         copy.dropped)

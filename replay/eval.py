@@ -73,12 +73,27 @@ def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(union > 0, inter / np.where(union > 0, union, 1), 0.0)
 
 
+def _same_frames(track: pl.DataFrame, obj: pl.DataFrame) -> None:
+    """The trajectory and the ground truth number frames alike: a frame's time agrees in both (a log
+    cut or recovered by a tool that did not renumber would compare each estimate with another moment)."""
+    if "t_ns" not in track.columns or "t_ns" not in obj.columns:
+        return
+    both = track.select("frame", "t_ns").unique("frame").join(obj.select("frame", pl.col("t_ns").alias("gt_t_ns")).unique("frame"),
+                                                             on="frame").filter(pl.col("t_ns") != pl.col("gt_t_ns")).sort("frame")
+    if both.height:
+        f, t, g = both.row(0)
+        raise TrackreplayError(f"frame {f} is at t={t} ns in the trajectory but at t={g} ns in the ground truth "
+                               f"({both.height} frame(s) disagree): they come from different logs, or the log was cut or "
+                               "recovered without renumbering its ground truth")
+
+
 def per_frame(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> pl.DataFrame:
     """One row per ground-truth frame with the estimate beside it and the errors."""
     track = _pick_track(traj, track_id)
     obj = _pick_gt(gt, gt_id)
     est = track.select("frame", "tracker", "track_id", "status",
                        *(pl.col(c).alias(f"est_{c}") for c in ("x", "y", "w", "h", "vx", "vy")))
+    _same_frames(track, obj)
     joined = obj.select("frame", "id", "visible", "x", "y", "w", "h", "vx", "vy").join(est, on="frame", how="left")
     return joined.with_columns(
         (((pl.col("est_x") - pl.col("x")) ** 2 + (pl.col("est_y") - pl.col("y")) ** 2).sqrt()).alias("centre_error"),

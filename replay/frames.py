@@ -312,6 +312,11 @@ def iter_frames(
         return image, encoded, encoding
 
     def bundle(left: LogMessage, right: LogMessage | None) -> Frame:
+        for region in hints_by_frame.get(left.index, ()):
+            if region.t_ns and region.t_ns != left.log_time:  # a mark counts frames; its time says which image it saw
+                raise LogError(f"{reader.path}: topic {topics.hints} marks frame {region.frame} at t={region.t_ns} ns, but "
+                               f"frame {region.frame} of {topics.image} is at t={left.log_time} ns: the log lost or gained "
+                               "images after it was marked (a tool that did not renumber its marks); mark it again")
         image, encoded, encoding = pixels(left)
         right_image = pixels(right)[0] if right is not None else None
         pose = ptz.at(left.log_time) if ptz is not None else None

@@ -197,3 +197,38 @@ def test_damage_in_the_summary_is_reported_and_every_message_kept(intact, tmp_pa
     report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
     assert not report.complete and report.exit_code == 1 and report.messages_saved == 60
     assert messages_of(tmp_path / "out.mcap") == messages_of(intact)
+
+
+def test_marks_and_ground_truth_are_renumbered_past_lost_images(tmp_path):
+    """Frames count images from the log's start: after a damaged chunk drops images, a mark (and a
+    ground-truth frame) names the image at its own time in the recovered log, or is dropped with it."""
+    from trackreplay.replay.frames import read_hints
+    from trackreplay.replay.groundtruth import read_groundtruth
+    from trackreplay.replay.reader import LogReader
+    from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb
+
+    path = tmp_path / "marked.mcap"
+    rng = np.random.default_rng(1)
+    times = [i * 10_000_000 for i in range(30)]
+    with LogWriter(path, flush_every=7) as log:
+        for i, t in enumerate(times):
+            log.write("/camera/image", image_message(rng.integers(0, 255, (24, 32, 3), dtype=np.uint8), "png", t), t)
+            obj = GroundTruthObject(1, float(i), 5.0, 2.0, 2.0)
+            log.write("/groundtruth/objects", GroundTruthFrame(i, t, (obj,)).to_pb(), t)
+        marks = [InitRegion(k, times[k], 10.0, 10.0, 4.0, 4.0, "target") for k in range(30)]  # one on every frame
+        log.write("/annotations/init", init_annotations_pb(marks, times[0]), times[0])
+    chunks = complete_chunk_counts(path)
+    data = bytearray(path.read_bytes())
+    data[(chunks[2][0] + chunks[3][0]) // 2] ^= 0x5A  # inside the fourth chunk: frames in the middle are lost
+    (tmp_path / "bad.mcap").write_bytes(bytes(data))
+    report = recover(tmp_path / "bad.mcap", tmp_path / "out.mcap")
+    out = LogReader(tmp_path / "out.mcap")
+    kept_times = [m.log_time for m in out.messages(["/camera/image"])]
+    assert 0 < len(kept_times) < 30
+    assert not report.complete and report.marks_dropped == 30 - len(kept_times)  # the marks on the lost images
+    hints = read_hints(out, "/annotations/init")
+    assert [(h.frame, h.t_ns) for h in hints] == [(k, t) for k, t in enumerate(kept_times)]
+    gt = read_groundtruth(out)
+    assert gt.height > 20 and set(gt["t_ns"]) <= set(kept_times)  # some truth went with its own damaged chunk
+    assert gt["frame"].to_list() == [kept_times.index(t) for t in gt["t_ns"]]
+    assert gt["x"].to_list() == [float(times.index(t)) for t in gt["t_ns"]]  # each truth with its own image

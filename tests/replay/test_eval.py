@@ -30,3 +30,15 @@ def test_metrics_against_known_offsets() -> None:
     expected_iou = (7 * 6) / (200 - 42)
     assert summary.iou_mean == pytest.approx(expected_iou * 0.8)
     assert frames.height == 10
+
+
+def test_frames_at_different_times_are_refused() -> None:
+    """Frame k of the trajectory and of the truth must be the same moment (e.g. not a log cut or
+    recovered without renumbering its ground truth)."""
+    from trackreplay.schemas.errors import TrackreplayError
+
+    gt = _gt(10)
+    rows = [state_row("flow", f, f + (5 if f >= 4 else 0), TrackState(1, x=10.0 + f, y=20.0, w=10.0, h=10.0))
+            for f in range(8)]
+    with pytest.raises(TrackreplayError, match="frame 4 is at t=9 ns in the trajectory but at t=4 ns"):
+        evaluate(trajectory_table(rows), gt)

@@ -44,3 +44,27 @@ def test_filter_topics_and_refusals(tmp_path: Path, capsys) -> None:
     assert topics["/camera/image"].count == LogReader(src).topics()["/camera/image"].count
     assert main(["filter", str(src), str(tmp_path / "x.mcap"), "--topic", "/nope"]) == 2
     assert "has no topic /nope" in capsys.readouterr().err
+
+
+def test_a_mark_written_at_the_start_and_the_ground_truth_follow_a_cut(tmp_path: Path, capsys) -> None:
+    """`annotate` writes its marks at the first frame's time: a cut from --start keeps a mark whose frame
+    is inside the range (renumbered), and the ground truth is renumbered alike, so `eval` compares
+    each estimate with the same moment's truth."""
+    src = GOLDEN / "flow-sim1-24f.mcap"
+    plain, marked, cut = tmp_path / "plain.mcap", tmp_path / "marked.mcap", tmp_path / "cut.mcap"
+    assert main(["filter", str(src), str(plain), "--topic", "/camera/image", "--topic", "/groundtruth/objects"]) == 0
+    assert main(["annotate", str(plain), "--frame", "12", "--box", "100,100,20,20", "--out", str(marked)]) == 0
+    assert main(["filter", str(marked), str(cut), "--start", "0.2"]) == 0  # frame 12 is at 0.4 s, frame 6 at 0.2 s
+    from trackreplay.replay.frames import read_hints
+    from trackreplay.replay.groundtruth import read_groundtruth
+
+    (mark,) = read_hints(LogReader(cut), "/annotations/init")
+    (before,) = read_hints(LogReader(marked), "/annotations/init")
+    assert (mark.frame, mark.t_ns, mark.x) == (before.frame - 6, before.t_ns, before.x)
+    gt_cut, gt_src = read_groundtruth(LogReader(cut)), read_groundtruth(LogReader(src))
+    assert gt_cut["frame"].min() == 0
+    assert gt_cut.drop("frame").equals(gt_src.filter(pl.col("frame") >= 6).drop("frame"))
+    traj = tmp_path / "traj.csv"
+    assert main(["replay", str(cut), "--tracker", "flow", "--quiet", "--export", str(traj)]) == 0
+    capsys.readouterr()
+    assert main(["eval", str(traj), str(cut)]) == 0

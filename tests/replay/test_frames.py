@@ -227,3 +227,18 @@ def test_messages_at_equals_the_same_messages_of_a_full_iteration(flow_sim1: Pat
         assert [(m.index, m.log_time, m.sequence, bytes(m.data), m.lost is None) for m in got] == \
             [(m.index, m.log_time, m.sequence, bytes(m.data), m.lost is None) for m in expected]
     assert any(m.lost for m in LogReader(bad).messages_at(topic, range(len(every))))
+
+
+def test_a_mark_for_another_moment_is_refused(tmp_path: Path) -> None:
+    """A mark counts frames and records its frame's time: when the two disagree (the log lost or
+    gained images after it was marked), replay says so instead of starting on the wrong image."""
+    from trackreplay.schemas.records import InitRegion, init_annotations_pb
+
+    def write(log):
+        for t in (0, 10, 20):
+            log.write(T.CAMERA_IMAGE, image_message(_img(t), "png", t), t)
+        log.write(T.ANNOTATIONS_INIT, init_annotations_pb([InitRegion(1, 20, 4.0, 4.0, 2.0, 2.0, "target")], 0), 0)
+
+    reader = _log_with(tmp_path, "shifted.mcap", write)
+    with pytest.raises(LogError, match="marks frame 1 at t=20 ns, but frame 1 of /camera/image is at t=10 ns"):
+        list(iter_frames(reader, FrameTopics.detect(reader)))
