@@ -10,6 +10,7 @@ become tuples so configs stay hashable.
 from __future__ import annotations
 
 import dataclasses
+import math
 import tomllib
 import types
 import typing
@@ -62,6 +63,15 @@ def _scalar_mismatch(hint: Any, value: Any) -> str | None:
     return None if fits else SCALARS[want]
 
 
+def _not_finite(value: Any) -> float | None:
+    """The first nan or infinity in a number or a list of them (None: none)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return value
+    if isinstance(value, list | tuple):
+        return next((v for v in value if isinstance(v, float) and not math.isfinite(v)), None)
+    return None
+
+
 def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "config", prefix: str = "") -> C:
     """Build ``cls`` from ``values`` (nested mappings for nested config dataclasses).
 
@@ -82,6 +92,8 @@ def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "con
     for key, value in values.items():
         if (want := _scalar_mismatch(hints.get(key), value)) is not None:
             raise TrackreplayError(f"{source}: {_join(prefix, key)} must be {want}, not {value!r}")
+        if (bad := _not_finite(value)) is not None:  # no parameter of ours means anything at nan or inf
+            raise TrackreplayError(f"{source}: {_join(prefix, key)} must be a finite number, not {bad!r}")
         inner = _dataclass_of(hints.get(key))
         if inner is None or value is None or isinstance(value, inner):
             clean[key] = _tuples(value)

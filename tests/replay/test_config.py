@@ -118,3 +118,53 @@ def test_a_value_of_the_wrong_type_names_its_key(values, message) -> None:
 
 def test_an_integer_is_a_number() -> None:
     assert config_from_dict(Nested, {"particles": {"sigma_px": 6}}, "cfg").particles.sigma_px == 6
+
+
+def _numeric_paths(cls, prefix=()):
+    """Every number (or list of numbers) key of a config dataclass, nested tables followed."""
+    import dataclasses
+    import typing
+
+    hints = typing.get_type_hints(cls)
+    for f in dataclasses.fields(cls):
+        default = f.default_factory() if f.default is dataclasses.MISSING else f.default
+        if dataclasses.is_dataclass(default):
+            yield from _numeric_paths(type(default), prefix + (f.name,))
+        elif isinstance(default, float) or (isinstance(default, tuple) and default and isinstance(default[0], float)):
+            yield prefix + (f.name,), default, hints[f.name]
+
+
+def _nested(path, value):
+    out = value
+    for key in reversed(path):
+        out = {key: out}
+    return out
+
+
+@pytest.mark.parametrize("tracker", ["flow", "golf", "colorpf", "groups"])
+def test_no_float_key_takes_nan_or_infinity(tracker) -> None:
+    """A review found nan/inf passing every check and crashing replays deep inside numpy/OpenCV (exit
+    70, one a segfault): each float key of every tracker now refuses them by name."""
+    from trackreplay.replay.registry import get
+
+    cls = get(tracker).config_cls
+    paths = list(_numeric_paths(cls))
+    assert len(paths) > 5
+    for path, default, _ in paths:
+        for bad in (float("nan"), float("inf"), float("-inf")):
+            value = tuple(bad for _ in default) if isinstance(default, tuple) else bad
+            with pytest.raises(TrackreplayError, match=f"{'.'.join(path)} must be a finite number"):
+                config_from_dict(cls, _nested(path, value), "c.toml")
+
+
+@pytest.mark.parametrize("tracker,values", [
+    ("golf", {"lut": {"hist_bins": -1}}), ("golf", {"reinit": {"parabola_history": -1}}),
+    ("golf", {"blobs": {"shape_area_px": -1.0}}), ("groups", {"klt": {"quality": -1.0}}),
+    ("groups", {"klt": {"min_distance": 1e12}}), ("groups", {"klt": {"win": -1}}), ("groups", {"klt": {"levels": -1}}),
+    ("groups", {"background": {"frames": -1}}),
+])
+def test_out_of_range_values_found_by_review_are_refused(tracker, values) -> None:
+    from trackreplay.replay.registry import get
+
+    with pytest.raises(TrackreplayError, match="c.toml: invalid"):
+        config_from_dict(get(tracker).config_cls, values, "c.toml")

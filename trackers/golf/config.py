@@ -122,6 +122,10 @@ class LutConfig:
             raise ValueError("lut.bin must divide 256")
         if self.sky_close_px < 0:
             raise ValueError("lut.sky_close_px must be >= 0 (0: the sky silhouette as the LUT gives it)")
+        if self.hist_bins < 2 or self.background_stride < 1 or self.learn_max < 0:
+            raise ValueError("lut.hist_bins must be >= 2, lut.background_stride >= 1 and lut.learn_max >= 0")
+        if min(self.smooth_bins, self.min_count, self.background_margin, self.context) < 0 or not 0 < self.core <= 1:
+            raise ValueError("lut.smooth_bins, min_count, background_margin and context must be >= 0, 0 < lut.core <= 1")
 
 
 @dataclass(frozen=True)
@@ -176,6 +180,9 @@ class BlobConfig:
             raise ValueError("blobs.area_tolerance must exceed 1")
         if not 0 < self.target_rate <= 1:
             raise ValueError("blobs.target_rate must be in (0, 1]")
+        if min(self.min_area_px, self.area_slack_px, self.shape_area_px, self.circularity_tolerance) < 0 or self.max_blobs < 1:
+            raise ValueError("blobs.min_area_px, area_slack_px, shape_area_px and circularity_tolerance must be >= 0, "
+                             "blobs.max_blobs >= 1")
 
 
 @dataclass(frozen=True)
@@ -297,6 +304,8 @@ class ReinitConfig:
     def __post_init__(self) -> None:
         if self.after_landing_frames < 0:
             raise ValueError("reinit.after_landing_frames must be >= 0")
+        if self.parabola_history < 3 or self.parabola_misses < 1 or self.min_sigma_px <= 0:
+            raise ValueError("reinit.parabola_history must be >= 3 (a parabola), parabola_misses >= 1, min_sigma_px > 0")
         if self.lost not in ("centre", "stay", "auto"):
             raise ValueError("reinit.lost must be 'centre', 'stay' or 'auto'")
 

@@ -38,6 +38,10 @@ class BackgroundConfig:
     threshold: float = 22.0  # grey levels, largest channel difference
     open_px: int = 3  # opening that drops isolated noisy pixels
 
+    def __post_init__(self) -> None:
+        if self.frames < 1 or self.open_px < 0:
+            raise ValueError("background.frames must be >= 1 and background.open_px >= 0")
+
 
 @dataclass(frozen=True)
 class StereoConfig:
@@ -60,6 +64,13 @@ class KltConfig:
     levels: int = 2
     forward_backward_px: float = 0.7  # LK there and back must return within this
     window: int = 6  # frames a track must span to be an observation point (paper: "Time Window")
+
+    def __post_init__(self) -> None:
+        # OpenCV's corner detector works in int pixels: an astronomically large min_distance crashed it
+        if self.max_corners < 1 or not 0 < self.quality < 1 or not 0 <= self.min_distance <= 10_000:
+            raise ValueError("klt.max_corners must be >= 1, 0 < klt.quality < 1 and 0 <= klt.min_distance <= 10000 px")
+        if self.win < 3 or self.levels < 0 or self.forward_backward_px <= 0 or self.window < 1:
+            raise ValueError("klt.win must be >= 3, klt.levels >= 0, klt.forward_backward_px > 0 and klt.window >= 1")
 
 
 @dataclass(frozen=True)
