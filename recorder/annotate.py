@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,6 +38,8 @@ def parse_box(text: str, frame: int, label: str) -> Mark:
         x, y, w, h = (float(v) for v in text.split(","))
     except ValueError:
         raise SourceError(f"box {text!r} must be four numbers x,y,w,h (top-left corner, width, height)") from None
+    if not all(math.isfinite(v) for v in (x, y, w, h)):
+        raise SourceError(f"box {text!r} must be four finite numbers x,y,w,h (nan or inf is no place in an image)")
     if w <= 0 or h <= 0:
         raise SourceError(f"box {text!r} has a non-positive width or height")
     return Mark(frame, x, y, w, h, label)

@@ -39,6 +39,7 @@ from trackreplay.replay.reader import LogReader
 from trackreplay.replay.trajectory import state_row, trajectory_table
 from trackreplay.trackers.base import Tracker, TrackState
 from trackreplay.trackers.frame import Frame
+from trackreplay.schemas.errors import TrackreplayError
 
 
 def tracker_rng(seed: int, tracker: str) -> np.random.Generator:
@@ -142,8 +143,11 @@ class ReplaySteps(Iterator[ReplayStep]):
         reader = LogReader(req.log)
         topics = FrameTopics.detect(reader, req.image_topic, req.stereo_topics)
         reader.require(topics.image)
-        t0, _ = reader.time_range()
+        t0, t1 = reader.time_range()
         start_ns = None if req.start_s is None else t0 + int(round(req.start_s * 1e9))
+        if start_ns is not None and start_ns > t1:  # nothing to replay is a mistake, not an empty success
+            raise TrackreplayError(f"{req.log}: --start {req.start_s:g} s is after the log's end "
+                                   f"({(t1 - t0) / 1e9:.3f} s from its first message)")
         end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
         check_labels({r.label for r in read_hints(reader, topics.hints, topics.image)}, req.tracker,

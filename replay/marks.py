@@ -28,7 +28,7 @@ def check_labels(labels: Iterable[str], tracker: str, tracker_cls, where: str) -
 def check_inside(boxes: Iterable[tuple[int, float, float, float, float]], width: int, height: int, where: str) -> None:
     """Each ``(frame, x, y, w, h)`` (top-left corner and size, pixels) lies inside a ``width`` x ``height`` image."""
     for frame, x, y, w, h in boxes:
-        if x < 0 or y < 0 or x + w > width or y + h > height:
+        if not (0 <= x and 0 <= y and x + w <= width and y + h <= height):  # written so that nan fails too
             raise SourceError(f"{where}: the box {x:g},{y:g},{w:g},{h:g} on frame {frame} is not inside the "
                               f"{width}x{height} image (x from 0 to {width}, y from 0 to {height}, top-left corner "
                               f"and size; `trackreplay frame` shows the pixel grid)")

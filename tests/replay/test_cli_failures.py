@@ -139,3 +139,28 @@ def test_impossible_values_are_refused_when_parsed(argv, message, capsys) -> Non
 def test_an_empty_time_range_is_refused(short_sim: Path, capsys) -> None:
     assert main(["replay", str(short_sim), "--start", "5", "--end", "2", "--quiet"]) == 2
     assert capsys.readouterr().err.strip() == "trackreplay: error: --end 2 must be after --start 5"
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["record", "OUT", "--images", "IMAGES", "--fps", "inf", "--quiet"], "--fps must be positive and finite"),
+    (["record", "OUT", "--images", "IMAGES", "--fps", "30", "--t0", "99999999999999999999", "--quiet"],
+     "the first frame time must be at most 2^62 ns"),
+    (["annotate", "LOG", "--frame", "0", "--box", "10,10,nan,10", "--out", "OUT"], "must be four finite numbers"),
+    (["replay", "LOG", "--start", "100", "--quiet"], "--start 100 s is after the log's end"),
+])
+def test_values_a_review_got_through_are_refused(argv, message, short_sim: Path, tmp_path: Path, capsys) -> None:
+    """Each once ended in exit 0 with an unusable output, or in an internal error: now exit 2, one
+    sentence, nothing written."""
+    images = tmp_path / "images"
+    images.mkdir()
+    import cv2
+    import numpy as np
+
+    for k in range(3):
+        cv2.imwrite(str(images / f"{k:03d}.png"), np.full((16, 16, 3), 40 * k, np.uint8))
+    out = tmp_path / "out.mcap"
+    subst = {"OUT": str(out), "IMAGES": str(images), "LOG": str(short_sim)}
+    assert main([subst.get(a, a) for a in argv]) == 2
+    [line] = our_lines(capsys.readouterr().err)
+    assert message in line
+    assert not out.exists() and not Path(str(out) + ".partial").exists()
