@@ -19,12 +19,33 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+def _replayed_from(table, times: dict[int, int], log: Path) -> None:
+    """Every row's frame is that frame of ``log`` (the same time): a trajectory of another log would
+    be smoothed with this one's frame times and camera poses and look right."""
+    import polars as pl
+
+    from trackreplay.schemas.errors import TrackreplayError
+
+    if "t_ns" not in table.columns or table.is_empty():
+        return
+    rows = table.select("frame", "t_ns").unique().sort("frame")
+    logged = pl.DataFrame({"frame": list(times), "log_t_ns": list(times.values())},
+                          schema={"frame": rows.schema["frame"], "log_t_ns": pl.Int64})
+    bad = rows.join(logged, on="frame", how="left").filter(pl.col("log_t_ns").is_null() | (pl.col("t_ns") != pl.col("log_t_ns")))
+    if bad.height:
+        f, t, lt = bad.row(0)
+        where = f"at t={lt} ns" if lt is not None else "missing"
+        raise TrackreplayError(f"the trajectory's frame {f} (t={t} ns) is {where} in {log} ({bad.height} frame(s) "
+                               "disagree): it was not replayed from this log")
+
+
 def smooth_and_report(table, log: Path, max_gap: int, observations=None):
     """Smooth ``table`` with the log's frame times and cameras (and the trackers' raw measurements,
     which only ``replay --smooth`` has); print one line per track."""
     from trackreplay.replay.smooth import SmoothConfig, log_context, smooth_trajectory
 
     times, cameras = log_context(log)
+    _replayed_from(table, times, log)
     out, fits = smooth_trajectory(table, SmoothConfig(max_gap=max_gap), frame_times=times, cameras=cameras,
                                   observations=observations)
     for f in fits:

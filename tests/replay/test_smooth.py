@@ -202,3 +202,17 @@ def test_golden_groups_log_smoothed_in_3d_from_its_points() -> None:
     assert rts.height >= obs.height - sum(f.outliers for f in fits)
     assert rts.select("VX", "VY", "VZ", "X_std", "Y_std", "Z_std").null_count().sum_horizontal().item() == 0
     assert (rts["Z_std"] > 0).all() and (rts["Z_std"] < 1.0).all()
+
+
+def test_a_trajectory_of_another_log_is_refused(tmp_path: Path, capsys) -> None:
+    """smooth takes frame times and camera poses from the log: a trajectory whose frames are at
+    other times there (replayed from another log) is refused instead of smoothed with them."""
+    log = Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap"
+    traj, other = tmp_path / "t.parquet", tmp_path / "other.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--quiet", "--export", str(traj)]) == 0
+    assert main(["smooth", str(traj), str(log), "--out", str(tmp_path / "s.parquet")]) == 0
+    write_trajectory(read_trajectory(traj).with_columns(pl.col("t_ns") + 1_000_000), other)
+    capsys.readouterr()
+    assert main(["smooth", str(other), str(log), "--out", str(tmp_path / "s2.parquet")]) == 2
+    assert "it was not replayed from this log" in capsys.readouterr().err
+    assert not (tmp_path / "s2.parquet").exists()
