@@ -182,7 +182,7 @@ def _surviving_frames(data, summary: tuple[dict[int, Schema], dict[int, Channel]
                 channels[record.id] = record.topic
             elif isinstance(record, Message) and channels.get(record.channel_id) == T.CAMERA_IMAGE:
                 times.append(record.log_time)
-    if not damaged:
+    if not damaged or not times:  # (no /camera/image: marks counting another topic's frames stay as they are)
         return None
     return {t: k for k, t in enumerate(sorted(times))}
 
