@@ -11,7 +11,7 @@ from scipy.interpolate import CubicSpline
 
 from trackreplay.recorder.atomic import partial_path
 from trackreplay.schemas.errors import OutputError, TrackreplayError
-from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order
+from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order, interpolated_times
 
 METHODS = ("linear", "cubic")
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
@@ -42,9 +42,10 @@ def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
     full = full.with_columns(
         pl.lit(head["tracker"]).alias("tracker"),
         pl.lit(head["track_id"], dtype=pl.Int64).alias("track_id"),
-        pl.col("t_ns").cast(pl.Float64).interpolate().round().cast(pl.Int64),
         pl.col("status").fill_null("lost"),
     )
+    full = full.with_columns(pl.Series("t_ns", interpolated_times(full["frame"].to_numpy(), full["t_ns"].fill_null(0).to_numpy(),
+                                                                  full["t_ns"].is_not_null().to_numpy()), dtype=pl.Int64))
     x = full["x"].to_numpy().astype(float)
     missing = np.isnan(x) | (full["status"].to_numpy() == "lost")
     fill = np.zeros(missing.size, bool)

@@ -61,7 +61,7 @@ import numpy as np
 import polars as pl
 from filterpy.kalman import KalmanFilter
 
-from trackreplay.replay.trajectory import COLUMNS, SCHEMA
+from trackreplay.replay.trajectory import COLUMNS, SCHEMA, interpolated_times
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.geometry.ptz import PtzCamera
 
@@ -404,18 +404,20 @@ def _smooth_one(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int
 
 def _finish(full: pl.DataFrame, tracker: str, track_id: int, frame_times: Mapping[int, int] | None) -> pl.DataFrame:
     """Identity columns and the times of added frames (the log's frame times, else interpolated)."""
-    t = full["t_ns"].to_numpy().astype(float)
-    missing = ~np.isfinite(t)
-    if missing.any():
-        frames = full["frame"].to_numpy()
-        if frame_times:
-            t[missing] = [frame_times.get(int(k), np.nan) for k in frames[missing]]
-        t = _interp(frames.astype(float), t, ~np.isfinite(t))
+    frames = full["frame"].to_numpy()
+    known = full["t_ns"].is_not_null().to_numpy()
+    t = full["t_ns"].fill_null(0).to_numpy().astype(np.int64)
+    if frame_times and not known.all():  # (ints: float64 would round epoch times off their frames)
+        logged = [frame_times.get(int(k)) for k in frames]
+        for i in np.flatnonzero(~known):
+            if logged[i] is not None:
+                t[i], known[i] = logged[i], True
+    t = interpolated_times(frames, t, known)
     full = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items() if c not in full.columns))
     return full.with_columns(
         pl.lit(tracker).alias("tracker"),
         pl.lit(track_id, dtype=pl.Int64).alias("track_id"),
-        pl.Series("t_ns", np.round(t), dtype=pl.Float64).cast(pl.Int64),
+        pl.Series("t_ns", t, dtype=pl.Int64),
     ).select(SMOOTH_COLUMNS)
 
 

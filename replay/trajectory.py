@@ -23,6 +23,29 @@ SCHEMA: dict[str, pl.DataType] = {
 COLUMNS = tuple(SCHEMA)
 
 
+def interpolated_times(frames: np.ndarray, times: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """Log times (int64 ns) of ``frames`` where only ``known`` ones are given: those exactly, the others
+    linear in the frame number between their known neighbours, rounded to the ns, the ends held.
+    Integer arithmetic throughout: float64 has 53 bits, so epoch times (~1.7e18 ns) would lose their
+    last bits and no longer name their frames."""
+    t = np.where(known, np.asarray(times), 0).astype(np.int64)
+    f = np.asarray(frames, dtype=np.int64)
+    n = len(t)
+    if not known.any() or known.all():
+        return t
+    idx = np.arange(n)
+    prev = np.maximum.accumulate(np.where(known, idx, -1))
+    nxt = np.minimum.accumulate(np.where(known, idx, n)[::-1])[::-1]
+    inner = ~known & (prev >= 0) & (nxt < n)
+    a, b = prev[inner], nxt[inner]
+    num, den = (t[b] - t[a]) * (f[inner] - f[a]), f[b] - f[a]
+    t[inner] = t[a] + (2 * num + den) // (2 * den)  # rounded half up
+    head, tail = ~known & (prev < 0), ~known & (nxt >= n)
+    t[head] = t[nxt[head]]
+    t[tail] = t[prev[tail]]
+    return t
+
+
 def state_row(tracker: str, frame: int, t_ns: int, state: TrackState) -> tuple:
     return (tracker, state.track_id, frame, t_ns, *(getattr(state, c) for c in FLOAT_COLUMNS), state.status, state.confidence)
 

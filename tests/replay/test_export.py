@@ -98,3 +98,33 @@ def test_lost_state_with_a_position_is_refused_and_confidence_is_bounded() -> No
     with pytest.raises(ValueError, match="confidence"):
         TrackState(1, x=3.0, y=4.0, confidence=1.5)
     assert TrackState(1, status="lost", confidence=0.0).x is None
+
+
+def test_epoch_times_stay_exact_through_gap_filling_and_smoothing() -> None:
+    """Wall-clock log times (~1.7e18 ns) do not fit float64's 53 bits: a review found every row's
+    t_ns rounded by the gap filling (and smoothing), and eval then refusing the tool's own output."""
+    from trackreplay.replay.smooth import smooth_trajectory
+    from trackreplay.replay.trajectory import interpolated_times, state_row, trajectory_table
+    from trackreplay.trackers.base import TrackState
+
+    t0, step = 1_732_800_000_123_456_789, 33_333_333
+    times = {f: t0 + f * step + (f % 3) for f in range(12)}  # not a float64-representable run
+    rows = [state_row("flow", f, times[f], TrackState(1, x=10.0 + f, y=5.0, status="measured"))
+            for f in range(12) if f not in (4, 5, 6)]
+    filled = fill_gaps(trajectory_table(rows), "linear", max_gap=5)
+    got = dict(zip(filled["frame"].to_list(), filled["t_ns"].to_list()))
+    assert all(got[f] == times[f] for f in range(12) if f not in (4, 5, 6))
+    assert [got[f] for f in (4, 5, 6)] == [int(v) for v in interpolated_times(
+        np.arange(12), np.array([times.get(f, 0) for f in range(12)]), np.array([f not in (4, 5, 6) for f in range(12)]))[4:7]]
+    assert times[3] < got[4] < got[5] < got[6] < times[7]
+    smoothed, _ = smooth_trajectory(trajectory_table(rows), frame_times=times)
+    assert dict(zip(smoothed["frame"].to_list(), smoothed["t_ns"].to_list())) == times
+
+
+def test_interpolated_times_known_values() -> None:
+    from trackreplay.replay.trajectory import interpolated_times
+
+    t = interpolated_times(np.array([0, 1, 2, 3, 5]), np.array([0, 0, 10, 0, 0]), np.array([False, False, True, False, True]))
+    assert t.tolist() == [10, 10, 10, 7, 0]  # the start held at the first known; 10 - 10/3 = 6.67 -> 7
+    t = interpolated_times(np.array([0, 1, 2, 4]), np.array([100, 0, 0, 401]), np.array([True, False, False, True]))
+    assert t.tolist() == [100, 175, 251, 401]  # 100 + 301/4 = 175.25 -> 175, 100 + 602/4 = 250.5 -> 251 (half up)
