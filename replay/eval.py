@@ -55,6 +55,8 @@ def _pick_gt(gt: pl.DataFrame, gt_id: int | None) -> pl.DataFrame:
         raise TrackreplayError("the log's ground truth holds no objects")
     if gt_id is None:
         counts = gt.filter(pl.col("x").is_not_null()).group_by("id").len().sort(["len", "id"], descending=[True, False])
+        if counts.is_empty():
+            raise TrackreplayError("the log's ground truth places no object on any frame (every row marks it absent)")
         gt_id = int(counts["id"][0])
     obj = gt.filter(pl.col("id") == gt_id)
     if obj.is_empty():

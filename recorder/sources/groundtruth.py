@@ -124,6 +124,9 @@ def read_otb(path: Path) -> GroundTruthTable:
             if len(cells) != 4:
                 raise SourceError(f"{where}: expected x,y,w,h, got {len(cells)} values")
             x, y, w, h = (_float(c, n, where) for c, n in zip(cells, "xywh"))
+            if w < 0 or h < 0:  # (0 or nan: OTB's "target absent"; a negative size is no box at all)
+                raise SourceError(f"{where}: width and height must not be negative, got w={w:g}, h={h:g} "
+                                  "(0,0,0,0 or NaN marks a frame without the target)")
             if all(math.isfinite(a) for a in (x, y, w, h)) and w > 0 and h > 0:
                 obj = GroundTruthObject(id=OTB_ID, x=x + w / 2, y=y + h / 2, w=w, h=h, visible=True)
             else:

@@ -41,6 +41,13 @@ def test_otb_separators_and_absent_target(tmp_path):
     assert table.objects_at(5) is None
 
 
+def test_otb_negative_size_names_the_line(tmp_path):
+    gt = tmp_path / "groundtruth_rect.txt"
+    gt.write_text("10,20,30,40\n10,20,-30,40\n")
+    with pytest.raises(SourceError, match=r"groundtruth_rect.txt:2: width and height must not be negative"):
+        read_groundtruth(gt)
+
+
 def test_format_detection_by_columns(tmp_path):
     otb = tmp_path / "boxes.txt"
     otb.write_text("\n1 2 3 4\n")

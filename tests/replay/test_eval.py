@@ -42,3 +42,14 @@ def test_frames_at_different_times_are_refused() -> None:
             for f in range(8)]
     with pytest.raises(TrackreplayError, match="frame 4 is at t=9 ns in the trajectory but at t=4 ns"):
         evaluate(trajectory_table(rows), gt)
+
+
+def test_truth_that_places_nothing_is_one_sentence() -> None:
+    """OTB's 0,0,0,0 rows mark the target absent: a file of only those once crashed eval (IndexError)."""
+    from trackreplay.schemas.errors import TrackreplayError
+
+    rows = [(f, f, 1, None, None, None, None, None, None, None, None, None, False, None) for f in range(3)]
+    gt = pl.DataFrame(rows, schema=GT_SCHEMA, orient="row")
+    traj = trajectory_table([state_row("flow", f, f, TrackState(1, x=1.0, y=1.0)) for f in range(3)])
+    with pytest.raises(TrackreplayError, match="places no object on any frame"):
+        evaluate(traj, gt)
