@@ -224,7 +224,10 @@ def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo
         else:
             rec.write(topics.camera_calibration, calib.left.to_pb(t, "camera"), t)
     if lens_table is not None:
-        rec.write(topics.lens_table, read_lens_table(lens_table, w, h).to_pb(t), t)
+        lens = read_lens_table(lens_table, w, h)
+        if (lens.width, lens.height) != (w, h):  # a replay would refuse the log (its camera model is for other pixels)
+            raise SourceError(f"the lens table {lens_table} is for {lens.width}x{lens.height} images but {first.where} is {w}x{h}")
+        rec.write(topics.lens_table, lens.to_pb(t), t)
     if plane is not None:
         if (plane.width, plane.height) != (w, h):
             raise SourceError(f"the ground plane is for {plane.width}x{plane.height} images but {first.where} is {w}x{h}")

@@ -24,6 +24,11 @@ from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 
 ENCODER_COLUMNS = ("t_ns", "pan", "tilt", "zoom", "focus")
 LENS_COLUMNS = ("zoom", "focus", "fx", "fy", "cx", "cy")
+# Bounds far past any real camera, so that a typo is an error at its line and not a crash in a replay
+MAX_PAN_DEG = 36_000.0
+MAX_LENS_VALUE = 1e7
+MAX_IMAGE_SIDE = 100_000
+MAX_POSITION_M = 1e7
 
 
 def _number(text: str, name: str, where: str) -> float:
@@ -59,6 +64,12 @@ def read_encoders(path: str | Path) -> Iterator[PtzReading]:
                 raise SourceError(f"{where}: t_ns {t_ns} is not after the previous reading's {prev}")
             prev = t_ns
             pan, tilt, zoom, focus = (_number(v, n, where) for v, n in zip(raw[1:], ENCODER_COLUMNS[1:]))
+            if not -90.0 <= tilt <= 90.0:  # past straight up or down the pan/tilt model would look backwards
+                raise SourceError(f"{where}: tilt {tilt:g} degrees is outside -90..90")
+            if not -MAX_PAN_DEG <= pan <= MAX_PAN_DEG:
+                raise SourceError(f"{where}: pan {pan:g} degrees is beyond {MAX_PAN_DEG:g} (100 turns)")
+            if zoom < 0 or abs(focus) > MAX_LENS_VALUE or zoom > MAX_LENS_VALUE:
+                raise SourceError(f"{where}: zoom {zoom:g} must be >= 0 and zoom, focus within {MAX_LENS_VALUE:g}")
             yield PtzReading(t_ns, pan, tilt, zoom, focus)
 
 
@@ -68,6 +79,8 @@ def _comment(text: str, table: dict[str, str], where: str) -> None:
         return  # a plain comment
     key, value = (s.strip() for s in body.split(":", 1))
     if key in ("width", "height", "camera_position"):
+        if key in table:
+            raise SourceError(f"{where}: {key} is given twice (also at {table[key + '@']})")
         table[key] = value
         table[key + "@"] = where
 
@@ -80,6 +93,7 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
     path = require_file(path, "lens table")
     header: dict[str, str] = {}
     entries: list[LensEntry] = []
+    seen: dict[tuple[float, float], str] = {}  # (zoom, focus) -> the line that has it
     with io.StringIO(read_text(path), newline="") as fh:
         for lineno, line in enumerate(fh, 1):
             where = f"{path}:{lineno}"
@@ -97,6 +111,11 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
             zoom, focus, fx, fy, cx, cy = (_number(v, n, where) for v, n in zip(cells, LENS_COLUMNS))
             if fx <= 0 or fy <= 0:
                 raise SourceError(f"{where}: fx and fy must be positive")
+            if max(fx, fy, abs(cx), abs(cy), abs(zoom), abs(focus)) > MAX_LENS_VALUE:
+                raise SourceError(f"{where}: a value beyond {MAX_LENS_VALUE:g} (fx, fy, cx, cy in pixels; zoom, focus)")
+            if (zoom, focus) in seen:
+                raise SourceError(f"{where}: zoom {zoom:g}, focus {focus:g} already has a row (line {seen[(zoom, focus)]})")
+            seen[(zoom, focus)] = where.rsplit(":", 1)[-1]
             entries.append(LensEntry(zoom, focus, fx, fy, cx, cy))
     if not entries:
         raise SourceError(f"lens table {path} has no zoom,focus,fx,fy,cx,cy rows")
@@ -105,8 +124,8 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
         if key not in header:
             return int(fallback or 0)
         value = _number(header[key], key, header[key + "@"])
-        if value <= 0 or value != int(value):
-            raise SourceError(f"{header[key + '@']}: {key} must be a positive integer")
+        if value <= 0 or value != int(value) or value > MAX_IMAGE_SIDE:
+            raise SourceError(f"{header[key + '@']}: {key} must be a positive integer up to {MAX_IMAGE_SIDE}")
         return int(value)
 
     position = (0.0, 0.0, 0.0)
@@ -116,4 +135,6 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
         if len(parts) != 3:
             raise SourceError(f"{where}: camera_position needs three numbers X, Y, Z")
         position = tuple(_number(p, "camera_position", where) for p in parts)  # type: ignore[assignment]
+        if max(abs(v) for v in position) > MAX_POSITION_M:
+            raise SourceError(f"{where}: camera_position beyond {MAX_POSITION_M:g} m from the origin")
     return LensTable(size("width", width), size("height", height), tuple(entries), position)

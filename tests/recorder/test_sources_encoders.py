@@ -48,6 +48,8 @@ def test_lens_table_size_from_comments(tmp_path):
     (["0.5,1,2,3,4"], r"enc\.csv:2: t_ns '0.5' is not an integer"),
     (["0,nan,2,3,4"], r"enc\.csv:2: pan 'nan' is not a finite number"),
     (["-5,1,2,3,4"], r"enc\.csv:2: t_ns -5 is negative"),
+    (["0,1,2,3,4", "10,1,500,3,4"], r"enc\.csv:3: tilt 500 degrees is outside -90..90"),  # (found by a review:
+    (["0,1e308,2,3,4"], r"enc\.csv:2: pan 1e\+308 degrees is beyond"),                  # lines of sight flipped)
 ])
 def test_bad_encoder_row_names_file_and_line(tmp_path, make_images, rows, match):
     enc = write_encoders(tmp_path / "enc.csv", rows)
@@ -75,9 +77,25 @@ def test_encoder_columns_in_any_order(tmp_path):
     ("# camera_position: 1, 2\n0,0,1,1,0,0\n", r"lens\.csv:1: camera_position needs three numbers"),
     ("0,0,0,1,0,0\n", r"lens\.csv:1: fx and fy must be positive"),
     ("# only comments\n", r"has no zoom,focus,fx,fy,cx,cy rows"),
+    ("# width: 5000000000\n0,0,1,1,0,0\n", r"lens\.csv:1: width must be a positive integer up to"),
+    ("0,0,1e308,1e308,0,0\n", r"lens\.csv:1: a value beyond"),
+    ("# camera_position: 1e308,1,1\n0,0,1,1,0,0\n", r"lens\.csv:1: camera_position beyond"),
+    ("0,0,1,1,0,0\n0,0,2,2,0,0\n", r"lens\.csv:2: zoom 0, focus 0 already has a row \(line 1\)"),
+    ("# width: 64\n# width: 32\n0,0,1,1,0,0\n", r"lens\.csv:2: width is given twice"),
 ])
 def test_bad_lens_table(tmp_path, text, match):
     lens = tmp_path / "lens.csv"
     lens.write_text(text)
     with pytest.raises(SourceError, match=match):
         read_lens_table(lens)
+
+
+def test_a_lens_table_for_other_images_is_refused_when_recording(tmp_path, make_images):
+    """A review recorded a 640x480 lens table with 320x240 frames (exit 0): the log could then not be replayed."""
+    lens = tmp_path / "lens.csv"
+    lens.write_text("# width: 640\n# height: 480\n0,0,500,500,320,240\n")
+    enc = write_encoders(tmp_path / "enc.csv", ["0,1,2,3,4"])
+    folder = make_images(tmp_path / "img", 2)
+    with pytest.raises(SourceError, match=r"lens table .*lens\.csv is for 640x480 images but .* is 64x48"):
+        record(tmp_path / "out.mcap", images=folder, fps=10, encoders=enc, lens_table=lens, quiet=True)
+    assert not (tmp_path / "out.mcap").exists()
