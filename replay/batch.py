@@ -136,8 +136,15 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
         summary["frame_digests"] = sidecar_path(out / "summary.json").name
         result.frame_digests.table().write_parquet(sidecar_path(out / "summary.json"))
         (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        if result.report.lost:  # as `replay` exits 7: the run finished, but not over the whole log
+            lost = [f.index for f in result.report.lost]
+            row.update(status="frames_lost", error=f"{len(lost)} frame(s) could not be read (frames {lost[0]}-{lost[-1]}: "
+                                                  f"{result.report.lost[0].reason}); `trackreplay recover` salvages the log")
         if _has_groundtruth(log):
-            row.update(_metrics(table, log))
+            metrics = _metrics(table, log)
+            if "error" in metrics and row["status"] == "ok":
+                row["error"] = metrics["error"]
+            row.update({k: v for k, v in metrics.items() if k != "error"})
         if shipped:
             row["files"] = {p.name: p.read_bytes() for p in out.iterdir() if p != log}
     except BaseException as err:  # noqa: BLE001 - a task reports, it never takes the batch down
@@ -161,8 +168,8 @@ def _metrics(table: pl.DataFrame, log: Path) -> dict[str, Any]:
 
     try:
         summary, _ = evaluate(table, read_groundtruth(LogReader(log)))
-    except TrackreplayError:  # e.g. a trajectory with no positioned rows: no metrics, not a failure
-        return {}
+    except TrackreplayError as err:  # e.g. a trajectory with no positioned rows: no metrics (why, in the row), not a failure
+        return {"error": f"no metrics: {err}"}
     values = summary.as_dict()
     return {m: values[m] for m in METRICS}
 
@@ -310,7 +317,7 @@ def format_table(table: pl.DataFrame) -> str:
     shown = table.with_columns(pl.col("log").map_elements(lambda s: Path(s).name, return_dtype=pl.String),
                                pl.col("digest").str.slice(0, 12),
                                pl.when(pl.col("status") == "ok").then(pl.lit("ok"))
-                               .otherwise(pl.lit("error: ") + pl.col("error")).alias("status"))
+                               .otherwise(pl.col("status").str.replace("_", " ") + pl.lit(": ") + pl.col("error")).alias("status"))
     drop = [c for c in ("task", "node", "task_seconds", "error") if c in shown.columns]
     drop += ["frames_lost"] if not (table["frames_lost"].fill_null(0) > 0).any() else []
     drop += [m for m in METRICS if shown[m].null_count() == shown.height]
@@ -318,7 +325,7 @@ def format_table(table: pl.DataFrame) -> str:
     with pl.Config(tbl_rows=-1, tbl_cols=-1, tbl_width_chars=250, fmt_str_lengths=70, tbl_hide_dataframe_shape=True,
                    tbl_hide_column_data_types=True, float_precision=3, tbl_formatting="ASCII_MARKDOWN"):
         text = str(shown)
-    failed = table.filter(pl.col("status") == "error")
+    failed = table.filter(pl.col("status") != "ok")
     for task, error in failed.select("task", "error").iter_rows():
         if len(error) > 62:  # cut short in the table: in full here
             text += f"\n{task}: error: {error}"

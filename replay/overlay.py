@@ -36,7 +36,11 @@ def trajectory_directions(traj: pl.DataFrame, track_id: int | None = None) -> pl
         raise TrackreplayError("the trajectory has no lines of sight (dx, dy, dz): was it tracked with PTZ encoders?")
     if track_id is None:
         track_id = int(rows.group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])["track_id"][0])
-    return rows.filter(pl.col("track_id") == track_id).sort("frame")
+    picked = rows.filter(pl.col("track_id") == track_id).sort("frame")
+    if picked.is_empty():
+        have = ", ".join(str(t) for t in sorted(rows["track_id"].unique().to_list()))
+        raise TrackreplayError(f"the trajectory has no track {track_id} with lines of sight (tracks: {have})")
+    return picked
 
 
 def project_trajectory(rows: pl.DataFrame, frame: Frame) -> OverlayPoints:

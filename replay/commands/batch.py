@@ -21,7 +21,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "Writes OUT/tasks/<task>/{trajectory.parquet,summary.json,summary.frames.parquet[,replay.rrd]} "
                     "and OUT/summary.parquet (one row per task: log, tracker, seed, parameters, digest, frames, "
                     "seconds, eval metrics where the log has ground truth, status, error), and prints the table. "
-                    "Exit 0 when every task succeeded, 1 when some failed. See docs/batch.md for clusters.")
+                    "Exit 0 when every task succeeded, 1 when some failed or lost frames to damage. See docs/batch.md for clusters.")
     p.add_argument("logs", nargs="+", type=Path, metavar="LOG")
     p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
     p.add_argument("--seeds", default="0", help="seeds: N, N-M or a comma list (default 0)")
@@ -56,6 +56,6 @@ def run(args: argparse.Namespace) -> int:
     table = summary_table(rows, tasks)
     table.write_parquet(out / "summary.parquet")
     print(format_table(table))
-    failed = table.filter(table["status"] == "error").height
+    failed = table.filter(table["status"] != "ok").height  # an error, or frames lost to damage (replay's exit 7)
     print(f"{table.height - failed} of {table.height} replays done; summary {out / 'summary.parquet'}")
     return FAILED if failed else 0

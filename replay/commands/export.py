@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from trackreplay.replay.commands.values import non_negative_int
 from trackreplay.replay.export import METHODS, fill_gaps, read_trajectory, write_trajectory
 
 
@@ -13,7 +14,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("trajectory", type=Path, help="input .parquet or .csv")
     p.add_argument("out", type=Path, help="output .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), default="linear")
-    p.add_argument("--max-gap", type=int, default=15, help="longest gap (frames) filled; longer stays lost")
+    p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) filled; longer stays lost")
     p.set_defaults(func=run)
     return p
 

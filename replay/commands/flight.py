@@ -38,8 +38,15 @@ def run(args: argparse.Namespace) -> int:
     from trackreplay.replay.flight import FlightConfig, fit_flight, flight_rows, observations
     from trackreplay.replay.smooth import log_context
 
+    from trackreplay.schemas.errors import TrackreplayError
+
+    if args.out is not None and args.out.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
+        raise TrackreplayError(f"--out {args.out}: a flight is written as .parquet or .csv")
     traj = read_trajectory(args.trajectory)
     track = args.track
+    if track is not None and track not in set(traj["track_id"].to_list()):
+        have = ", ".join(str(t) for t in sorted(set(traj["track_id"].to_list())))
+        raise TrackreplayError(f"{args.trajectory} has no track {track} (tracks: {have or 'none'})")
     if track is None and not traj.is_empty():
         counts = traj.filter(pl.col("status") == "measured").group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
         track = int(counts["track_id"][0]) if counts.height else None

@@ -77,6 +77,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+MAX_PICTURE_PX = 2**28  # the decode limit of docs/exit_codes.md, for what we draw too
+
+
 def run(args: argparse.Namespace) -> int:
     reader = LogReader(args.log)
     topic = image_topic(reader, args.image_topic)
@@ -87,6 +90,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         step = args.grid or max(5, int(round(max(w, h) / 16 / 5)) * 5)
         scale = args.scale or (2 if w < 800 else 1)
+        if w * h * scale * scale > MAX_PICTURE_PX:
+            raise TrackreplayError(f"--scale {scale} would make a {w * scale}x{h * scale} picture; at most "
+                                   f"{MAX_PICTURE_PX} pixels (2^28)")
         picture = draw_grid(image, step, scale)
     if args.out.suffix.lower() != ".png":
         raise TrackreplayError(f"--out {args.out} must end in .png")

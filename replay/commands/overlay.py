@@ -32,6 +32,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     if (args.frame is None) == (args.video is None):
         raise TrackreplayError("give either --frame N with --out IMAGE, or --video OUT")
+    if args.out is not None and not cv2.haveImageWriter(str(args.out)):  # before any work (OpenCV raises at the write)
+        raise TrackreplayError(f"--out {args.out}: OpenCV writes no image format by that name (use .png or .jpg)")
     rows = trajectory_directions(read_trajectory(args.trajectory), args.track_id)
     reader = LogReader(args.log)
     topics = FrameTopics.detect(reader)

@@ -83,3 +83,25 @@ def test_without_ray_batch_says_how_to_install_it(monkeypatch, short_sim: Path, 
     err = capsys.readouterr().err
     assert "pip install 'trackreplay[cluster]'" in err and "--serial" in err
     assert main(["batch", str(short_sim), "--out", str(tmp_path), "--serial", "--quiet"]) == 0
+
+
+def test_a_replay_that_lost_frames_is_not_ok(tmp_path: Path) -> None:
+    """`replay` exits 7 when damage cost frames; a batch row says so (status frames_lost, why in error)
+    instead of "ok" (found by a review)."""
+    from trackreplay.replay.batch import run_task
+
+    from mcap.reader import make_reader
+
+    short_sim = GOLF.parent / "flow-sim1-24f.mcap"  # two chunks: the second is damaged
+    data = bytearray(short_sim.read_bytes())
+    with open(short_sim, "rb") as fh:
+        chunk = make_reader(fh).get_summary().chunk_indexes[1]
+    data[chunk.chunk_start_offset + chunk.chunk_length // 2] ^= 0x5A
+    bad = tmp_path / "bad.mcap"
+    bad.write_bytes(bytes(data))
+    (task,) = plan([bad], "flow", [0], [])
+    row = run_task(task, BatchOptions(out=tmp_path / "out"))
+    assert row["status"] == "frames_lost" and row["frames_lost"] > 0
+    assert "could not be read" in row["error"] and "recover" in row["error"]
+    (good,) = plan([short_sim], "flow", [0], [])
+    assert run_task(good, BatchOptions(out=tmp_path / "out2"))["status"] == "ok"

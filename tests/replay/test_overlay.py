@@ -63,3 +63,14 @@ def test_overlay_video_and_errors(tmp_path: Path, capsys: pytest.CaptureFixture)
     assert int(cap.get(cv2.CAP_PROP_FRAME_COUNT)) == FRAMES
     assert main(["overlay", str(log), str(traj), "--frame", "99", "--out", str(tmp_path / "x.png")]) == 2
     assert "has no frame 99" in capsys.readouterr().err
+    # found by a review: an unknown image format was an internal error after the work, a missing track drew nothing
+    assert main(["overlay", str(log), str(traj), "--frame", "1", "--out", str(tmp_path / "x.xyz")]) == 2
+    assert "writes no image format by that name" in capsys.readouterr().err
+    assert main(["overlay", str(log), str(traj), "--frame", "1", "--track-id", "7", "--out", str(tmp_path / "y.png")]) == 2
+    assert "has no track 7 with lines of sight" in capsys.readouterr().err
+    assert main(["flight", str(traj), str(log), "--track", "9"]) == 2
+    assert "has no track 9" in capsys.readouterr().err
+    assert main(["flight", str(traj), str(log), "--out", str(tmp_path / "f.xyz")]) == 2
+    assert "a flight is written as .parquet or .csv" in capsys.readouterr().err
+    assert main(["frame", str(log), "1", "--out", str(tmp_path / "f.png"), "--scale", "100000"]) == 2
+    assert "at most 268435456 pixels" in capsys.readouterr().err
