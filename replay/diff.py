@@ -54,6 +54,7 @@ class Divergence:
     trajectory_diverges: bool = False
     digests: tuple[str | None, str | None] = (None, None)
     notes: tuple[str, ...] = field(default_factory=tuple)
+    trajectory_name: str = "trajectory"  # what was compared for it (an .rrd holds the tracks as drawn)
 
     @property
     def identical(self) -> bool:
@@ -72,11 +73,11 @@ class Divergence:
             return "\n".join([head, *self.notes])
         first = self.fields[0].describe() if self.fields else "outputs differ"
         if not self.trajectory_diverges:
-            traj = f"trajectory equal in all {min(self.frames_a, self.frames_b)} frames"
+            traj = f"{self.trajectory_name} equal in all {min(self.frames_a, self.frames_b)} frames"
         elif self.trajectory_equal_until is not None and self.trajectory_equal_until >= 0:
-            traj = f"trajectory equal up to frame {self.trajectory_equal_until}"
+            traj = f"{self.trajectory_name} equal up to frame {self.trajectory_equal_until}"
         else:
-            traj = "trajectory differs from the start"
+            traj = f"{self.trajectory_name} differs from the start"
         more = f" (and {len(self.fields) - 1} more field{'s' if len(self.fields) > 2 else ''})" if len(self.fields) > 1 else ""
         where = "static data" if self.frame == "static" else f"frame {self.frame}"
         lines = [f"{where}: {first}{more}; {traj}"]

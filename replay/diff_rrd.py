@@ -130,4 +130,5 @@ def diff_rrd(a: Path, b: Path) -> Divergence:
     if tracks_diverge_at is not None:
         earlier = [f for f in frames if f < tracks_diverge_at and f != STATIC]
         until = earlier[-1] if earlier else -1
-    return Divergence(len(frames_a), len(frames_b), shown, tuple(fields), until, tracks_diverge_at is not None)
+    return Divergence(len(frames_a), len(frames_b), shown, tuple(fields), until, tracks_diverge_at is not None,
+                      trajectory_name="tracks as drawn (/tracks: boxes and points, not every trajectory column)")
