@@ -303,6 +303,9 @@ def summary_table(rows: list[dict[str, Any]], tasks: list[BatchTask]) -> pl.Data
             columns.append(pl.Series(c, values, dtype=schema[c]))
         else:  # a parameter: its own type when all values share one, else text
             kinds = {type(v) for v in values}
+            if kinds == {int, float}:  # 3.0,4 on the command line: numbers, not text
+                columns.append(pl.Series(c, [float(v) for v in values], dtype=pl.Float64))
+                continue
             columns.append(pl.Series(c, values if len(kinds) == 1 and not kinds & {list, tuple, dict}
                                      else [json.dumps(v) for v in values]))
     return pl.DataFrame(columns)

@@ -105,3 +105,11 @@ def test_a_replay_that_lost_frames_is_not_ok(tmp_path: Path) -> None:
     assert "could not be read" in row["error"] and "recover" in row["error"]
     (good,) = plan([short_sim], "flow", [0], [])
     assert run_task(good, BatchOptions(out=tmp_path / "out2"))["status"] == "ok"
+
+
+def test_a_parameter_given_as_300_0_and_400_is_a_number_column() -> None:
+    from trackreplay.replay.batch import summary_table
+
+    tasks = plan([GOLF], "golf", [0], grid(["golf.search.max_px=300.0,400"]))
+    table = summary_table([{"status": "ok"}, {"status": "ok"}], tasks)
+    assert table["golf.search.max_px"].dtype == pl.Float64 and table["golf.search.max_px"].to_list() == [300.0, 400.0]
