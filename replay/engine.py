@@ -32,7 +32,7 @@ from trackreplay.replay import registry
 from trackreplay.replay.config import ConfigSource, config_to_dict, load_config
 from trackreplay.replay.config_toml import config_toml
 from trackreplay.replay.digest import FrameDigests, ReplayDigest
-from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images, read_hints
+from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints
 from trackreplay.replay.marks import check_labels
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
@@ -150,9 +150,13 @@ class ReplaySteps(Iterator[ReplayStep]):
                                    f"({(t1 - t0) / 1e9:.3f} s from its first message)")
         end_ns = None if req.end_s is None else t0 + int(round(req.end_s * 1e9))
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
-        check_labels({r.label for r in read_hints(reader, topics.hints, topics.image)}, req.tracker,
-                     self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
-        self.tracker.prepare(marked_images(reader, topics))  # a no-op for trackers that need no look ahead
+        marks = read_hints(reader, topics.hints, topics.image)
+        check_labels({r.label for r in marks}, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
+        outside = len(marks) - len(marks_in_window(marks, start_ns, end_ns))
+        self.notice = (f"{outside} of the log's {len(marks)} mark(s) are on frames outside --start/--end and are not "
+                       "used (a track starts only from a mark on a frame it replays)") if outside else ""
+        # a no-op for trackers that need no look ahead
+        self.tracker.prepare(marked_images(reader, topics, start_ns=start_ns, end_ns=end_ns))
         self.report = BundleReport()
         self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)
         self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report,
@@ -186,6 +190,9 @@ def replay(req: ReplayRequest) -> ReplayResult:
     rows: list[tuple] = []
     extra: list[dict] | None = [] if hasattr(getattr(steps.tracker, "intermediates", None), "extra_rows") else None
     notices: list[str] = []
+    if steps.notice:  # the replay's own, before any tracker's
+        notices.append(steps.notice)
+        print(f"trackreplay: {steps.notice}", file=sys.stderr)
     observed: list[dict] | None = None
     if req.observations:
         from trackreplay.replay.smooth import observation_rows, observations_table

@@ -230,13 +230,24 @@ def read_rig_pose(reader: LogReader, topic: str = T.STEREO_POSE) -> RigPose | No
         raise LogError(f"{reader.path}: topic {topic} is not a usable rig pose (foxglove.FrameTransform): {err}") from None
 
 
-def marked_images(reader: LogReader, topics: FrameTopics) -> list[tuple]:
-    """``(image, regions)`` for every frame the log's init annotations mark, in frame order.
+def marks_in_window(hints: tuple[InitRegion, ...], start_ns: int | None, end_ns: int | None) -> tuple[InitRegion, ...]:
+    """The marks on frames inside ``start_ns <= t < end_ns`` (a mark's time is its frame's, checked
+    when frames are bundled): a replay from --start must not start a track from a mark on a frame it
+    never shows the tracker."""
+    if start_ns is None and end_ns is None:
+        return hints
+    return tuple(r for r in hints if (start_ns is None or r.t_ns >= start_ns) and (end_ns is None or r.t_ns < end_ns))
+
+
+def marked_images(reader: LogReader, topics: FrameTopics, start_ns: int | None = None,
+                  end_ns: int | None = None) -> list[tuple]:
+    """``(image, regions)`` for every frame the log's init annotations mark (inside the replay's
+    window), in frame order.
 
     Only those images are decoded; trackers that learn from the marks (the golf LUTs) get them
-    all before the first step, wherever the marked frames are in the log.
+    all before the first step, wherever the marked frames are in the window.
     """
-    hints = read_hints(reader, topics.hints, topics.image)
+    hints = marks_in_window(read_hints(reader, topics.hints, topics.image), start_ns, end_ns)
     by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
         by_frame.setdefault(region.frame, []).append(region)
@@ -279,7 +290,7 @@ def iter_frames(
     except ValueError as err:
         raise LogError(f"{reader.path}: topic {topics.lens}: {err}") from None
     zoom_range = (min(e.zoom for e in lens.entries), max(e.zoom for e in lens.entries)) if lens is not None else (0.0, 0.0)
-    hints = read_hints(reader, topics.hints, topics.image)
+    hints = marks_in_window(read_hints(reader, topics.hints, topics.image), start_ns, end_ns)
     hints_by_frame: dict[int, list[InitRegion]] = {}
     for region in hints:
         hints_by_frame.setdefault(region.frame, []).append(region)

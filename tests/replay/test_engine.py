@@ -90,3 +90,19 @@ def test_notices_are_hashed_into_the_digest_printed_once_and_returned(short_sim:
     assert capsys.readouterr().err.count("trackreplay: flow: mode A") == 1
     assert a.trajectory.equals(b.trajectory) and a.digest != b.digest
     assert a.summary(short_sim)["notices"] == ["mode A"]
+
+
+def test_a_mark_outside_the_replayed_window_starts_nothing(tmp_path) -> None:
+    """A review replayed a log marked on frame 0 from --start 1.5: the colour PF put frame 0's box on
+    frame 45 and reported 75 rows measured at confidence 1. Marks outside --start/--end are not used
+    now, and the replay says so."""
+    from pathlib import Path
+
+    from trackreplay.replay.engine import ReplayRequest, replay
+
+    log = Path(__file__).resolve().parents[1] / "golden" / "colorpf-approach-320x240.mcap"  # marked on frame 8
+    whole = replay(ReplayRequest(log=log, tracker="colorpf"))
+    assert (whole.trajectory["status"] == "measured").sum() > 0
+    late = replay(ReplayRequest(log=log, tracker="colorpf", start_s=0.5))
+    assert late.frames > 0 and late.trajectory.is_empty()
+    assert any("outside --start/--end and are not used" in n for n in late.notices)
