@@ -3,7 +3,9 @@
 Frames become 0-based (file frame 1 = recorded frame 0). Boxes become centre/size in
 image pixels. MOTChallenge pixels are 1-based (top-left pixel (1, 1)) and become 0-based
 (``x = bb_left - 1 + w/2``), the inverse of ``replay.export.write_mot``, so an exported
-trajectory imports back unchanged. OTB boxes are taken as they are (unchanged so far).
+trajectory imports back unchanged. OTB boxes are 1-based too (the benchmark's MATLAB toolkit: the
+top-left pixel is (1, 1)) and become 0-based the same way (``x = x_otb - 1 + w/2``), so a box marked
+from the first row with ``x - 1, y - 1`` (as docs/colorpf_eval.py marks otb_crossing) is its truth.
 
 - MOTChallenge (``frame,id,bb_left,bb_top,bb_width,bb_height,conf[,x,y,z]``, comma
   separated): rows whose ``conf`` is 0 are skipped (MOT ground truth's "ignore this entry").
@@ -128,7 +130,7 @@ def read_otb(path: Path) -> GroundTruthTable:
                 raise SourceError(f"{where}: width and height must not be negative, got w={w:g}, h={h:g} "
                                   "(0,0,0,0 or NaN marks a frame without the target)")
             if all(math.isfinite(a) for a in (x, y, w, h)) and w > 0 and h > 0:
-                obj = GroundTruthObject(id=OTB_ID, x=x + w / 2, y=y + h / 2, w=w, h=h, visible=True)
+                obj = GroundTruthObject(id=OTB_ID, x=x - 1 + w / 2, y=y - 1 + h / 2, w=w, h=h, visible=True)
             else:
                 obj = GroundTruthObject(id=OTB_ID, visible=False)
             frames[frame] = (obj,)

@@ -33,11 +33,11 @@ def test_otb_separators_and_absent_target(tmp_path):
     gt.write_text("10,20,30,40\n11\t21\t30\t40\n0 0 0 0\nNaN,NaN,NaN,NaN\n12, 22, 30, 40\n")
     table = read_groundtruth(gt)
     assert table.format == "otb"
-    assert table.objects_at(0) == (GroundTruthObject(id=1, x=25.0, y=40.0, w=30.0, h=40.0, visible=True),)
-    assert table.objects_at(1)[0].x == 26.0
+    assert table.objects_at(0) == (GroundTruthObject(id=1, x=24.0, y=39.0, w=30.0, h=40.0, visible=True),)  # 1-based -> 0-based
+    assert table.objects_at(1)[0].x == 25.0
     for frame in (2, 3):
         assert table.objects_at(frame) == (GroundTruthObject(id=1, visible=False),)
-    assert table.objects_at(4)[0].y == 42.0
+    assert table.objects_at(4)[0].y == 41.0
     assert table.objects_at(5) is None
 
 
@@ -68,7 +68,7 @@ def test_groundtruth_recorded_at_frame_times(tmp_path, make_images, log_messages
     frames = [(m.log_time, GroundTruthFrame.from_pb(m.pb)) for m in log_messages(tmp_path / "out.mcap") if m.topic == "/groundtruth/objects"]
     assert [(t, f.frame, f.t_ns) for t, f in frames] == [(0, 0, 0), (50_000_000, 1, 50_000_000), (100_000_000, 2, 100_000_000)]
     assert frames[1][1].objects[0].visible is False and frames[1][1].objects[0].x is None
-    assert frames[2][1].objects[0].x == 5.0
+    assert frames[2][1].objects[0].x == 4.0  # 1-based 3 + 4/2 -> 0-based 4
 
 
 def test_mot_every_frame_gets_a_message_and_extra_frames_warn(tmp_path, make_images, log_messages):
