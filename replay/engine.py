@@ -14,6 +14,7 @@ prints each distinct notice once to stderr and returns them, in order, in ``Repl
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 import zlib
@@ -71,6 +72,18 @@ class ReplayRequest:
     # Keep the trackers' raw measurements (replay/smooth.py observation_rows) for the offline
     # smoother: ReplayResult.observations. Not part of the digest.
     observations: bool = False
+
+    def __post_init__(self) -> None:
+        """The checks the CLI's argument parser makes, for callers of the Python API too."""
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or self.seed < 0:
+            raise TrackreplayError(f"seed must be a non-negative integer, not {self.seed!r}")
+        for name in ("start_s", "end_s"):
+            value = getattr(self, name)
+            if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
+                                      or not math.isfinite(value) or value < 0):
+                raise TrackreplayError(f"{name} must be a finite number of seconds >= 0, not {value!r}")
+        if self.start_s is not None and self.end_s is not None and self.end_s <= self.start_s:
+            raise TrackreplayError(f"end_s {self.end_s:g} must be after start_s {self.start_s:g}")
 
 
 @dataclass(frozen=True)

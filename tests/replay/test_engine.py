@@ -106,3 +106,22 @@ def test_a_mark_outside_the_replayed_window_starts_nothing(tmp_path) -> None:
     late = replay(ReplayRequest(log=log, tracker="colorpf", start_s=0.5))
     assert late.frames > 0 and late.trajectory.is_empty()
     assert any("outside --start/--end and are not used" in n for n in late.notices)
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"start_s": 1.0, "end_s": 0.5}, "end_s 0.5 must be after start_s 1"),
+    ({"start_s": -5.0}, "start_s must be a finite number of seconds >= 0"),
+    ({"start_s": float("nan")}, "start_s must be a finite number"),
+    ({"seed": -1}, "seed must be a non-negative integer"),
+    ({"seed": "1"}, "seed must be a non-negative integer"),
+])
+def test_the_python_api_checks_what_the_cli_parser_checks(kwargs, message) -> None:
+    """A review found replay_log(start_s=1, end_s=0.5) returning 0 frames and seed=-1 failing deep in numpy."""
+    from pathlib import Path
+
+    from trackreplay.replay.api import replay_log
+    from trackreplay.schemas.errors import TrackreplayError
+
+    log = Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap"
+    with pytest.raises(TrackreplayError, match=message):
+        replay_log(log, "flow", **kwargs)
