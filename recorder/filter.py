@@ -21,6 +21,7 @@ from pathlib import Path
 
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.log_summary import read_summary, topic_counts
+from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
@@ -101,6 +102,8 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
             writer.add_message(copy.channel_id(schema, channel), t, data, msg.publish_time, msg.sequence)
             report.kept[channel.topic] = report.kept.get(channel.topic, 0) + 1
         copy.copy_attachments_and_metadata(reader)
+        cut = {k: str(v) for k, v in (("start_ns", start_ns), ("end_ns", end_ns)) if v is not None}
+        writer.add_metadata(RECORD_NAME, provenance({"log": src}, topics=",".join(sorted(keep)), **cut))  # this step's own
         writer.finish()
     return report
 

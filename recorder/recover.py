@@ -20,6 +20,7 @@ from mcap.records import Attachment, Channel, Footer, Header, Message, Metadata,
 from mcap.writer import CompressionType, Writer
 
 from trackreplay.recorder.atomic import replace_when_done
+from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.mcap_scan import MCAP_MAGIC, ChunkRecords, Damage, open_mapped, scan, summary_definitions
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
@@ -66,7 +67,7 @@ def recover(broken: str | Path, out: str | Path) -> RecoverReport:
         if bytes(data[:len(MCAP_MAGIC)]) != MCAP_MAGIC:
             raise LogError(f"{broken} is not an MCAP file (bad magic bytes); nothing to recover")
         with replace_when_done(out) as dst:
-            return _rewrite(data, dst)
+            return _rewrite(data, dst, broken)
     finally:
         if hasattr(data, "close"):
             data.close()
@@ -187,7 +188,7 @@ def _surviving_frames(data, summary: tuple[dict[int, Schema], dict[int, Channel]
     return {t: k for k, t in enumerate(sorted(times))}
 
 
-def _rewrite(data, dst: BinaryIO) -> RecoverReport:
+def _rewrite(data, dst: BinaryIO, source: Path) -> RecoverReport:
     summary = summary_definitions(data)
     copy = _Copy(dst, summary, _surviving_frames(data, summary))
     damage: list[Damage] = []
@@ -203,6 +204,7 @@ def _rewrite(data, dst: BinaryIO) -> RecoverReport:
         else:
             copy.add(item)
     copy.start()
+    copy.writer.add_metadata(RECORD_NAME, provenance({"log": source}))  # this step's own, after the source's records
     copy.writer.finish()
     error = None
     if damage:

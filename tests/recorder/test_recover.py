@@ -68,9 +68,10 @@ def test_intact_log_is_copied_completely(intact, tmp_path):
         assert [a.name for a in reader.iter_attachments()] == ["lens.csv"]
     with open(tmp_path / "copy.mcap", "rb") as fh:
         metadata = [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()]
-    with open(intact, "rb") as fh:
-        assert metadata == [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()]
-    assert [name for name, _ in metadata] == ["trackreplay.provenance", "source"]
+    with open(intact, "rb") as fh:  # the source's records as they were, then recover's own provenance
+        assert metadata[:-1] == [(m.name, m.metadata) for m in make_reader(fh).iter_metadata()]
+    assert [name for name, _ in metadata] == ["trackreplay.provenance", "source", "trackreplay.provenance"]
+    assert metadata[-1][1]["source.log"].startswith("intact.mcap sha256:")
 
 
 def test_truncated_copies_keep_every_complete_chunk(intact, tmp_path):

@@ -68,3 +68,14 @@ def test_a_mark_written_at_the_start_and_the_ground_truth_follow_a_cut(tmp_path:
     assert main(["replay", str(cut), "--tracker", "flow", "--quiet", "--export", str(traj)]) == 0
     capsys.readouterr()
     assert main(["eval", str(traj), str(cut)]) == 0
+
+
+def test_a_cut_log_says_how_it_was_made(tmp_path: Path) -> None:
+    """Every log we write carries its own provenance record (a review found filter's output with only its source's)."""
+    from mcap.reader import make_reader
+
+    out = tmp_path / "cut.mcap"
+    assert main(["filter", str(GOLDEN / "flow-sim1-24f.mcap"), str(out), "--end", "0.5"]) == 0
+    with open(out, "rb") as fh:
+        records = [m.metadata for m in make_reader(fh).iter_metadata() if m.name == "trackreplay.provenance"]
+    assert records[-1]["source.log"].startswith("flow-sim1-24f.mcap sha256:") and "end_ns" in records[-1]
