@@ -10,7 +10,7 @@ from pathlib import Path
 
 from mcap_protobuf.schema import register_schema
 
-from trackreplay.recorder.log_summary import read_summary, require_topic, topic_counts
+from trackreplay.recorder.log_summary import log_file, read_summary, require_topic, topic_counts
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
@@ -85,6 +85,7 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     ``out`` may equal ``src``: the new log is written beside it and renamed over it only
     once complete, so an interruption never damages the original.
     """
+    src = log_file(src)  # (a ROS 2 bag folder: the .mcap in it)
     summary = read_summary(src)  # missing, not MCAP or truncated: one-sentence errors
     require_topic(src, summary, image_topic)
     require_intact(src)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from trackreplay.recorder.atomic import replace_when_done
-from trackreplay.recorder.log_summary import read_summary, topic_counts
+from trackreplay.recorder.log_summary import log_file, read_summary, topic_counts
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
 from trackreplay.schemas import messages as m
@@ -41,6 +41,7 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
                end_ns: int | None = None, image_topic: str | None = None) -> FilterReport:
     """Write ``out``: ``src``'s ``topics`` (all when None) with ``start_ns <= log_time < end_ns``
     (absolute ns); ``image_topic`` is the topic marks count frames on (default: /camera/image)."""
+    src = log_file(src)  # (a ROS 2 bag folder: the .mcap in it)
     summary = read_summary(src)
     require_intact(src)
     present = topic_counts(summary)

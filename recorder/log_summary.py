@@ -23,11 +23,24 @@ def truncation_hint(path: Path) -> str:
             f"run `trackreplay recover {path} FIXED.mcap` to salvage every complete chunk")
 
 
-def read_summary(path: str | Path) -> Summary:
-    """The log's summary (channels, schemas, statistics); raises ``LogError``/``TruncatedLogError``."""
+def log_file(path: str | Path) -> Path:
+    """``path`` itself, or the one ``.mcap`` file inside a folder (a ROS 2 bag folder: metadata.yaml
+    beside the bag's .mcap)."""
     path = Path(path)
+    if path.is_dir():
+        found = sorted(path.glob("*.mcap"))
+        if len(found) == 1:
+            return found[0]
+        names = (": " + ", ".join(p.name for p in found)) if found else ""
+        raise LogError(f"{path} is a folder with {len(found)} .mcap files{names}; give the log file itself")
     if not path.is_file():
         raise LogError(f"{path} does not exist or is not a file")
+    return path
+
+
+def read_summary(path: str | Path) -> Summary:
+    """The log's summary (channels, schemas, statistics); raises ``LogError``/``TruncatedLogError``."""
+    path = log_file(path)
     with open(path, "rb") as fh:
         head = fh.read(len(MCAP_MAGIC))
         fh.seek(0, 2)

@@ -31,9 +31,9 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
     A truncated or damaged log raises ``TruncatedLogError`` unless ``partial_ok``, in which case
     the result covers the readable part and has ``truncated: True`` and ``error``.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise LogError(f"{path} does not exist or is not a file")
+    from trackreplay.recorder.log_summary import log_file
+
+    path = log_file(path)
     schemas: dict[int, str] = {}
     channels: dict[int, Channel] = {}
     counts: dict[int, int] = {}

@@ -96,9 +96,9 @@ class LogReader:
     """Random-access reader over one MCAP log (opens the file per iteration)."""
 
     def __init__(self, path: str | Path) -> None:
-        self.path = Path(path)
-        if not self.path.is_file():
-            raise LogError(f"{self.path} does not exist or is not a file")
+        from trackreplay.recorder.log_summary import log_file
+
+        self.path = log_file(path)  # (a ROS 2 bag folder: the .mcap in it)
         with open(self.path, "rb") as fh:
             head = fh.read(8)
             fh.seek(0, 2)

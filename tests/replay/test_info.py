@@ -136,3 +136,23 @@ def test_info_names_damaged_stretches_and_counts_the_rest(flow_sim1, tmp_path, c
     assert main(["info", str(bad)]) == 3
     out = capsys.readouterr().out
     assert f"bytes {first.chunk_start_offset}-" in out and "DAMAGED: 1 unreadable stretch" in out
+
+
+def test_a_bag_folder_is_read_through_its_one_mcap(tmp_path, capsys) -> None:
+    """A ROS 2 bag is a folder (metadata.yaml beside the .mcap): the verbs take the folder (a review
+    found it refused as 'not a file'); a folder with no or several .mcap files is named as such."""
+    import shutil
+    from pathlib import Path
+
+    from trackreplay.replay.cli import main
+
+    bag = tmp_path / "bag"
+    bag.mkdir()
+    (bag / "metadata.yaml").write_text("rosbag2_bagfile_information: {}\n")
+    shutil.copy(Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap", bag / "bag_0.mcap")
+    assert main(["info", str(bag)]) == 0
+    assert main(["replay", str(bag), "--tracker", "flow", "--quiet"]) == 0
+    shutil.copy(bag / "bag_0.mcap", bag / "bag_1.mcap")
+    capsys.readouterr()
+    assert main(["info", str(bag)]) == 2
+    assert "is a folder with 2 .mcap files: bag_0.mcap, bag_1.mcap" in capsys.readouterr().err
