@@ -113,6 +113,7 @@ class ColorPfTracker(TrackerBase):
         self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
         self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
         self.hold_run = 0  # hold.enabled: held frames in a row
+        self._velocity_steps = 0  # hold.enabled: displacements between vouched estimates measured so far
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
@@ -297,7 +298,9 @@ class ColorPfTracker(TrackerBase):
         ``hold.max_frames`` frames in a row."""
         cfg, ref = self.config, self.reference
         assert ref is not None
-        if self.hold_run >= cfg.hold.max_frames:
+        if self.hold_run >= cfg.hold.max_frames or self._velocity_steps == 0:
+            # (no velocity measured yet, e.g. right after the mark: holding would freeze the box where it
+            # was marked while the target walks off; a review saw otb_crossing marked on frame 60 held there)
             return estimate, False
         shares = neighbour_shares(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px, gain)
         if shares.max() <= ref.p_detect / ref.p_square:
@@ -314,6 +317,7 @@ class ColorPfTracker(TrackerBase):
             return
         if self._vouched is not None:
             last, xy = self._vouched
+            self._velocity_steps += 1
             s = self.config.hold.smoothing
             self.track_velocity = s * self.track_velocity + (1.0 - s) * (estimate[:2] - xy) / max(index - last, 1)
         self._vouched = (index, estimate[:2].copy())

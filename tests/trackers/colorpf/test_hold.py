@@ -63,7 +63,23 @@ def _tracker(enabled: bool = True) -> ColorPfTracker:
     tracker.pf.particles = np.column_stack([rng.normal(100.0, 2.0, 40), rng.normal(90.0, 2.0, 40),
                                             np.full(40, 12.0), np.full(40, 36.0)])
     tracker.track_velocity = np.array([-1.0, 0.5])
+    tracker._velocity_steps = 3  # a velocity measured between vouched estimates
     return tracker
+
+
+def test_no_hold_before_a_velocity_is_measured():
+    """Right after the mark the track has no velocity: holding would freeze the box where it was marked
+    (a review marked otb_crossing on frame 60: the box stayed there, `predicted` at confidence 0.8-1.0,
+    while the walker walked 100 px away)."""
+    background = np.full((200, 200, 3), 100, np.uint8)
+    image = background.copy()
+    image[72:108, 94:106] = 20
+    image[30:72, 60:160] = 20  # a larger region beside it: the hold's condition
+    tracker = _tracker()
+    tracker._velocity_steps = 0
+    estimate = tracker.pf.estimate()
+    out, held = tracker._hold(image, background, 1.0, np.array([98.0, 91.0, 12.0, 36.0]), estimate)
+    assert not held and np.array_equal(out, estimate)
 
 
 def test_the_estimate_is_the_prediction_only_beside_a_larger_region():
