@@ -1,4 +1,9 @@
-"""Frames of a video file, timed by frame index and frame rate (or a timestamps file)."""
+"""Frames of a video file, timed by frame index and frame rate (or a timestamps file).
+
+Frame i is at ``t0 + i / fps``: a variable-frame-rate video (gaps, dropped frames) is timed at its
+average rate, not at its container's per-frame times; give those with ``--timestamps`` (a review
+found the gap of a VFR clip gone; OpenCV cannot write such a video for a test, so it is not detected).
+"""
 
 from __future__ import annotations
 
