@@ -8,11 +8,12 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
+from mcap.reader import make_reader
 from mcap_protobuf.schema import register_schema
 
 from trackreplay.recorder.log_summary import log_file, read_summary, require_topic, topic_counts
 from trackreplay.recorder.atomic import replace_when_done
-from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
+from trackreplay.recorder.mcap_copy import McapCopy, damage_is_an_error, require_intact
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.recorder.sources.base import read_text
 from trackreplay.schemas import messages as m
@@ -76,7 +77,7 @@ def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
 
 def _frame_times(path: Path, image_topic: str) -> list[int]:
     with open(path, "rb") as fh, damage_is_an_error(path):
-        return [msg.log_time for _, _, msg in checked_reader(fh).iter_messages(topics=[image_topic], log_time_order=True)]
+        return [msg.log_time for _, _, msg in make_reader(fh).iter_messages(topics=[image_topic], log_time_order=True)]
 
 
 def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMERA_IMAGE) -> list[InitRegion]:
@@ -99,7 +100,7 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     # Written as OUT.partial and renamed when complete (so --in-place never damages the original);
     # the file gets the usual permissions (umask), not a temporary file's 0600.
     with replace_when_done(out) as dst, open(src, "rb") as fh, damage_is_an_error(src):
-        source = checked_reader(fh)
+        source = make_reader(fh)
         copy = McapCopy(source, dst)
         writer = copy.writer
         by_topic: dict[str, int] = {}

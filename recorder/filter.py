@@ -18,11 +18,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from mcap.reader import make_reader
 
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.log_summary import log_file, read_summary, topic_counts
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
-from trackreplay.recorder.mcap_copy import McapCopy, checked_reader, damage_is_an_error, require_intact
+from trackreplay.recorder.mcap_copy import McapCopy, damage_is_an_error, require_intact
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -56,7 +57,7 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
     report = FilterReport()
 
     with open(src, "rb") as fh, damage_is_an_error(src):
-        reader = checked_reader(fh)
+        reader = make_reader(fh)
         # Pass 1: the last state message before the range, and which images are kept (for marks).
         last_state: dict[int, tuple] = {}
         first_image = None
@@ -72,7 +73,7 @@ def filter_log(src: Path, out: Path, topics: list[str] | None = None, start_ns: 
                 last_state[channel.id] = (msg.log_time, msg.sequence)
 
     with replace_when_done(out) as dst, open(src, "rb") as fh, damage_is_an_error(src):
-        reader = checked_reader(fh)
+        reader = make_reader(fh)
         copy = McapCopy(reader, dst)
         writer = copy.writer
         for schema, channel, msg in reader.iter_messages(log_time_order=True):

@@ -11,7 +11,7 @@ from typing import BinaryIO
 
 import zstandard
 from mcap.exceptions import McapError
-from mcap.reader import McapReader, make_reader
+from mcap.reader import McapReader
 from mcap.records import Channel, Schema
 from mcap.writer import Writer
 
@@ -19,11 +19,6 @@ from trackreplay.schemas.errors import TruncatedLogError
 
 # the decompressors' own errors too: a flipped byte inside a compressed chunk (lz4 raises RuntimeError)
 READ_ERRORS = (McapError, ValueError, EOFError, struct.error, zstandard.ZstdError, RuntimeError)
-
-
-def checked_reader(fh: BinaryIO) -> McapReader:
-    """An MCAP reader that checks every chunk's CRC: a copy must not pass damaged bytes on as clean."""
-    return make_reader(fh, validate_crcs=True)
 
 
 def require_intact(src: Path) -> None:
@@ -46,8 +41,9 @@ def require_intact(src: Path) -> None:
 
 @contextmanager
 def damage_is_an_error(src: Path) -> Iterator[None]:
-    """A damaged or truncated ``src`` met while copying it: one sentence (nothing is written: the
-    copy's ``replace_when_done`` discards its partial output)."""
+    """A damaged or truncated ``src`` met while copying it after :func:`require_intact` passed it (a
+    record mcap's reader cannot parse): one sentence; nothing is written (``replace_when_done``
+    discards the partial output)."""
     try:
         yield
     except READ_ERRORS as err:

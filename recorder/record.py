@@ -16,7 +16,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from trackreplay.recorder.image_codec import ENCODINGS, compressed_image, image_message
-from trackreplay.recorder.sources.base import MAX_FPS, FrameClock, ImageFrame, read_timestamps
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, check_fps, read_timestamps
 from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
 from trackreplay.recorder.sources.ground_plane import read_ground_plane
 from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
@@ -126,8 +126,8 @@ def record(
         raise SourceError(f"record needs exactly one image source (--video, --images or --stereo), got {len(given) or 'none'}")
     if encoding not in ENCODINGS:
         raise SourceError(f"image encoding must be one of {', '.join(ENCODINGS)}, not {encoding!r}")
-    if fps is not None and not 0 < fps <= MAX_FPS:  # (nan fails both)
-        raise SourceError(f"--fps must be positive and finite, at most {MAX_FPS:g} frames a second, not {fps}")
+    if fps is not None:
+        check_fps(fps)
 
     # Everything that can be checked is checked before the output exists.
     clock = _clock(video, images, stereo, fps, timestamps, t0_ns)

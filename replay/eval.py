@@ -8,6 +8,7 @@ import numpy as np
 import polars as pl
 
 from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.replay.trajectory import frame_time_mismatches
 
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_PX = 20.0
@@ -80,8 +81,7 @@ def _same_frames(track: pl.DataFrame, obj: pl.DataFrame) -> None:
     cut or recovered by a tool that did not renumber would compare each estimate with another moment)."""
     if "t_ns" not in track.columns or "t_ns" not in obj.columns:
         return
-    both = track.select("frame", "t_ns").unique("frame").join(obj.select("frame", pl.col("t_ns").alias("gt_t_ns")).unique("frame"),
-                                                             on="frame").filter(pl.col("t_ns") != pl.col("gt_t_ns")).sort("frame")
+    both = frame_time_mismatches(track, obj)
     if both.height:
         f, t, g = both.row(0)
         raise TrackreplayError(f"frame {f} is at t={t} ns in the trajectory but at t={g} ns in the ground truth "

@@ -23,6 +23,17 @@ SCHEMA: dict[str, pl.DataType] = {
 COLUMNS = tuple(SCHEMA)
 
 
+def frame_time_mismatches(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False) -> pl.DataFrame:
+    """Rows ``frame, t_ns, other_t_ns`` (sorted by frame) where table ``a``'s frame is at another time in
+    ``b`` (both with ``frame`` and ``t_ns`` columns); with ``missing``, also frames of ``a`` that ``b``
+    lacks (``other_t_ns`` null). A trajectory, a ground truth and a log number frames alike only when
+    every shared frame is the same moment in each."""
+    other = b.select("frame", pl.col("t_ns").cast(pl.Int64).alias("other_t_ns")).unique("frame")
+    joined = a.select("frame", pl.col("t_ns").cast(pl.Int64)).unique("frame").join(
+        other.with_columns(pl.col("frame").cast(a.schema["frame"])), on="frame", how="left" if missing else "inner")
+    return joined.filter(pl.col("other_t_ns").is_null() | (pl.col("t_ns") != pl.col("other_t_ns"))).sort("frame")
+
+
 def interpolated_times(frames: np.ndarray, times: np.ndarray, known: np.ndarray) -> np.ndarray:
     """Log times (int64 ns) of ``frames`` where only ``known`` ones are given: those exactly, the others
     linear in the frame number between their known neighbours, rounded to the ns, the ends held.

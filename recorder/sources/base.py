@@ -43,6 +43,12 @@ MAX_T0_NS = 2**62
 MAX_FPS = 1e6
 
 
+def check_fps(fps: float) -> None:
+    """A frame rate we can time frames by: positive, finite, frames at least 1 us apart."""
+    if not 0 < fps <= MAX_FPS:  # (nan fails both)
+        raise SourceError(f"--fps must be positive and finite, at most {MAX_FPS:g} frames a second, not {fps}")
+
+
 @dataclass(frozen=True)
 class FrameClock:
     """Capture time of frame ``i``: ``timestamps[i]`` when given, else ``t0_ns + i / fps``."""
@@ -59,9 +65,8 @@ class FrameClock:
             raise SourceError(f"the first frame time must not be negative, not {self.t0_ns} ns")
         if self.t0_ns > MAX_T0_NS:  # log times are signed 64-bit ns; this leaves ~146 years of frames after it
             raise SourceError(f"the first frame time must be at most 2^62 ns ({MAX_T0_NS}), not {self.t0_ns} ns")
-        if self.timestamps is None and not self.fps <= MAX_FPS:  # also inf and nan
-            raise SourceError(f"--fps must be a finite rate of at most {MAX_FPS:g} frames a second (frames "
-                              f"1 us apart), not {self.fps}")
+        if self.fps is not None:
+            check_fps(self.fps)
 
     def t_ns(self, index: int) -> int:
         if self.timestamps is not None:

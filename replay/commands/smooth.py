@@ -24,14 +24,13 @@ def _replayed_from(table, times: dict[int, int], log: Path) -> None:
     be smoothed with this one's frame times and camera poses and look right."""
     import polars as pl
 
+    from trackreplay.replay.trajectory import frame_time_mismatches
     from trackreplay.schemas.errors import TrackreplayError
 
     if "t_ns" not in table.columns or table.is_empty():
         return
-    rows = table.select("frame", "t_ns").unique().sort("frame")
-    logged = pl.DataFrame({"frame": list(times), "log_t_ns": list(times.values())},
-                          schema={"frame": rows.schema["frame"], "log_t_ns": pl.Int64})
-    bad = rows.join(logged, on="frame", how="left").filter(pl.col("log_t_ns").is_null() | (pl.col("t_ns") != pl.col("log_t_ns")))
+    logged = pl.DataFrame({"frame": list(times), "t_ns": list(times.values())}, schema={"frame": pl.Int64, "t_ns": pl.Int64})
+    bad = frame_time_mismatches(table, logged, missing=True)
     if bad.height:
         f, t, lt = bad.row(0)
         where = f"at t={lt} ns" if lt is not None else "missing"
