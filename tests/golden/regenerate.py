@@ -1,6 +1,9 @@
 """Rewrite the golden logs and their expected digests (run only when a change is intended).
 
-    python tests/golden/regenerate.py [TRACKER ...]   # all, or only the named ones (others kept as they are)
+    python tests/golden/regenerate.py [--keep-logs] [TRACKER ...]   # all, or only the named ones (others kept as they are)
+
+``--keep-logs``: replay the logs already here instead of writing them again (a tracker change: the
+input stays byte for byte what it was, only the expected digest and trajectory move).
 
 Review the digest change in the diff: it says which trackers' outputs moved. Each tracker's
 trajectory is kept beside its log (``<tracker>.trajectory.parquet``) so that a digest change
@@ -59,13 +62,16 @@ GOLDEN = {
 
 
 def main() -> None:
-    only = set(sys.argv[1:]) or set(GOLDEN)
+    args = sys.argv[1:]
+    keep = "--keep-logs" in args
+    only = {a for a in args if a != "--keep-logs"} or set(GOLDEN)
     expected = json.loads((HERE / "expected.json").read_text()) if (HERE / "expected.json").exists() else {}
     for tracker, (name, make) in GOLDEN.items():
         if tracker not in only:
             continue
         path = HERE / name
-        make(path)
+        if not (keep and path.exists()):
+            make(path)
         result = replay(ReplayRequest(log=path, tracker=tracker, seed=0))
         expected[tracker] = {"log": name, "seed": 0, "frames": result.frames, "digest": result.digest}
         result.trajectory.write_parquet(HERE / f"{tracker}.trajectory.parquet")

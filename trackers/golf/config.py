@@ -57,6 +57,11 @@ class ParticleConfig:
     rest_frames: int = 2
     rest_px: float = 1.5
     rest_roundness: float = 0.8  # ... or seen on its marked frame only, at least this round (no motion blur: a streak 2.5x as long as wide is ~0.8)
+    # ... unless the ball is a speck, under this area (px, not scaled: a blob under a 2x2 block has no
+    # shape). A far ball rolling along the line of sight looks still without lying still, and a strike's
+    # wide search finds only other specks that fit a 1-3 px target as well as it does (a 240 fps shot:
+    # 25-45 px off, "measured").
+    strike_min_area_px: float = 4.0
     miss_velocity_damping: float = 0.85  # per frame without a ball the sample velocities decay: no drift when lost
     # With encoders, move the samples by each pose change (they then live in camera-independent
     # directions). Off by default: the operator keeps the ball nearly still in the picture, which the
@@ -72,6 +77,8 @@ class ParticleConfig:
             raise ValueError("particles.sigma_px must be positive and particles.alpha non-negative")
         if self.rest_roundness < 0:
             raise ValueError("particles.rest_roundness must be >= 0 (above 1: a single sighting never counts as at rest)")
+        if not self.strike_min_area_px >= 0:
+            raise ValueError("particles.strike_min_area_px must be >= 0 (0: a ball of any size may be struck)")
 
 
 @dataclass(frozen=True)
@@ -104,6 +111,10 @@ class LutConfig:
     context: float = 4.0  # reference luminance histogram: window this many box sizes, min search.min_px
     hist_bins: int = 32  # context luminance histogram bins
     switch_margin: float = 0.2  # hysteresis: switch when the other LUT fits 60 % of the region
+    # The other LUT is tried on a miss (the background changed under the ball faster than the switch)
+    # only where its own background is at least this share of I_s: the ground LUT over open sky passes
+    # cloud puffs, and a 2 px ball among them was "measured" on one 30 px away.
+    other_min_share: float = 0.05
     # Over open sky a small ball's blurred rim mixes with the sky, so the sky LUT keeps scattered core pixels: on the
     # synthetic shots its blob was a quarter of the ball's area, in pieces on a third of the frames
     # (the ground LUT: 1.3x, 0.5 %), so the area target shrank and the whole ball was refused as
@@ -120,6 +131,8 @@ class LutConfig:
     def __post_init__(self) -> None:
         if self.bin < 1 or 256 % self.bin:
             raise ValueError("lut.bin must divide 256")
+        if not 0 <= self.other_min_share <= 1:
+            raise ValueError("lut.other_min_share must be in [0, 1]")
         if self.sky_close_px < 0:
             raise ValueError("lut.sky_close_px must be >= 0 (0: the sky silhouette as the LUT gives it)")
         if self.hist_bins < 2 or self.background_stride < 1 or self.learn_max < 0:
@@ -226,6 +239,10 @@ class ValidateConfig:
     entry_margin_px: float = 24.0  # fixed camera, ball gone out of the picture: a new track starts this near the edge
     confirm_min_area_px: float = 2.0  # ... each blob of at least this many pixels (not scaled: one pixel has no shape)
     confirm_fit: float = 0.5  # ... and agree with each other in area and be round (validate.track_fit) at least this well
+    # ... and, with encoders and a 3-D filter running, not put the ball (range from the blobs' area) more
+    # than this many times nearer than the filter's range less 3 sigma (0: off). A cloud puff is tens
+    # of px: a ball that size would be a few metres from the lens.
+    confirm_max_nearer: float = 2.0
     # Still scenery (scenery.py): a blob within this of where a blob was the frame before, seen while the
     # ball was measured elsewhere, is refused while it stays (reference height; 0: off). Centroids of
     # a still object move 0.1-0.5 px between frames (noise, JPEG).
@@ -236,6 +253,8 @@ class ValidateConfig:
             raise ValueError("validate: need confirm_frames >= 1, gate_sigmas > 0, 0 <= min_confidence <= 1, 0 <= min_fit <= 1")
         if self.still_px < 0:
             raise ValueError("validate.still_px must be >= 0 (0: no still scenery)")
+        if self.confirm_max_nearer != 0 and not self.confirm_max_nearer >= 1:
+            raise ValueError("validate.confirm_max_nearer must be 0 (off) or >= 1")
 
 
 @dataclass(frozen=True)

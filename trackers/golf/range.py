@@ -95,6 +95,20 @@ def ground_range(camera: PtzCamera, pixel: np.ndarray, centre_height_m: float) -
     return r if r <= MAX_CALIBRATION_RANGE_M else None
 
 
+def nearer_than_predicted(range_m: float, position: np.ndarray, covariance: np.ndarray, viewpoint: np.ndarray,
+                          factor: float, sigmas: float = 3.0) -> bool:
+    """A ball seen at ``range_m`` is more than ``factor`` times nearer than a predicted 3-D
+    ``position`` (with its 3 x 3 ``covariance``) allows, seen from ``viewpoint``: nearer than the
+    predicted range less ``sigmas`` of its spread along the line of sight, divided by ``factor``."""
+    offset = np.asarray(position, float) - np.asarray(viewpoint, float)
+    predicted = float(np.linalg.norm(offset))
+    if not predicted > 0 or not math.isfinite(range_m):
+        return False
+    along = offset / predicted
+    spread = math.sqrt(max(float(along @ np.asarray(covariance, float) @ along), 0.0))
+    return range_m * factor < predicted - sigmas * spread
+
+
 class RangeFromArea:
     """Range measurements of one ball: the area to use, the calibrated range and its uncertainty."""
 

@@ -37,12 +37,12 @@ from trackreplay.trackers.golf.blobs import (STILL, ApparentMotion, BlobTargets,
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
-from trackreplay.trackers.golf.lut import GolfLuts
+from trackreplay.trackers.golf.lut import LUT_NAMES, GolfLuts
 from trackreplay.trackers.golf.marks import Marks
 from trackreplay.trackers.golf.notices import Notices
 from trackreplay.trackers.golf.particles import (DIM, ParticleSet, launch, likelihood, motion, spread_sigma, state, warp,
                                                  with_camera_motion)
-from trackreplay.trackers.golf.range import RangeFromArea
+from trackreplay.trackers.golf.range import RangeFromArea, nearer_than_predicted
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
@@ -145,7 +145,7 @@ class GolfTracker(TrackerBase):
         if not lost and (found is None or found.verdict != "measured"):
             # The background changed under the ball faster than the luminance switch (tree line, horizon):
             # the ball may pass the other LUT; take it only if that finds the ball in the gate.
-            for name in (n for n in self.luts.names if n != sil.lut_name):
+            for name in (n for n in self.luts.names if n != sil.lut_name and self._background_here(sil, n)):
                 other = LutSilhouette(name, sil.lut_scores, named_silhouette(ycc, self.luts, name), sil.offset)
                 alt = self._select(other.mask, other.offset, search.centre, scale, False, motion)
                 seen_alt = self.validator.seen_in_gate(gated=alt, predicted=search.centre, spread=search.spread,
@@ -161,6 +161,8 @@ class GolfTracker(TrackerBase):
                                         diameter=diameter, size=(width, height), scale=scale, lost=lost,
                                         entry_only=not self._centre_search(camera, prev_camera, width, height),
                                         seen=seen_gated)
+        if check.verdict == "confirmed" and self._too_near(camera):
+            check = dataclasses.replace(check, verdict="too_near", confidence=0.0)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
@@ -213,6 +215,22 @@ class GolfTracker(TrackerBase):
         return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))]
 
     # --- stages ------------------------------------------------------------------------------------
+    def _background_here(self, sil: LutSilhouette, name: str) -> bool:
+        """LUT ``name``'s background is at least ``lut.other_min_share`` of the search region (its
+        score in :meth:`GolfLuts.choose`): a LUT says nothing about colours it never saw around the ball."""
+        share = float(sil.lut_scores[LUT_NAMES.index(name)])
+        return share >= self.config.lut.other_min_share  # (NaN, a LUT not built: False)
+
+    def _too_near(self, camera: PtzCamera | None) -> bool:
+        """A confirmed track's blobs are too big for the ball where the 3-D filter has it
+        (``validate.confirm_max_nearer``; never without encoders or a running filter)."""
+        factor = self.config.validate.confirm_max_nearer
+        if factor <= 0 or camera is None or not self.ekf.initialised:
+            return False
+        area, _ = self.validator.confirmed_shape()
+        range_m, _ = self.range.measure(area, camera)
+        return nearer_than_predicted(range_m, self.ekf.kf.x[:3], self.ekf.kf.P[:3, :3], camera.position, factor)
+
     def _apparent_motion(self, position: np.ndarray, camera: PtzCamera | None, compensated: bool) -> ApparentMotion:
         """The samples' mean velocity as the image sees it (with the camera's own motion when the
         samples are compensated) and its spread: how long the ball's streak may be this frame."""
@@ -282,8 +300,12 @@ class GolfTracker(TrackerBase):
         """The ball, missed this frame for the first time, was lying still when last seen, so it was
         struck: seen still on ``rest_frames`` frames, or on its marked frame only and as a sharp disc
         there (round, no motion blur: a mark on the launch frame of a 30 fps clip, gone 40-70 px
-        a frame later; a streak marked in flight is no ball at rest)."""
+        a frame later; a streak marked in flight is no ball at rest). Never for a speck (a target area
+        under ``particles.strike_min_area_px``): a far ball rolling along the line of sight looks still
+        without lying still, and the wide search a strike opens finds only other specks around it."""
         cfg = self.config.particles
+        if self.targets is not None and self.targets.area < cfg.strike_min_area_px:
+            return False
         if self._sightings == 1 and self.targets is not None:  # (never seen since the mark: nothing known)
             return self.targets.circularity >= cfg.rest_roundness
         return self.reinit.at_rest(cfg.rest_frames, cfg.rest_px * scale)

@@ -12,6 +12,8 @@ from trackreplay.trackers.golf.config import ParticleConfig, ValidateConfig
 from trackreplay.trackers.golf.blobs import BlobTargets, disc_circularity, roundness
 from trackreplay.trackers.foreground.blobs import measure_blobs
 
+from .conftest import BALL_BGR
+
 NS = 33_333_333
 
 
@@ -287,3 +289,29 @@ def test_a_bounce_off_the_prediction_is_confirmed_from_the_low_confidence_frames
     for k in range(confirmed[0], 20):
         (s,), _ = results[k]
         assert s.status == "measured" and abs(s.x - path[k][0]) < 3 and abs(s.y - path[k][1]) < 3
+
+
+def test_a_speck_seen_still_then_missed_opens_no_strike_search(backdrop):
+    # A far ball of one pixel, seen still (as a ball rolling along the line of sight is), then gone;
+    # single-pixel specks 25-35 px around where it was. Found on a 240 fps shot: the strike's wide
+    # search took such specks, 25-45 px off, for a 1 px ball. A speck has no shape: nothing in a wide
+    # search can be told from it, so no strike search is opened for one.
+    rng = np.random.default_rng(3)
+    angles, radii = rng.uniform(0, 2 * np.pi, 10), rng.uniform(25, 35, 10)
+    specks = {10 + k: (640 + int(round(r * np.cos(a))), 600 + int(round(r * np.sin(a)))) for k, (a, r) in enumerate(zip(angles, radii))}
+    base = backdrop()
+    regions = (InitRegion(0, 0, 640.0, 600.0, 3, 3, "ball"),)
+    frames = []
+    for k in range(20):
+        img = base.copy()
+        x, y = (640, 600) if k < 10 else specks[k]
+        img[y, x] = BALL_BGR
+        frames.append(Frame(k, k * NS, img, hints=tuple(r for r in regions if r.frame == k), all_hints=regions))
+    tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
+    results = [(tracker.step(f), tracker.intermediates) for f in frames[:10]]
+    assert statuses(results).count("measured") >= 8, statuses(results)
+    assert tracker.targets.area < GolfConfig().particles.strike_min_area_px  # the ball is a speck
+    results += [(tracker.step(f), tracker.intermediates) for f in frames[10:]]
+    assert "measured" not in statuses(results)[10:], statuses(results)
+    struck = GolfTracker(GolfConfig(particles=ParticleConfig(strike_min_area_px=0.0)), np.random.default_rng(0))
+    assert "measured" in [struck.step(f)[0].status for f in frames][10:]  # with a strike search one is taken

@@ -8,7 +8,7 @@ from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
 from trackreplay.trackers.golf.config import EkfConfig, RangeConfig
 from trackreplay.trackers.golf.landing import MAX_REJECTIONS, BallisticEkf, EkfState, measurement_jacobian, predict_landing
-from trackreplay.trackers.golf.range import RangeFromArea, range_from_area, range_rel_sigma
+from trackreplay.trackers.golf.range import RangeFromArea, nearer_than_predicted, range_from_area, range_rel_sigma
 from trackreplay.trackers.golf.reinit import image_parabola_landing
 
 LENS = LensTable(1280, 720, (LensEntry(0, 0, 1000, 1000, 640, 360), LensEntry(100, 0, 9000, 9000, 640, 360)), (-12.0, 18.0, 4.0))
@@ -74,6 +74,23 @@ def test_range_from_area_inverts_the_projection():
     d = cam.intrinsics.fx * D / 60.0
     assert range_from_area(math.pi / 4 * d * d, cam, D) == pytest.approx(60.0)
     assert range_rel_sigma(math.pi / 4 * d * d, 0.1) > 0.1
+
+
+def test_a_blob_far_too_big_for_the_predicted_ball_is_too_near():
+    """A cloud puff of 300 px where the filter has the ball 56 m away: as a ball it would be ~9 m
+    from the lens. The same puff is no contradiction when the filter is unsure of its range."""
+    cam = follow(np.array([40.0, 0.0, 15.0]), diameter_px=3.0)
+    predicted = np.array([40.0, 0.0, 15.0])
+    sure, unsure = np.eye(3) * 1.0, np.eye(3) * 15.0**2  # 1 m, 15 m along the line of sight
+    puff = range_from_area(300.0, cam, D)
+    ball = range_from_area(math.pi / 4 * 9.0, cam, D)  # the 3 px ball the camera was zoomed for
+    distance = float(np.linalg.norm(predicted - cam.position))
+    assert puff < distance / 4 and abs(ball - distance) < 1.0
+    assert nearer_than_predicted(puff, predicted, sure, cam.position, factor=2.0)
+    assert not nearer_than_predicted(ball, predicted, sure, cam.position, factor=2.0)
+    assert not nearer_than_predicted(puff, predicted, unsure, cam.position, factor=2.0)  # 3 sigma reaches it
+    assert not nearer_than_predicted(0.6 * distance, predicted, sure, cam.position, factor=2.0)  # within the factor
+    assert not nearer_than_predicted(math.nan, predicted, sure, cam.position, factor=2.0)
 
 
 def test_landing_of_a_vacuum_shot_is_analytic():
