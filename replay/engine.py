@@ -33,8 +33,9 @@ from trackreplay.replay import registry
 from trackreplay.replay.config import ConfigSource, config_to_dict, load_config
 from trackreplay.replay.config_toml import config_toml
 from trackreplay.replay.digest import FrameDigests, ReplayDigest
-from trackreplay.replay.frames import BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints
-from trackreplay.replay.marks import check_labels
+from trackreplay.replay.frames import (BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints,
+                                       read_stereo_rig)
+from trackreplay.replay.marks import check_can_track, check_labels
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
 from trackreplay.replay.trajectory import state_row, trajectory_table
@@ -165,7 +166,11 @@ class ReplaySteps(Iterator[ReplayStep]):
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
         marks = read_hints(reader, topics.hints, topics.image)
         check_labels({r.label for r in marks}, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
-        outside = len(marks) - len(marks_in_window(marks, start_ns, end_ns))
+        inside = marks_in_window(marks, start_ns, end_ns)
+        check_can_track(req.tracker, self.entry.tracker_cls, inside, len(inside) < len(marks),
+                        getattr(self.entry.tracker_cls, "needs", "") != "stereo" or read_stereo_rig(reader, topics) is not None,
+                        req.log)
+        outside = len(marks) - len(inside)
         self.notice = (f"{outside} of the log's {len(marks)} mark(s) are on frames outside --start/--end and are not "
                        "used (a track starts only from a mark on a frame it replays)") if outside else ""
         # a no-op for trackers that need no look ahead

@@ -3,7 +3,7 @@ with labels the chosen tracker reads."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
 from trackreplay.schemas.errors import LogError, SourceError
 
@@ -23,6 +23,23 @@ def check_labels(labels: Iterable[str], tracker: str, tracker_cls, where: str) -
         raise LogError(f"{where}: marks labelled {', '.join(repr(x) for x in ignored)} would be ignored by the "
                        f"{tracker} tracker, which reads only {', '.join(repr(x) for x in known)} marks "
                        f"(annotate again with --label {known[0]})")
+
+
+def check_can_track(tracker: str, tracker_cls, marks: Sequence, windowed: bool, has_stereo: bool, log) -> None:
+    """Refuse a replay its tracker cannot start on: one that starts only from a mark (``needs =
+    "mark"``) on a log (or ``--start``/``--end`` window) that marks nothing, one that needs a
+    calibrated stereo pair (``needs = "stereo"``) on a log without one. Refused before any frame is
+    decoded: a trajectory with no row is no answer to a replay."""
+    needs = getattr(tracker_cls, "needs", "")
+    if needs == "mark" and not marks:
+        raise LogError(f"{log}: the {tracker} tracker starts only from a marked box and the log marks none"
+                       + (" on the frames replayed (--start/--end)" if windowed else "")
+                       + "; mark one with `trackreplay annotate LOG --frame N --box x,y,w,h` "
+                       "(`trackreplay frame LOG N` shows the pixel grid)")
+    if needs == "stereo" and not has_stereo:
+        raise LogError(f"{log}: the {tracker} tracker needs a calibrated stereo pair (/stereo/left/image and "
+                       "/stereo/right/image with their calibration, or a ROS 2 pair with camera_info; "
+                       "--stereo-topics names other topics) and the log has none")
 
 
 def check_inside(boxes: Iterable[tuple[int, float, float, float, float]], width: int, height: int, where: str) -> None:

@@ -100,12 +100,19 @@ def test_a_mark_outside_the_replayed_window_starts_nothing(tmp_path) -> None:
 
     from trackreplay.replay.engine import ReplayRequest, replay
 
+    from trackreplay.replay.cli import main as cli
+    from trackreplay.schemas.errors import LogError
+
     log = Path(__file__).resolve().parents[1] / "golden" / "colorpf-approach-320x240.mcap"  # marked on frame 8
     whole = replay(ReplayRequest(log=log, tracker="colorpf"))
     assert (whole.trajectory["status"] == "measured").sum() > 0
-    late = replay(ReplayRequest(log=log, tracker="colorpf", start_s=0.5))
-    assert late.frames > 0 and late.trajectory.is_empty()
-    assert any("outside --start/--end and are not used" in n for n in late.notices)
+    with pytest.raises(LogError, match=r"marks none on the frames replayed \(--start/--end\)"):
+        replay(ReplayRequest(log=log, tracker="colorpf", start_s=0.5))  # its only mark is before the window
+    twice = tmp_path / "twice.mcap"  # a second mark, on frame 30 (1.0 s), after the window below
+    assert cli(["annotate", str(log), "--frame", "30", "--box", "150,70,14,40", "--out", str(twice)]) == 0
+    early = replay(ReplayRequest(log=twice, tracker="colorpf", end_s=0.9))
+    assert (early.trajectory["status"] == "measured").sum() > 0
+    assert any("1 of the log's 2 mark(s) are on frames outside --start/--end and are not used" in n for n in early.notices)
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -125,3 +132,25 @@ def test_the_python_api_checks_what_the_cli_parser_checks(kwargs, message) -> No
     log = Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap"
     with pytest.raises(TrackreplayError, match=message):
         replay_log(log, "flow", **kwargs)
+
+
+@pytest.mark.parametrize("tracker, message", [
+    ("colorpf", "the colorpf tracker starts only from a marked box and the log marks none; mark one with"),
+    ("golf", "the golf tracker starts only from a marked box and the log marks none; mark one with"),
+    ("groups", "the groups tracker needs a calibrated stereo pair"),
+])
+def test_a_replay_its_tracker_cannot_start_on_is_refused(tracker, message, capsys, tmp_path) -> None:
+    """Before: exit 0 with a trajectory of no row and a notice ("nothing is tracked") that a script
+    running many replays never reads. Now bad input: one sentence naming the log, exit 2, before any
+    frame is decoded."""
+    from pathlib import Path
+
+    from trackreplay.replay.cli import main as cli
+
+    golden = Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap"
+    log = tmp_path / "unmarked.mcap"  # its images alone: no mark, no stereo pair
+    assert cli(["filter", str(golden), str(log), "--topic", "/camera/image"]) == 0
+    capsys.readouterr()
+    assert cli(["replay", str(log), "--tracker", tracker, "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert f"trackreplay: error: {log}: {message}" in err and err.count("\n") == 1

@@ -86,6 +86,7 @@ class ColorPfTracker(TrackerBase):
     """Seed 002 (SPEC Tracker 2). ``step(frame)`` returns one track (id 1) from the marked frame on."""
 
     name = "colorpf"
+    needs = "mark"  # the engine refuses a log that marks no target (replay.marks.check_can_track)
 
     def __init__(self, config: ColorPfConfig, rng: np.random.Generator) -> None:
         self.config = config

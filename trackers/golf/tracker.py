@@ -58,6 +58,7 @@ class GolfTracker(TrackerBase):
     """Seed 000 (SPEC Tracker 1). ``step(frame)`` returns one track (id 1) once started."""
 
     name = "golf"
+    needs = "mark"  # the engine refuses a log that marks no ball (replay.marks.check_can_track)
 
     def __init__(self, config: GolfConfig, rng: np.random.Generator) -> None:
         self.config = config

@@ -84,6 +84,7 @@ class GroupTracker(TrackerBase):
     """Seed 003 (SPEC Tracker 3). ``step(frame)`` returns one state per live or just-ended group."""
 
     name = "groups"
+    needs = "stereo"  # the engine refuses a log without a calibrated stereo pair (replay.marks.check_can_track)
 
     def __init__(self, config: GroupsConfig, rng: np.random.Generator) -> None:
         self.user_config = config
