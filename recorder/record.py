@@ -108,6 +108,7 @@ def record(
     lens_table: str | Path | None = None,
     groundtruth: str | Path | None = None,
     gt_format: str = "auto",
+    gt_first_frame: int = 0,
     ground_plane: str | Path | None = None,
     encoding: str = "jpeg",
     flush_every: int = 30,
@@ -148,7 +149,7 @@ def record(
             pass
     if lens_table is not None:
         read_lens_table(lens_table)
-    gt = read_groundtruth(groundtruth, gt_format) if groundtruth is not None else None
+    gt = read_groundtruth(groundtruth, gt_format, gt_first_frame) if groundtruth is not None else None
     plane, plane_warnings = read_ground_plane(ground_plane) if ground_plane is not None else (None, ())
     inputs = {Path(p).resolve() for p in (video, images, timestamps, calibration, encoders, lens_table, groundtruth, ground_plane, *(stereo or ())) if p is not None}
     if out.resolve() in inputs:
@@ -238,4 +239,9 @@ def _warnings(gt: GroundTruthTable | None, frames: int) -> tuple[str, ...]:
     if gt is not None and gt.last_frame >= frames:
         extra = sum(1 for f in gt.frames if f >= frames)
         return (f"{gt.path} annotates {extra} frame(s) after the last recorded frame ({frames}); they were not written",)
+    if gt is not None and not gt.dense and len(gt.frames) < frames:
+        first, last = min(gt.frames), gt.last_frame
+        return (f"{gt.path} has {len(gt.frames)} boxes for {frames} recorded frames: they were taken as frames "
+                f"{first}-{last} (line 1 = frame {first}); frames without a box have no ground truth "
+                "(a truth that starts later in the sequence, as OTB's David at image 300: --gt-first-frame 299)",)
     return ()

@@ -31,6 +31,8 @@ def list_images(folder: str | Path) -> list[Path]:
 
 def decode_image(path: Path, data: bytes) -> np.ndarray:
     """``data`` decoded to uint8 BGR or grey; alpha is dropped."""
+    if not data:  # (OpenCV asserts on an empty buffer instead of answering None)
+        raise SourceError(f"image {path} is empty (0 bytes)")
     image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None:
         raise SourceError(f"image {path} cannot be decoded (corrupt or not an image)")

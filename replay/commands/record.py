@@ -34,6 +34,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="fixed camera over flat ground: JSON with width, height, image_to_ground (3x3) or points [[u,v,X,Y],...], "
                         "camera_ground [X,Y], camera_height (see recorder/sources/ground_plane.py)")
     p.add_argument("--gt-format", choices=FORMATS, default="auto", help="annotation format (default: detect)")
+    p.add_argument("--gt-first-frame", type=int, default=0, metavar="N",
+                   help="the recorded frame (0-based) the annotation's first frame describes (default 0; OTB's David, "
+                        "whose truth starts at image 300: 299)")
     p.add_argument("--encoding", choices=ENCODINGS, default="jpeg", help="encoding of decoded frames (default jpeg)")
     p.add_argument("--flush-every", type=int, default=30, metavar="N", help="flush a chunk every N messages (default 30): a crash loses at most N")
     p.add_argument("--topic", action="append", default=[], metavar="KEY=/NAME",
@@ -60,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
         args.out, video=args.video, images=args.images, stereo=tuple(args.stereo) if args.stereo else None,
         fps=args.fps, t0_ns=args.t0, timestamps=args.timestamps, calibration=args.calibration,
         encoders=args.encoders, lens_table=args.lens_table, groundtruth=args.groundtruth, gt_format=args.gt_format,
+        gt_first_frame=args.gt_first_frame,
         ground_plane=args.ground_plane,
         encoding=args.encoding, flush_every=args.flush_every, topics=parse_topics(args.topic), quiet=args.quiet,
     )

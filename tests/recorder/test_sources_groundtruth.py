@@ -41,6 +41,23 @@ def test_otb_separators_and_absent_target(tmp_path):
     assert table.objects_at(5) is None
 
 
+def test_old_mac_line_endings_and_a_truth_that_starts_later(tmp_path, make_images, log_messages):
+    """A review: CR-only line endings read as one line (an error in MOT's column names); a truth file
+    shorter than the image folder (OTB's David starts at image 300) recorded silently from frame 0."""
+    gt = tmp_path / "groundtruth_rect.txt"
+    gt.write_bytes(b"10,20,30,40\r11,21,30,40\r")
+    assert sorted(read_groundtruth(gt).frames) == [0, 1]
+    assert sorted(read_groundtruth(gt, first_frame=2).frames) == [2, 3]
+    with pytest.raises(SourceError, match="first frame must be a frame number >= 0"):
+        read_groundtruth(gt, first_frame=-1)
+    folder = make_images(tmp_path / "img", 5)
+    report = record(tmp_path / "a.mcap", images=folder, fps=20, groundtruth=gt, quiet=True)
+    assert len(report.warnings) == 1 and "has 2 boxes for 5 recorded frames: they were taken as frames 0-1" in report.warnings[0]
+    record(tmp_path / "b.mcap", images=folder, fps=20, groundtruth=gt, gt_first_frame=3, quiet=True)
+    frames = [m.pb.frame for m in log_messages(tmp_path / "b.mcap") if m.topic == "/groundtruth/objects"]
+    assert frames == [3, 4]
+
+
 def test_otb_negative_size_names_the_line(tmp_path):
     gt = tmp_path / "groundtruth_rect.txt"
     gt.write_text("10,20,30,40\n10,20,-30,40\n")
@@ -89,6 +106,9 @@ def test_mot_every_frame_gets_a_message_and_extra_frames_warn(tmp_path, make_ima
     ("groundtruth_rect.txt", "1,2,3,4\n1,2,3\n", r"groundtruth_rect\.txt:2: expected x,y,w,h, got 3 values"),
     ("groundtruth_rect.txt", "1,2,3,four\n", r"groundtruth_rect\.txt:1: h 'four' is not a number"),
     ("groundtruth_rect.txt", "\n\n", r"groundtruth_rect\.txt is empty"),
+    # a review: one NaN, or an infinity, was taken silently as "target absent"
+    ("groundtruth_rect.txt", "1,2,3,4\n160,NaN,17,45\n", r"groundtruth_rect\.txt:2: the box 160,NaN,17,45 is neither a box nor"),
+    ("groundtruth_rect.txt", "inf,140,17,45\n", r"groundtruth_rect\.txt:1: the box inf,140,17,45 is neither"),
 ])
 def test_bad_annotation_rows(tmp_path, name, text, match):
     path = tmp_path / name

@@ -84,6 +84,15 @@ def test_corrupt_image_names_file(tmp_path, make_images):
         record(tmp_path / "out.mcap", images=folder, fps=10, quiet=True)
 
 
+def test_empty_image_file_names_file(tmp_path, make_images):
+    """A review's zero-byte 0001.jpg: OpenCV asserted inside imdecode and record exited 70 (internal error)."""
+    folder = make_images(tmp_path / "img", 3)
+    (folder / "frame0.jpg").write_bytes(b"")
+    with pytest.raises(SourceError, match=r"image .*frame0\.jpg is empty \(0 bytes\)"):
+        record(tmp_path / "out.mcap", images=folder, fps=10, quiet=True)
+    assert not (tmp_path / "out.mcap").exists()
+
+
 def test_folder_errors(tmp_path, make_images):
     with pytest.raises(SourceError, match=r"missing does not exist"):
         record(tmp_path / "out.mcap", images=tmp_path / "missing", fps=10, quiet=True)

@@ -36,3 +36,11 @@ def to_hsv(image: np.ndarray) -> np.ndarray:
 
 
 HSV_RANGES = ((0.0, 180.0), (0.0, 256.0), (0.0, 256.0))  # value ranges of to_hsv's channels
+
+
+def saturated_share(image: np.ndarray, s_min: float) -> float:
+    """The share of pixels whose HSV saturation is at least ``s_min`` (a fraction of its range):
+    0 for a grey picture (one channel, or three equal ones), most of a colour one."""
+    if image.ndim == 2 or image.shape[-1] == 1:
+        return 0.0
+    return float(np.count_nonzero(to_hsv(image)[..., 1] >= s_min * 256.0)) / max(image.shape[0] * image.shape[1], 1)

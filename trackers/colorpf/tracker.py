@@ -44,9 +44,12 @@ starts the track; later marks are not used (a notice says so).
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
+from trackreplay.trackers.appearance.color import saturated_share
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, scale_of, snap, warp
@@ -64,6 +67,10 @@ from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 
+GREY_SHARE = 0.005  # fewer saturated pixels than this share of the marked frame: a grey picture
+GREY_NOTICE = ("the marked frame has no colour (under 0.5 % of its pixels saturated: a grey sequence), so H-S "
+               "histograms carry nothing; the brightness histogram of Perez et al. is used instead "
+               "(likelihood.histogram = \"hsv\": H-S of coloured pixels, V of the rest)")
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
@@ -191,6 +198,10 @@ class ColorPfTracker(TrackerBase):
         assert mark is not None and self.background is not None
         height, width = frame.image.shape[:2]
         box = marked_box((mark.x, mark.y, mark.w, mark.h), width, height)
+        if cfg.likelihood.histogram == "hs" and saturated_share(frame.image, cfg.likelihood.s_min) < GREY_SHARE:
+            # no hue or saturation to histogram: every box would score alike, and confidently
+            self.model = ColourModel(dataclasses.replace(cfg.likelihood, histogram="hsv"))
+            self._say(GREY_NOTICE)
         self.reference = box_reference(self.model, frame.image, box)
         background, source = self.background.at_start(frame.image)
         mask = None

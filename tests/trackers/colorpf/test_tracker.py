@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import dataclasses
+
 import numpy as np
 import polars as pl
 import pytest
@@ -98,6 +100,25 @@ def test_fallback_notice_without_background_and_the_chosen_mark():
     assert "no background" in said[0] and "the track starts from the first, on frame 0 (label 'car')" in said[0]
     assert tracker.intermediates.reference_kind == "box"
     assert start_mark(()) == (None, "")
+
+
+def test_a_grey_sequence_is_said_and_tracked_on_brightness():
+    """A review ran an OTB sequence saved grey: every H-S histogram was the same single bin, every box
+    scored S = 1, and 93 rows were `measured` at confidence 1 up to 140 px off the walker (AUC 0.04).
+    A grey marked frame now switches the histogram to Perez et al.'s (V for uncoloured pixels) and says so;
+    a colour frame keeps H-S."""
+    mark = InitRegion(0, 0, 35.5, 29.5, 12, 20, "target")
+    grey = []
+    for f in _frames(6, [mark]):
+        g = f.image.mean(axis=2, keepdims=True).astype(np.uint8)
+        grey.append(dataclasses.replace(f, image=np.repeat(g, 3, axis=2)))
+    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    notices = [(tracker.step(f), tracker.intermediates.notice)[1] for f in grey]
+    assert "no colour" in notices[0] and "likelihood.histogram = \"hsv\"" in notices[0]
+    assert tracker.model.config.histogram == "hsv" and tracker.intermediates.reference.shape == (10 * 10 + 10,)
+    colour = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    colour.step(_frames(1, [mark])[0])
+    assert colour.model.config.histogram == "hs" and "no colour" not in colour.intermediates.notice
 
 
 def test_no_mark_is_said_and_nothing_tracked():
