@@ -22,7 +22,7 @@ from trackreplay.recorder.sources.ground_plane import read_ground_plane
 from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
 from trackreplay.recorder.sources.images import check_count, list_images, read_images
 from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration, pose_message
-from trackreplay.recorder.sources.video import frame_count_hint, read_video, video_clock
+from trackreplay.recorder.sources.video import VideoLosses, frame_count_hint, read_video, video_clock
 from trackreplay.recorder.writer import LogWriter
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
@@ -60,6 +60,7 @@ class RecordReport:
     start_ns: int | None = None
     end_ns: int | None = None
     warnings: tuple[str, ...] = ()
+    frames_lost: bool = False  # the source had frames that could not be decoded (named in warnings)
 
 
 def _image_pb(frame: ImageFrame, encoding: str, frame_id: str):
@@ -157,10 +158,11 @@ def record(
     if not out.parent.is_dir():
         raise SourceError(f"output folder {out.parent} does not exist")
 
+    losses = VideoLosses(str(video))
     if pair is not None:
         bundles: Iterator[tuple[ImageFrame, ImageFrame | None]] = pair.pairs(clock)
     else:
-        mono = read_images(images, clock) if images is not None else read_video(video, clock)
+        mono = read_images(images, clock) if images is not None else read_video(video, clock, losses)
         bundles = ((f, None) for f in mono)
 
     try:
@@ -205,8 +207,9 @@ def record(
         out.unlink(missing_ok=True)  # a half-recorded log of a broken source would mislead
         raise
     writer.close()
+    lost = losses.warnings() if video is not None else ()
     return RecordReport(out, frames, writer.messages_written, dict(rec.counts), rec.start, rec.end,
-                        plane_warnings + _warnings(gt, frames))
+                        plane_warnings + lost + _warnings(gt, frames), frames_lost=bool(lost))
 
 
 def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo: bool, calib: Calibration | None, lens_table,

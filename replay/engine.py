@@ -35,7 +35,7 @@ from trackreplay.replay.config_toml import config_toml
 from trackreplay.replay.digest import FrameDigests, ReplayDigest
 from trackreplay.replay.frames import (BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints,
                                        read_stereo_rig)
-from trackreplay.replay.marks import check_can_track, check_labels
+from trackreplay.replay.marks import check_can_track, check_labels, check_one_start_per_frame
 from trackreplay.replay.prefetch import prefetch
 from trackreplay.replay.reader import LogReader
 from trackreplay.replay.trajectory import state_row, trajectory_table
@@ -166,6 +166,7 @@ class ReplaySteps(Iterator[ReplayStep]):
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
         marks = read_hints(reader, topics.hints, topics.image)
         check_labels({r.label for r in marks}, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
+        check_one_start_per_frame(marks, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
         inside = marks_in_window(marks, start_ns, end_ns)
         check_can_track(req.tracker, self.entry.tracker_cls, inside, len(inside) < len(marks),
                         getattr(self.entry.tracker_cls, "needs", "") != "stereo" or read_stereo_rig(reader, topics) is not None,

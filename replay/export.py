@@ -119,12 +119,19 @@ def write_mot(df: pl.DataFrame, path: Path) -> None:
     out.write_csv(path, include_header=False, float_precision=3)
 
 
+def trajectory_format(path: str | Path) -> str:
+    """The format a trajectory path's suffix asks for (checked before a replay, so a wrong name
+    does not cost the whole replay first)."""
+    kind = FORMATS.get(Path(path).suffix.lower())
+    if kind is None:
+        raise TrackreplayError(f"{path}: unknown trajectory format; use .parquet, .csv or .txt (MOTChallenge)")
+    return kind
+
+
 def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
     """Write by suffix: ``.parquet`` (default format), ``.csv`` or ``.txt`` (MOTChallenge)."""
     path = Path(path)
-    kind = FORMATS.get(path.suffix.lower())
-    if kind is None:
-        raise TrackreplayError(f"{path}: unknown trajectory format; use .parquet, .csv or .txt (MOTChallenge)")
+    kind = trajectory_format(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = partial_path(path)  # the final name appears only for a complete file
     try:

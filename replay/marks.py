@@ -25,6 +25,23 @@ def check_labels(labels: Iterable[str], tracker: str, tracker_cls, where: str) -
                        f"(annotate again with --label {known[0]})")
 
 
+def check_one_start_per_frame(marks: Iterable, tracker: str, tracker_cls, where: str) -> None:
+    """A tracker that follows one object (``one_start_per_frame``: golf) starts from one mark per
+    frame: two different boxes on a frame, neither labelled ``start`` or ``init``, leave the choice to
+    their order (a review marked a wrong box first: nothing was tracked, exit 0)."""
+    if not getattr(tracker_cls, "one_start_per_frame", False):
+        return
+    boxes: dict[int, set] = {}
+    starts: dict[int, bool] = {}
+    for m in marks:
+        boxes.setdefault(m.frame, set()).add((m.x, m.y, m.w, m.h))
+        starts[m.frame] = starts.get(m.frame, False) or any(w in m.label.lower() for w in ("start", "init"))
+    for frame in sorted(boxes):
+        if len(boxes[frame]) > 1 and not starts[frame]:
+            raise LogError(f"{where}: frame {frame} has {len(boxes[frame])} different marks and the {tracker} tracker "
+                           "follows one ball: keep one, or label the one to start from `start` (--label start)")
+
+
 def check_can_track(tracker: str, tracker_cls, marks: Sequence, windowed: bool, has_stereo: bool, log) -> None:
     """Refuse a replay its tracker cannot start on: one that starts only from a mark (``needs =
     "mark"``) on a log (or ``--start``/``--end`` window) that marks nothing, one that needs a

@@ -253,6 +253,8 @@ class StereoSource:
             rf = next(right, None)
             if rf is None:
                 raise SourceError(f"stereo videos differ in length: {self.right} ends after {count} frames, {self.left} goes on")
+            if lf.index != rf.index:  # (a frame of one video did not decode)
+                raise SourceError(f"stereo videos lost different frames: {lf.where} is paired with {rf.where}")
             if lf.size != rf.size:
                 raise SourceError(f"{rf.where} is {rf.size[0]}x{rf.size[1]} but {lf.where} is {lf.size[0]}x{lf.size[1]}")
             count += 1

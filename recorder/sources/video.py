@@ -8,6 +8,7 @@ found the gap of a VFR clip gone; OpenCV cannot write such a video for a test, s
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -20,7 +21,7 @@ def open_video(path: str | Path) -> cv2.VideoCapture:
     path = require_file(path, "video")
     cap = cv2.VideoCapture(str(path))
     if not cap.isOpened():
-        raise SourceError(f"OpenCV cannot open video {path} (unsupported container or codec)")
+        raise SourceError(f"OpenCV cannot open video {path} (truncated or damaged, or an unsupported container or codec)")
     return cap
 
 
@@ -52,21 +53,66 @@ def frame_count_hint(path: str | Path) -> int | None:
     return n if n > 0 else None
 
 
-def read_video(path: str | Path, clock: FrameClock) -> Iterator[ImageFrame]:
-    """Decoded BGR frames, one at a time."""
+MAX_FAILED_READS = 30  # failed reads in a row before the video is taken as ended (OpenCV reads on past a bad frame)
+
+
+@dataclass
+class VideoLosses:
+    """What reading a video could not decode: ``lost`` index ranges (first, last) inside it, and the
+    frames it declares (``declared``, approximate: an intact MP4 may claim a few more) against those read."""
+
+    path: str
+    declared: int = 0
+    read: int = 0
+    last_index: int = -1
+    lost: list[tuple[int, int]] = field(default_factory=list)
+
+    def warnings(self) -> tuple[str, ...]:
+        out = []
+        if self.lost:
+            ranges = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in self.lost[:10]) + (" ..." if len(self.lost) > 10 else "")
+            n = sum(b - a + 1 for a, b in self.lost)
+            out.append(f"video {self.path}: {n} frame(s) could not be decoded (damaged) and are missing from the log: "
+                       f"frames {ranges}; the frames after them keep their own times")
+        tail = self.declared - (self.last_index + 1)
+        if tail > max(2, 0.01 * self.declared):
+            out.append(f"video {self.path}: decoding stopped after frame {self.last_index} of the {self.declared} the file "
+                       "declares (truncated or damaged): the log holds what could be read")
+        return tuple(out)
+
+
+def read_video(path: str | Path, clock: FrameClock, losses: VideoLosses | None = None) -> Iterator[ImageFrame]:
+    """Decoded BGR frames, one at a time, each at its own index: a frame that does not decode is
+    skipped and the reading goes on (``losses``, when given, says which; the next frame's index comes
+    from its presentation time, ``CAP_PROP_POS_MSEC``, so a gap keeps the later frames' times)."""
     path = Path(path)
     cap = open_video(path)
+    losses = losses if losses is not None else VideoLosses(str(path))
+    losses.declared = int(cap.get(cv2.CAP_PROP_FRAME_COUNT) or 0)
+    rate = float(cap.get(cv2.CAP_PROP_FPS) or 0.0)
+    expected = 0  # the next frame's index when nothing is lost
     try:
-        index = 0
-        while True:
+        failed = 0
+        while failed <= MAX_FAILED_READS:
             ok, image = cap.read()
             if not ok:
-                break
+                failed += 1
+                continue
+            failed = 0
+            index = expected
+            msec = float(cap.get(cv2.CAP_PROP_POS_MSEC) or 0.0)
+            if rate > 0 and msec > 0:
+                by_time = int(round(msec * rate / 1000.0))
+                if by_time > expected:  # frames between did not decode
+                    losses.lost.append((expected, by_time - 1))
+                    index = by_time
             yield ImageFrame(index, clock.t_ns(index), f"{path} frame {index}", image)
-            index += 1
+            losses.read += 1
+            losses.last_index = index
+            expected = index + 1
     finally:
         cap.release()
-    if index == 0:
+    if losses.read == 0:
         raise SourceError(f"video {path} has no readable frames")
-    if clock.timestamps is not None and index != len(clock.timestamps):
-        raise SourceError(f"{clock.timestamps_path} has {len(clock.timestamps)} timestamps but video {path} has {index} frames")
+    if clock.timestamps is not None and expected != len(clock.timestamps):
+        raise SourceError(f"{clock.timestamps_path} has {len(clock.timestamps)} timestamps but video {path} has {expected} frames")

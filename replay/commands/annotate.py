@@ -10,7 +10,7 @@ from trackreplay.schemas.errors import TrackreplayError
 
 from trackreplay.replay import registry
 from trackreplay.replay.commands.frame import frame_image, image_topic
-from trackreplay.replay.marks import check_inside, check_labels
+from trackreplay.replay.marks import check_inside, check_labels, check_one_start_per_frame
 from trackreplay.replay.reader import LogReader
 
 
@@ -49,6 +49,7 @@ def run(args: argparse.Namespace) -> int:
     check_inside(((mk.frame, mk.x, mk.y, mk.w, mk.h) for mk in marks), width, height, f"{args.log}: {topic}")
     if args.tracker:
         check_labels({mk.label for mk in marks}, args.tracker, registry.get(args.tracker).tracker_cls, "annotate")
+        check_one_start_per_frame(marks, args.tracker, registry.get(args.tracker).tracker_cls, "annotate")
     regions = annotate(args.log, out, marks, topic)
     print(f"wrote {out}: {len(regions)} marked region(s) on frames {sorted({r.frame for r in regions})}")
     return 0

@@ -13,7 +13,7 @@ from trackreplay.schemas.errors import TrackreplayError
 
 from trackreplay.replay import registry
 from trackreplay.replay.engine import ReplayRequest, replay
-from trackreplay.replay.export import METHODS, fill_gaps, write_trajectory
+from trackreplay.replay.export import METHODS, fill_gaps, trajectory_format, write_trajectory
 
 
 # The replay finished but skipped damaged or undecodable frames (docs/exit_codes.md).
@@ -72,6 +72,8 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.export:
+        trajectory_format(args.export)  # before the replay, not after it
     request = request_from_args(args, args.rrd)
     if args.summary:  # the summary's sidecar holds per-frame digests (for `trackreplay diff`)
         request = dataclasses.replace(request, frame_digests=True)

@@ -66,3 +66,21 @@ def test_exactly_one_image_source(tmp_path, make_video):
     video = make_video(tmp_path / "v.avi", 2)
     with pytest.raises(SourceError, match="exactly one image source"):
         record(tmp_path / "out.mcap", video=video, images=tmp_path, quiet=True)
+
+
+def test_a_truncated_video_is_recorded_up_to_the_damage_and_says_so(tmp_path, make_video, log_messages):
+    """A review cut a video to half its bytes: `record` wrote the first half as the whole clip, exit 0.
+    Now every readable frame is kept (a valid log), a warning names the shortfall and the CLI exits 7."""
+    from trackreplay.replay.cli import main as cli
+
+    video = make_video(tmp_path / "v.avi", 40, fps=20.0, size=(160, 120), fourcc="MJPG")
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(video.read_bytes()[: video.stat().st_size // 2])
+    report = record(tmp_path / "out.mcap", video=cut, quiet=True)
+    assert report.frames_lost and 5 < report.frames < 35
+    assert any("decoding stopped after frame" in w and "of the 40 the file declares" in w for w in report.warnings)
+    msgs = log_messages(tmp_path / "out.mcap")
+    assert [m.log_time for m in msgs] == [i * 50_000_000 for i in range(report.frames)]  # the frames before it, on time
+    assert cli(["record", str(tmp_path / "cli.mcap"), "--video", str(cut), "--quiet"]) == 7
+    whole = record(tmp_path / "whole.mcap", video=video, quiet=True)
+    assert whole.frames == 40 and not whole.frames_lost and whole.warnings == ()

@@ -147,6 +147,8 @@ def test_an_empty_time_range_is_refused(short_sim: Path, capsys) -> None:
      "the first frame time must be at most 2^62 ns"),
     (["annotate", "LOG", "--frame", "0", "--box", "10,10,nan,10", "--out", "OUT"], "must be four finite numbers"),
     (["replay", "LOG", "--start", "100", "--quiet"], "--start 100 s is after the log's end"),
+    # a review: a wrong --export suffix was refused only after the whole replay (and its 166 MB .rrd)
+    (["replay", "LOG", "--export", "OUT.json", "--rrd", "OUT", "--quiet"], "unknown trajectory format"),
 ])
 def test_values_a_review_got_through_are_refused(argv, message, short_sim: Path, tmp_path: Path, capsys) -> None:
     """Each once ended in exit 0 with an unusable output, or in an internal error: now exit 2, one
@@ -159,7 +161,7 @@ def test_values_a_review_got_through_are_refused(argv, message, short_sim: Path,
     for k in range(3):
         cv2.imwrite(str(images / f"{k:03d}.png"), np.full((16, 16, 3), 40 * k, np.uint8))
     out = tmp_path / "out.mcap"
-    subst = {"OUT": str(out), "IMAGES": str(images), "LOG": str(short_sim)}
+    subst = {"OUT": str(out), "IMAGES": str(images), "LOG": str(short_sim), "OUT.json": str(tmp_path / "t.json")}
     assert main([subst.get(a, a) for a in argv]) == 2
     [line] = our_lines(capsys.readouterr().err)
     assert message in line

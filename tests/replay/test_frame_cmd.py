@@ -48,3 +48,21 @@ def test_labels_a_tracker_ignores_are_refused(short_sim: Path, tmp_path: Path, c
                  "--tracker", "golf", "--out", str(out)]) == 0
     with pytest.raises(LogError, match="labelled 'ball' would be ignored by the flow tracker"):
         replay(ReplayRequest(log=out, tracker="flow"))
+
+
+def test_two_golf_marks_on_a_frame_need_one_labelled_start(short_sim: Path, tmp_path: Path, capsys) -> None:
+    """A review marked a wrong box and the ball on one frame: the golf tracker started from the first
+    (the wrong one) and tracked nothing, exit 0; swapped, it tracked the ball."""
+    two = tmp_path / "two.mcap"
+    args = ["annotate", str(short_sim), "--frame", "0", "--box", "10,10,8,8", "--box", "40,40,8,8", "--label", "ball"]
+    assert main(args + ["--tracker", "golf", "--out", str(two)]) == 2
+    assert "frame 0 has 2 different marks and the golf tracker follows one ball" in capsys.readouterr().err
+    assert main(args + ["--out", str(two)]) == 0  # without --tracker annotate does not know who will read them
+    with pytest.raises(LogError, match=r"frame 0 has \d different marks"):  # (and the log's own mark)
+        replay(ReplayRequest(log=two, tracker="golf"))
+    start = tmp_path / "start.mcap"  # one of them labelled start: that one starts the track
+    assert main(["annotate", str(two), "--frame", "0", "--box", "12,12,8,8", "--label", "start", "--out", str(start)]) == 0
+    replay(ReplayRequest(log=start, tracker="golf"))
+    same = tmp_path / "same.mcap"  # the same box twice is one mark
+    assert main(["annotate", str(short_sim), "--frame", "0", "--box", "10,10,8,8", "--box", "10,10,8,8", "--label", "ball",
+                 "--tracker", "golf", "--out", str(same)]) == 0

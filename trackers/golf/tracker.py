@@ -59,6 +59,7 @@ class GolfTracker(TrackerBase):
 
     name = "golf"
     needs = "mark"  # the engine refuses a log that marks no ball (replay.marks.check_can_track)
+    one_start_per_frame = True  # ... and two different marks on a frame, neither labelled start (check_one_start_per_frame)
 
     def __init__(self, config: GolfConfig, rng: np.random.Generator) -> None:
         self.config = config
