@@ -55,6 +55,8 @@ HOLED = 217
 ONE_MARK = [
     ("approach1", "approach, one mark at 20 (box 312,200,8,8)", VIDEO, REFERENCE, "frame,x,y,w,h\n20,312,200,8,8\n", HOLED),
     ("approach4", "approach, four marks (12, 16, 20, 30)", VIDEO, REFERENCE, MARKS, HOLED),
+    # a review's case: one mark at 12 measured pieces of the empty cup liner on 213-219 and 224, up to 31 px off
+    ("approach12", "approach, one mark at 12 (box 343,177,6,6)", VIDEO, REFERENCE, "frame,x,y,w,h\n12,343,177,6,6\n", HOLED),
     ("iron1", "iron shot into the sky, one mark at 458 (box 593,1016,22,22)", IRON_DIR / "vid1.mp4", IRON_DIR / "reference.csv",
      "frame,x,y,w,h\n458,593,1016,22,22\n", 612),
 ]

@@ -183,7 +183,10 @@ class ReplaySteps(Iterator[ReplayStep]):
 
     def __next__(self) -> ReplayStep:
         frame = next(self._frames)
-        states = tuple(self.tracker.step(frame))
+        try:
+            states = tuple(self.tracker.step(frame))
+        except TrackreplayError as err:  # a tracker refusing its input (a mark round no ball) names the log too
+            raise type(err)(f"{self.request.log}: {err}") from None
         return ReplayStep(frame, states, self.tracker.intermediates)
 
     def close(self) -> None:

@@ -211,6 +211,19 @@ def start_targets(mask: np.ndarray, offset: tuple[int, int], near: np.ndarray, c
     return BlobTargets(float(blobs.area[biggest]), float(min(max(roundness(blobs)[biggest], 0.6), 1.0)))
 
 
+def spills_over(mask: np.ndarray, offset: tuple[int, int], area: float) -> bool:
+    """The marked ball's blob (``area`` px, the biggest in ``mask``, a crop twice the marked box)
+    reaches the crop's edge: what the LUT picks out is not inside twice the box, so the box was not
+    drawn round a ball the colours tell apart (a 400 px box on grass: a 356 000 px "ball")."""
+    blobs = measure_blobs(mask, offset, moments=False)
+    k = np.flatnonzero(blobs.area == area)
+    if not k.size or mask.size == 0:
+        return False
+    x0, y0, w, h = (int(v) for v in blobs.bbox[int(k[0])])
+    ox, oy = int(offset[0]), int(offset[1])
+    return x0 <= ox or y0 <= oy or x0 + w >= ox + mask.shape[1] or y0 + h >= oy + mask.shape[0]
+
+
 def shape_tolerance(area: np.ndarray, cfg: BlobConfig, scale: float) -> np.ndarray:
     """The roundness tolerance for blobs of ``area`` px: ``circularity_tolerance``, widened as
     ``sqrt(shape_area_px / area)`` below ``shape_area_px`` (a shape read from a few pixels is noisy:

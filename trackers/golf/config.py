@@ -243,6 +243,9 @@ class ValidateConfig:
     # than this many times nearer than the filter's range less 3 sigma (0: off). A cloud puff is tens
     # of px: a ball that size would be a few metres from the lens.
     confirm_max_nearer: float = 2.0
+    # ... and not be something that was already there, beside the ball, on the frame where the ball was
+    # last measured (seen_before.py: the cup's liner the ball dropped into). False: off.
+    confirm_not_seen_before: bool = True
     # Still scenery (scenery.py): a blob within this of where a blob was the frame before, seen while the
     # ball was measured elsewhere, is refused while it stays (reference height; 0: off). Centroids of
     # a still object move 0.1-0.5 px between frames (noise, JPEG).

@@ -28,12 +28,13 @@ from collections.abc import Callable
 import numpy as np
 
 from trackreplay.schemas.records import InitRegion
+from trackreplay.schemas.errors import LogError
 from trackreplay.trackers.base import Marked, TrackerBase, TrackState
 from trackreplay.trackers.filters.particles import ParticleFilter, squared_deviations
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
 from trackreplay.trackers.golf.blobs import (STILL, ApparentMotion, BlobTargets, GatedBlobs, refuse, roundness, select_ball,
-                                             start_targets)
+                                             spills_over, start_targets)
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
@@ -46,6 +47,7 @@ from trackreplay.trackers.golf.range import RangeFromArea, nearer_than_predicted
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
+from trackreplay.trackers.golf.seen_before import LastSighting, was_there_before
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, named_silhouette, previous_in_pose, top_hat)
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
@@ -82,6 +84,7 @@ class GolfTracker(TrackerBase):
         self._prev_image: np.ndarray | None = None
         self._last_measured: tuple[int, float, float] | None = None  # frame, x, y
         self._sightings = 0  # frames measured since the track (re)started
+        self._last_sighting: LastSighting | None = None  # the frame the ball was last measured on (seen_before)
         self.intermediates = GolfIntermediates.idle("")
         self._moments_memo: list = [None, None, {}]  # particles, weights, {first component: (mean, spread)}
         self._estimate_memo: tuple = (None, None, None)  # particles, weights, estimate
@@ -165,6 +168,8 @@ class GolfTracker(TrackerBase):
                                         seen=seen_gated)
         if check.verdict == "confirmed" and self._too_near(camera):
             check = dataclasses.replace(check, verdict="too_near", confidence=0.0)
+        if check.verdict == "confirmed" and self._seen_before(frame.image, camera, gated.blobs.centroid[check.candidate], scale):
+            check = dataclasses.replace(check, verdict="seen_before", confidence=0.0)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
@@ -195,6 +200,7 @@ class GolfTracker(TrackerBase):
             confidence = check.confidence
         if status == "measured":
             self._last_measured = (frame.index, x, y)
+            self._last_sighting = LastSighting(frame.image, camera, (x, y), diameter)
             self._sightings += 1
         self.scenery.update(frame.index, gated.blobs, gated.accepted | (gated.reason == STILL),
                             (x, y) if status == "measured" else None, diameter, scale)
@@ -222,6 +228,16 @@ class GolfTracker(TrackerBase):
         score in :meth:`GolfLuts.choose`): a LUT says nothing about colours it never saw around the ball."""
         share = float(sil.lut_scores[LUT_NAMES.index(name)])
         return share >= self.config.lut.other_min_share  # (NaN, a LUT not built: False)
+
+    def _seen_before(self, image: np.ndarray, camera: PtzCamera | None, point: np.ndarray, scale: float) -> bool:
+        """A confirmed track's blob was already there, beside the ball, when the ball was last
+        measured (``validate.confirm_not_seen_before``, :mod:`.seen_before`)."""
+        cfg = self.config
+        if not cfg.validate.confirm_not_seen_before or self._last_sighting is None:
+            return False
+        area, _ = self.validator.confirmed_shape()
+        return was_there_before(self._last_sighting, camera, point, area, self.luts, self.lut_name,
+                                cfg.validate.still_px * scale, cfg.blobs.area_tolerance, image)
 
     def _too_near(self, camera: PtzCamera | None) -> bool:
         """A confirmed track's blobs are too big for the ball where the 3-D filter has it
@@ -350,6 +366,7 @@ class GolfTracker(TrackerBase):
         self.misses = 0
         self._last_measured = None  # a re-anchor is no step of the ball's
         self._sightings = 0
+        self._last_sighting = None
         self.validator.reset()
         self.scenery.reset()  # the user says where the ball is
         self.reinit.landed_at, self.reinit.followed_landing = None, False  # a landing before the mark is not this track's
@@ -357,6 +374,11 @@ class GolfTracker(TrackerBase):
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
         ycc, offset, mask = box_silhouette(frame.image, box, self.luts, self.lut_name)
         found = start_targets(mask, offset, np.array([region.x, region.y]), cfg.blobs, scale)
+        if found is not None and spills_over(mask, offset, found.area):
+            raise LogError(f"the box marked on frame {region.frame} ({region.w:g}x{region.h:g} px round {region.x:g},{region.y:g}) "
+                           "holds no ball the golf tracker can tell from its surroundings: the colours it picks out fill the "
+                           "box and run past twice its size; draw the box round the ball alone (`trackreplay frame LOG "
+                           f"{region.frame}` shows the pixel grid)")
         self.targets = found or BlobTargets(math.pi / 4.0 * region.w * region.h, cfg.blobs.initial_circularity)
         if found is not None:
             self.range.learn_ball(ycc[..., 0], mask)

@@ -47,7 +47,7 @@ from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
 MERGED_SHAPES = (CIRCULARITY, EXCESS, ELONGATED)  # blobs refused for their shape, not their size
 VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
-            "ambiguous", "merged_nearer", "too_near")
+            "ambiguous", "merged_nearer", "too_near", "seen_before")
 
 
 @dataclass(frozen=True, eq=False)

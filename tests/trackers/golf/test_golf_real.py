@@ -15,9 +15,9 @@ APPROACH = REAL / "golf_broadcast_approach" / "demo.mp4"
 IRON = REAL / "golf_iron_shot_sky"
 
 
-def marked_log(tmp: Path, video: Path, marks: str) -> Path:
+def marked_log(tmp: Path, video: Path, marks: str, encoding: str = "jpeg") -> Path:
     (tmp / "marks.csv").write_text("frame,x,y,w,h\n" + marks)
-    for args in (["record", str(tmp / "clip.mcap"), "--video", str(video), "--encoding", "jpeg"],
+    for args in (["record", str(tmp / "clip.mcap"), "--video", str(video), "--encoding", encoding],
                  ["annotate", str(tmp / "clip.mcap"), "--from-csv", str(tmp / "marks.csv"), "--label", "ball",
                   "--out", str(tmp / "marked.mcap")]):
         try:
@@ -43,6 +43,21 @@ def test_broadcast_approach_one_mark_at_frame_20(tmp_path):
     assert measured.mean() >= 0.8  # issue 10: >= 80 % of frames 12-206 measured
     assert (d[measured] <= 5).mean() >= 0.9  # ... and >= 90 % of those within 5 px
     assert not (d[measured] > 25).any()  # no confident wrong rows
+
+
+@pytest.mark.skipif(not APPROACH.is_file(), reason="../shared/data/real/golf_broadcast_approach is absent")
+@pytest.mark.parametrize("mark, encoding", [("12,343,177,6,6\n", "jpeg"), ("20,313,201,6,6\n", "png")])
+def test_broadcast_approach_the_empty_cup_is_never_measured(tmp_path, mark, encoding):
+    """Two reviews: one mark at 12 measured pieces of the empty cup's liner on 213-219 and 224 (up to
+    31 px off); the clip recorded losslessly (PNG) measured the liner on 219-233. The ball rolls over
+    the liner from 208 and is in the hole from 217 (docs/golf_real.py, HOLED): nothing is measured there
+    (the liner was beside the ball before the loss: seen_before). (Today nothing from 207 on either.)"""
+    log = marked_log(tmp_path, APPROACH, mark, encoding)
+    traj = replay(ReplayRequest(log=log, tracker="golf")).trajectory
+    assert not (traj.filter(pl.col("frame") >= 217)["status"] == "measured").any()
+    ref = pl.read_csv(ROOT / "docs" / "data" / "golf_broadcast_reference.csv", comment_prefix="#")
+    measured, d = against(traj, ref)
+    assert measured.mean() >= 0.8 and not (d[measured] > 25).any()
 
 
 @pytest.mark.skipif(not (IRON / "vid1.mp4").is_file(), reason="../shared/data/real/golf_iron_shot_sky is absent")

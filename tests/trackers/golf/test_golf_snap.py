@@ -68,8 +68,12 @@ def test_the_track_starts_on_the_ball_from_a_loose_box(backdrop, draw_ball):
     states, area = first(GolfConfig())
     assert all(s.status == "measured" and np.hypot(s.x - BALL[0], s.y - BALL[1]) < 1.0 for s in states)
     assert area == pytest.approx(np.pi * 25, rel=0.25)
-    drawn, drawn_area = first(GolfConfig(snap=dataclasses.replace(GolfConfig().snap, enabled=False)))
-    assert drawn_area > 1.5 * np.pi * 25 or any(np.hypot(s.x - BALL[0], s.y - BALL[1]) >= 1.0 for s in drawn)
+    # without the snap the box's grass is learned as ball: what the LUT picks out runs past twice the box,
+    # and the mark is refused rather than tracked (tracker._start, blobs.spills_over)
+    from trackreplay.schemas.errors import LogError
+
+    with pytest.raises(LogError, match="holds no ball the golf tracker can tell from its surroundings"):
+        first(GolfConfig(snap=dataclasses.replace(GolfConfig().snap, enabled=False)))
 
 
 def test_bad_settings_are_refused():
