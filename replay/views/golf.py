@@ -148,9 +148,9 @@ def _ekf(rec: FrameLogger, path: str, frame: Frame, ekf, trail_world: np.ndarray
                    colors=[(255, 0, 255)], labels=[f"landing in {ekf.landing_in_s:.2f} s"])
     else:
         parts.clear(rec, f"{path}/landing")
-    if frame.camera is not None:
-        parts.draw(rec, f"{world}/camera", rr.Points3D, positions=_row(frame.camera.position), radii=0.5,
-                   colors=[(255, 255, 255)], labels=["camera"])
+    if frame.camera is not None:  # a PTZ head turns about a fixed point: its position once, not per frame
+        parts.static_once(rec, f"{world}/camera", rr.Points3D(positions=_row(frame.camera.position), radii=0.5,
+                                                              colors=[(255, 255, 255)], labels=["camera"]))
     if np.all(np.isfinite(ekf.x)):
         p = ekf.x[:3]
         parts.draw(rec, f"{world}/ball", rr.Points3D, positions=_row(p), radii=0.4, colors=[(255, 255, 0)])
