@@ -34,6 +34,17 @@ def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
     return runs
 
 
+def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
+    """Values at frames ``at`` from the known samples and their rate (per frame) there: the segment's
+    slope for linear, the spline's derivative for cubic (natural, from 4 samples; linear below)."""
+    if method == "cubic" and known_f.size >= 4:
+        spline = CubicSpline(known_f, known_v, bc_type="natural")
+        return spline(at), spline(at, 1)
+    k = np.clip(np.searchsorted(known_f, at), 1, known_f.size - 1)
+    slope = (known_v[k] - known_v[k - 1]) / (known_f[k] - known_f[k - 1])
+    return np.interp(at, known_f, known_v), slope
+
+
 def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
     first, last = track["frame"].min(), track["frame"].max()
     frames = pl.DataFrame({"frame": np.arange(first, last + 1, dtype=np.int64)})
@@ -56,18 +67,17 @@ def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
         return full.select(COLUMNS)
     f = full["frame"].to_numpy().astype(float)
     known = ~missing
-    columns = {}
+    columns, rates = {}, {}
     for name in FLOAT_COLUMNS:
         values = full[name].to_numpy().astype(float)
         ok = known & ~np.isnan(values)
         if ok.sum() < 2:
             continue
-        if method == "cubic" and ok.sum() >= 4:
-            est = CubicSpline(f[ok], values[ok], bc_type="natural")(f[fill])
-        else:
-            est = np.interp(f[fill], f[ok], values[ok])
-        values[fill] = est
+        values[fill], rates[name] = _interpolate(f[ok], values[ok], f[fill], method)
         columns[name] = values
+    for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own positions do, not as the neighbours' velocities
+        if v in columns and p in rates:
+            columns[v][fill] = rates[p]
     if all(k in columns for k in ("dx", "dy", "dz")):  # lines of sight stay unit vectors
         d = np.stack([columns["dx"], columns["dy"], columns["dz"]])
         d[:, fill] /= np.linalg.norm(d[:, fill], axis=0)
@@ -84,6 +94,8 @@ def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl
 
     Missing frames between a track's first and last row become rows; filled rows get
     ``status = "interpolated"``. ``cubic`` uses a natural cubic spline through the known samples.
+    A filled row's ``vx, vy`` are its positions' rate (the segment's slope, or the spline's
+    derivative), in px/frame.
     """
     if method not in METHODS:
         raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")

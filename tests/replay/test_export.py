@@ -128,3 +128,27 @@ def test_interpolated_times_known_values() -> None:
     assert t.tolist() == [10, 10, 10, 7, 0]  # the start held at the first known; 10 - 10/3 = 6.67 -> 7
     t = interpolated_times(np.array([0, 1, 2, 4]), np.array([100, 0, 0, 401]), np.array([True, False, False, True]))
     assert t.tolist() == [100, 175, 251, 401]  # 100 + 301/4 = 175.25 -> 175, 100 + 602/4 = 250.5 -> 251 (half up)
+
+
+def test_filled_rows_move_at_their_positions_rate() -> None:
+    """A review found filled rows' vx, vy interpolated on their own (y advancing 29.9 px/frame while
+    vy ramped 5.8 -> 46.2): a filled row's velocity is its positions' rate, measured rows keep theirs."""
+    frames = [0, 1, 2, 3, 8, 9, 10, 11]
+    rows = [state_row("flow", f, f, TrackState(1, x=float(f * f), y=3.0 * f, w=4.0, h=4.0, vx=100.0 + f, vy=-1.0))
+            for f in frames]
+    linear = fill_gaps(trajectory_table(rows), "linear", 5)
+    gap = linear.filter(pl.col("status") == "interpolated")
+    assert gap["frame"].to_list() == [4, 5, 6, 7]
+    assert gap["vx"].to_list() == pytest.approx([(64 - 9) / 5] * 4)  # the segment's slope, px/frame
+    assert gap["vy"].to_list() == pytest.approx([3.0] * 4)
+    measured = linear.filter(pl.col("status") == "measured")
+    assert measured["vx"].to_list() == [100.0 + f for f in frames] and measured["vy"].to_list() == [-1.0] * 8
+    cubic = fill_gaps(trajectory_table(rows), "cubic", 5)
+    from scipy.interpolate import CubicSpline
+
+    spline = CubicSpline(frames, [float(f * f) for f in frames], bc_type="natural")
+    gap = cubic.filter(pl.col("status") == "interpolated")
+    assert gap["x"].to_list() == pytest.approx(spline([4, 5, 6, 7]).tolist())
+    assert gap["vx"].to_list() == pytest.approx(spline([4, 5, 6, 7], 1).tolist())  # the spline's own derivative
+    assert cubic.filter(pl.col("status") == "measured")["vx"].to_list() == [100.0 + f for f in frames]
+
