@@ -11,7 +11,7 @@ from scipy.interpolate import CubicSpline
 
 from trackreplay.recorder.atomic import partial_path
 from trackreplay.schemas.errors import OutputError, TrackreplayError
-from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order, interpolated_times
+from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, canonical_order, conform, interpolated_times
 
 METHODS = ("linear", "cubic")
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
@@ -161,22 +161,29 @@ def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
 
 
 def read_trajectory(path: str | Path) -> pl.DataFrame:
-    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV)."""
+    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV), checked as the ★ table
+    (:func:`~trackreplay.replay.trajectory.conform`); an empty one is refused (nothing to work on)."""
     path = Path(path)
     if not path.is_file():
         raise TrackreplayError(f"{path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in (".parquet", ".csv"):
+        raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
     try:
-        if path.suffix.lower() == ".parquet":
-            df = pl.read_parquet(path)
-        elif path.suffix.lower() == ".csv":
-            df = pl.read_csv(path, schema_overrides=SCHEMA)
-        else:
-            raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
+        # CSV cells are read as text and cast by conform, which names the line of a bad one
+        df = pl.read_parquet(path) if suffix == ".parquet" else pl.read_csv(path, infer_schema=False)
     except (pl.exceptions.PolarsError, OSError) as err:
-        raise TrackreplayError(f"{path} is not a readable trajectory table ({err})") from None
+        raise TrackreplayError(f"{path} is not a readable trajectory table ({_first_line(err)})") from None
     if "confidence" not in df.columns:  # tables written before the column existed
         df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
-    absent = [c for c in COLUMNS if c not in df.columns]
-    if absent:
-        raise TrackreplayError(f"{path} lacks trajectory columns: {', '.join(absent)}")
-    return canonical_order(df.cast({c: t for c, t in SCHEMA.items()}))
+    where = (lambda i: f"row {i + 1}") if suffix == ".parquet" else (lambda i: f"line {i + 2}")  # CSV line 1: header
+    df = conform(df, str(path), where)
+    if df.is_empty():
+        raise TrackreplayError(f"{path} holds no rows: an empty trajectory")
+    return canonical_order(df)
+
+
+def _first_line(err: Exception) -> str:
+    """The gist of a library's message (polars explains at length, over several paragraphs)."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    return lines[0].rstrip(".:") if lines else type(err).__name__
