@@ -95,7 +95,8 @@ def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl
     Missing frames between a track's first and last row become rows; filled rows get
     ``status = "interpolated"``. ``cubic`` uses a natural cubic spline through the known samples.
     A filled row's ``vx, vy`` are its positions' rate (the segment's slope, or the spline's
-    derivative), in px/frame.
+    derivative), in px/frame; its ``t_ns`` is interpolated between the neighbours' (exact only
+    without jitter: eval and smooth do not compare it with the log's).
     """
     if method not in METHODS:
         raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")

@@ -23,17 +23,25 @@ SCHEMA: dict[str, pl.DataType] = {
 }
 COLUMNS = tuple(SCHEMA)
 KEY = ("tracker", "track_id", "frame")
+# Rows whose t_ns is their frame's own time. Gap filling adds rows (interpolated, or lost beyond
+# --max-gap) with times interpolated between their neighbours: exact only without jitter.
+TIMED_STATUSES = ("measured", "predicted")
 
 
 def frame_time_mismatches(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False) -> pl.DataFrame:
-    """Rows ``frame, t_ns, other_t_ns`` (sorted by frame) where table ``a``'s frame is at another time in
-    ``b`` (both with ``frame`` and ``t_ns`` columns); with ``missing``, also frames of ``a`` that ``b``
-    lacks (``other_t_ns`` null). A trajectory, a ground truth and a log number frames alike only when
-    every shared frame is the same moment in each."""
-    other = b.select("frame", pl.col("t_ns").cast(pl.Int64).alias("other_t_ns")).unique("frame")
-    joined = a.select("frame", pl.col("t_ns").cast(pl.Int64)).unique("frame").join(
-        other.with_columns(pl.col("frame").cast(a.schema["frame"])), on="frame", how="left" if missing else "inner")
-    return joined.filter(pl.col("other_t_ns").is_null() | (pl.col("t_ns") != pl.col("other_t_ns"))).sort("frame")
+    """Rows ``frame, t_ns, other_t_ns`` (one per frame, sorted) where table ``a``'s frame is at another
+    time in ``b`` (both with ``frame`` and ``t_ns`` columns); with ``missing``, also frames of ``a`` that
+    ``b`` lacks (``other_t_ns`` null). Only rows of ``a`` in :data:`TIMED_STATUSES` (every row when it
+    has no ``status``) are compared by time. A trajectory, a ground truth and a log number frames alike
+    only when every shared frame is the same moment in each."""
+    other = b.select(pl.col("frame").cast(a.schema["frame"]), pl.col("t_ns").cast(pl.Int64).alias("other_t_ns"),
+                     pl.lit(True).alias("_in_b")).unique("frame", keep="first", maintain_order=True)
+    timed = pl.col("status").is_in(TIMED_STATUSES) if "status" in a.columns else pl.lit(True)
+    rows = a.select("frame", pl.col("t_ns").cast(pl.Int64), timed.alias("_timed"))
+    joined = rows.join(other, on="frame", how="left" if missing else "inner")
+    bad = joined.filter(pl.col("_in_b").is_null() | (pl.col("_timed") & (pl.col("t_ns") != pl.col("other_t_ns"))))
+    return bad.sort("frame", maintain_order=True).unique("frame", keep="first", maintain_order=True).select(
+        "frame", "t_ns", "other_t_ns")
 
 
 def interpolated_times(frames: np.ndarray, times: np.ndarray, known: np.ndarray) -> np.ndarray:
