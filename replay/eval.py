@@ -89,6 +89,28 @@ def _same_frames(track: pl.DataFrame, obj: pl.DataFrame) -> None:
                                "recovered without renumbering its ground truth")
 
 
+def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int], annotated: pl.DataFrame,
+                 log_name: str) -> None:
+    """The trajectory was replayed from this log: every row's frame is one of the log's images
+    (``log_times``, frame -> t_ns) and, where the row's time is the frame's own (measured,
+    predicted), at that time in the log and in its ground truth (``annotated``: frame, t_ns)."""
+    logged = pl.DataFrame({"frame": list(log_times), "t_ns": list(log_times.values())},
+                          schema={"frame": pl.Int64, "t_ns": pl.Int64})
+    bad = frame_time_mismatches(traj, logged, missing=True)
+    if bad.height:
+        f, t, lt = bad.row(0)
+        where = (f"is at t={lt} ns in {log_name}" if lt is not None
+                 else f"is not one of the {len(log_times)} frames of {log_name}")
+        raise TrackreplayError(f"{traj_name}: frame {f} (t={t} ns) {where} ({bad.height} frame(s) disagree): "
+                               "the trajectory was not replayed from this log")
+    bad = frame_time_mismatches(traj, annotated)
+    if bad.height:
+        f, t, g = bad.row(0)
+        raise TrackreplayError(f"{traj_name}: frame {f} is at t={t} ns, as in the log, but at t={g} ns in the ground truth "
+                               f"of {log_name} ({bad.height} frame(s) disagree): the log was cut or recovered without "
+                               "renumbering its ground truth")
+
+
 def per_frame(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> pl.DataFrame:
     """One row per ground-truth frame with the estimate beside it and the errors."""
     track = _pick_track(traj, track_id)

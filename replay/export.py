@@ -11,7 +11,7 @@ from scipy.interpolate import CubicSpline
 
 from trackreplay.recorder.atomic import partial_path
 from trackreplay.schemas.errors import OutputError, TrackreplayError
-from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order, interpolated_times
+from trackreplay.replay.trajectory import COLUMNS, FLOAT_COLUMNS, canonical_order, conform, interpolated_times
 
 METHODS = ("linear", "cubic")
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
@@ -32,6 +32,17 @@ def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
         else:
             i += 1
     return runs
+
+
+def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
+    """Values at frames ``at`` from the known samples and their rate (per frame) there: the segment's
+    slope for linear, the spline's derivative for cubic (natural, from 4 samples; linear below)."""
+    if method == "cubic" and known_f.size >= 4:
+        spline = CubicSpline(known_f, known_v, bc_type="natural")
+        return spline(at), spline(at, 1)
+    k = np.clip(np.searchsorted(known_f, at), 1, known_f.size - 1)
+    slope = (known_v[k] - known_v[k - 1]) / (known_f[k] - known_f[k - 1])
+    return np.interp(at, known_f, known_v), slope
 
 
 def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
@@ -56,18 +67,17 @@ def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
         return full.select(COLUMNS)
     f = full["frame"].to_numpy().astype(float)
     known = ~missing
-    columns = {}
+    columns, rates = {}, {}
     for name in FLOAT_COLUMNS:
         values = full[name].to_numpy().astype(float)
         ok = known & ~np.isnan(values)
         if ok.sum() < 2:
             continue
-        if method == "cubic" and ok.sum() >= 4:
-            est = CubicSpline(f[ok], values[ok], bc_type="natural")(f[fill])
-        else:
-            est = np.interp(f[fill], f[ok], values[ok])
-        values[fill] = est
+        values[fill], rates[name] = _interpolate(f[ok], values[ok], f[fill], method)
         columns[name] = values
+    for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own positions do, not as the neighbours' velocities
+        if v in columns and p in rates:
+            columns[v][fill] = rates[p]
     if all(k in columns for k in ("dx", "dy", "dz")):  # lines of sight stay unit vectors
         d = np.stack([columns["dx"], columns["dy"], columns["dz"]])
         d[:, fill] /= np.linalg.norm(d[:, fill], axis=0)
@@ -84,6 +94,9 @@ def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl
 
     Missing frames between a track's first and last row become rows; filled rows get
     ``status = "interpolated"``. ``cubic`` uses a natural cubic spline through the known samples.
+    A filled row's ``vx, vy`` are its positions' rate (the segment's slope, or the spline's
+    derivative), in px/frame; its ``t_ns`` is interpolated between the neighbours' (exact only
+    without jitter: eval and smooth do not compare it with the log's).
     """
     if method not in METHODS:
         raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
@@ -149,22 +162,29 @@ def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
 
 
 def read_trajectory(path: str | Path) -> pl.DataFrame:
-    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV)."""
+    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV), checked as the ★ table
+    (:func:`~trackreplay.replay.trajectory.conform`); an empty one is refused (nothing to work on)."""
     path = Path(path)
     if not path.is_file():
         raise TrackreplayError(f"{path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in (".parquet", ".csv"):
+        raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
     try:
-        if path.suffix.lower() == ".parquet":
-            df = pl.read_parquet(path)
-        elif path.suffix.lower() == ".csv":
-            df = pl.read_csv(path, schema_overrides=SCHEMA)
-        else:
-            raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
+        # CSV cells are read as text and cast by conform, which names the line of a bad one
+        df = pl.read_parquet(path) if suffix == ".parquet" else pl.read_csv(path, infer_schema=False)
     except (pl.exceptions.PolarsError, OSError) as err:
-        raise TrackreplayError(f"{path} is not a readable trajectory table ({err})") from None
+        raise TrackreplayError(f"{path} is not a readable trajectory table ({_first_line(err)})") from None
     if "confidence" not in df.columns:  # tables written before the column existed
         df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
-    absent = [c for c in COLUMNS if c not in df.columns]
-    if absent:
-        raise TrackreplayError(f"{path} lacks trajectory columns: {', '.join(absent)}")
-    return canonical_order(df.cast({c: t for c, t in SCHEMA.items()}))
+    where = (lambda i: f"row {i + 1}") if suffix == ".parquet" else (lambda i: f"line {i + 2}")  # CSV line 1: header
+    df = conform(df, str(path), where)
+    if df.is_empty():
+        raise TrackreplayError(f"{path} holds no rows: an empty trajectory")
+    return canonical_order(df)
+
+
+def _first_line(err: Exception) -> str:
+    """The gist of a library's message (polars explains at length, over several paragraphs)."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    return lines[0].rstrip(".:") if lines else type(err).__name__

@@ -99,6 +99,15 @@ def choose_image_topic(reader: LogReader) -> str:
                    f"--image-topic TOPIC, or a stereo pair with --stereo-topics LEFT RIGHT")
 
 
+def image_times(reader: LogReader, image_topic: str | None = None) -> dict[int, int]:
+    """Frame number -> log time of every image on ``image_topic`` (default :func:`choose_image_topic`),
+    read without decoding: the frames a replay numbers. A lost image (a damaged chunk) keeps its
+    number and, where the chunk's index gives it, its time; its frame exists, the tracker skipped it."""
+    topic = image_topic or choose_image_topic(reader)
+    require_image_topic(reader, topic)
+    return {item.index: item.log_time for item in reader.messages([topic]) if item.lost is None or item.log_time >= 0}
+
+
 @dataclass
 class BundleReport:
     """What bundling noticed; filled while frames are produced."""

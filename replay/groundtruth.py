@@ -22,17 +22,26 @@ def read_groundtruth(reader: LogReader, topic: str = T.GROUNDTRUTH, rig_world: b
     """Ground truth rows; ``X Y Z`` as stored (stereo scenes: the left camera's frame), or, when the
     log carries the stereo rig's pose (``/stereo/pose``) and ``rig_world``, in that world frame
     (Z up) — the frame the group tracker then reports in, so the two compare as they are."""
+    return groundtruth_with_frames(reader, topic, rig_world)[0]
+
+
+def groundtruth_with_frames(reader: LogReader, topic: str = T.GROUNDTRUTH,
+                            rig_world: bool = True) -> tuple[pl.DataFrame, pl.DataFrame]:
+    """:func:`read_groundtruth`'s rows and the annotated frames (``frame, t_ns``, one per message),
+    including those whose message lists no object: the truth says nothing is there."""
     reader.require(topic)
-    rows = []
+    rows, frames = [], []
     for item in reader.messages([topic]):
         gt = GroundTruthFrame.from_pb(item.decode())
+        frames.append((gt.frame, gt.t_ns))
         for o in gt.objects:
             rows.append((gt.frame, gt.t_ns, o.id, o.x, o.y, o.w, o.h, o.X, o.Y, o.Z, o.vx, o.vy, o.visible, o.group))
     table = pl.DataFrame(rows, schema=GT_SCHEMA, orient="row").sort(["id", "frame"])
+    annotated = pl.DataFrame(frames, schema={"frame": pl.Int64, "t_ns": pl.Int64}, orient="row").unique("frame").sort("frame")
     pose = read_rig_pose(reader) if rig_world else None
     if pose is None or table.height == 0:
-        return table
+        return table, annotated
     cam = table.select("X", "Y", "Z").to_numpy().astype(np.float64)
     world = pose.to_world(np.nan_to_num(cam))
     world[~np.isfinite(cam).all(axis=1)] = np.nan
-    return table.with_columns(*(pl.Series(c, world[:, k]).fill_nan(None) for k, c in enumerate("XYZ")))
+    return table.with_columns(*(pl.Series(c, world[:, k]).fill_nan(None) for k, c in enumerate("XYZ"))), annotated

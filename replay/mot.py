@@ -242,17 +242,26 @@ def _hota_summary(tp, fn, fp, loca, ass_a, ass_re, ass_pr) -> HotaSummary:
 
 
 def frames_from_tables(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", min_iou: float = 0.5,
-                       max_distance_m: float = 1.0, similarity: bool = False) -> list[Frame]:
-    """Per ground-truth frame: visible truth vs the tracker's rows with a position (``lost`` rows and
-    frames before the truth starts are left out). ``space`` is "image" (boxes) or "3d" (X Y Z).
-    With ``similarity`` the matrices are HOTA similarities (IoU; ``max(0, 1 − d/max_distance_m)``)
-    instead of thresholded distances."""
+                       max_distance_m: float = 1.0, similarity: bool = False,
+                       frames: Iterable[int] | None = None) -> list[Frame]:
+    """Per annotated frame: visible truth vs the tracker's rows with a position (``lost`` rows left out).
+    ``space`` is "image" (boxes) or "3d" (X Y Z). With ``similarity`` the matrices are HOTA
+    similarities (IoU; ``max(0, 1 − d/max_distance_m)``) instead of thresholded distances.
+
+    The annotated frames are ``frames`` (every ground-truth message's, from
+    :func:`~trackreplay.replay.groundtruth.groundtruth_with_frames`), else those with a truth row.
+    A frame the truth annotates with no visible object (hidden, out of the picture, or none listed)
+    counts like any other: a box there is a false positive, an unmatched prediction in HOTA. Invisible
+    truth is not an ignore region (MOTChallenge's zero-marked rows are dropped on import); frames the
+    truth does not annotate (before it starts, after it ends) are left out."""
     traj = traj.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost"))
-    gt = gt.filter(pl.col("visible").fill_null(True))
-    out = []
+    annotated = sorted({int(f) for f in (gt["frame"] if frames is None else frames)})
+    visible = gt.filter(pl.col("visible").fill_null(True))
+    gt_by = {k[0]: df for k, df in visible.partition_by("frame", as_dict=True).items()} if visible.height else {}
     tr_by = {k[0]: df for k, df in traj.partition_by("frame", as_dict=True).items()} if traj.height else {}
-    for (frame,), g in sorted(gt.partition_by("frame", as_dict=True).items()):
-        t = tr_by.get(frame, traj.clear())
+    out = []
+    for frame in annotated:
+        g, t = gt_by.get(frame, visible.clear()), tr_by.get(frame, traj.clear())
         if space == "image":
             gb = g.select((pl.col("x") - pl.col("w") / 2), (pl.col("y") - pl.col("h") / 2), "w", "h").to_numpy()
             tb = t.select((pl.col("x") - pl.col("w") / 2), (pl.col("y") - pl.col("h") / 2), "w", "h").to_numpy()
@@ -265,13 +274,27 @@ def frames_from_tables(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "im
     return out
 
 
+def three_d_missing(traj: pl.DataFrame, gt: pl.DataFrame) -> str | None:
+    """Why the 3-D block does not apply (the trajectory's positioned rows, or the visible truth, have
+    no ``X, Y, Z`` at all: a 2-D tracker or truth), or None when both have some."""
+    def has(df: pl.DataFrame) -> bool:
+        return df.select(pl.all_horizontal(pl.col(c).is_not_null() for c in "XYZ").any()).item() is True
+
+    if not has(traj.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost"))):
+        return "the trajectory has no X, Y, Z"
+    if not has(gt.filter(pl.col("visible").fill_null(True))):
+        return "the ground truth has no X, Y, Z"
+    return None
+
+
 def mot_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", min_iou: float = 0.5,
-                max_distance_m: float = 1.0) -> MotSummary:
-    return clear_mot(frames_from_tables(traj, gt, space=space, min_iou=min_iou, max_distance_m=max_distance_m))
+                max_distance_m: float = 1.0, frames: Iterable[int] | None = None) -> MotSummary:
+    return clear_mot(frames_from_tables(traj, gt, space=space, min_iou=min_iou, max_distance_m=max_distance_m, frames=frames))
 
 
-def hota_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", max_distance_m: float = 1.0) -> HotaSummary:
-    return hota(frames_from_tables(traj, gt, space=space, max_distance_m=max_distance_m, similarity=True))
+def hota_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", max_distance_m: float = 1.0,
+                 frames: Iterable[int] | None = None) -> HotaSummary:
+    return hota(frames_from_tables(traj, gt, space=space, max_distance_m=max_distance_m, similarity=True, frames=frames))
 
 
 def format_hota(s: HotaSummary, label: str) -> str:

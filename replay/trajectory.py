@@ -8,7 +8,8 @@ from collections.abc import Callable, Iterable, Sequence
 import numpy as np
 import polars as pl
 
-from trackreplay.trackers.base import TrackState
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.base import POSITION_FIELDS, STATUSES, TrackState
 
 FLOAT_COLUMNS = ("x", "y", "w", "h", "X", "Y", "Z", "dx", "dy", "dz", "vx", "vy")
 SCHEMA: dict[str, pl.DataType] = {
@@ -21,17 +22,26 @@ SCHEMA: dict[str, pl.DataType] = {
     "confidence": pl.Float64,
 }
 COLUMNS = tuple(SCHEMA)
+KEY = ("tracker", "track_id", "frame")
+# Rows whose t_ns is their frame's own time. Gap filling adds rows (interpolated, or lost beyond
+# --max-gap) with times interpolated between their neighbours: exact only without jitter.
+TIMED_STATUSES = ("measured", "predicted")
 
 
 def frame_time_mismatches(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False) -> pl.DataFrame:
-    """Rows ``frame, t_ns, other_t_ns`` (sorted by frame) where table ``a``'s frame is at another time in
-    ``b`` (both with ``frame`` and ``t_ns`` columns); with ``missing``, also frames of ``a`` that ``b``
-    lacks (``other_t_ns`` null). A trajectory, a ground truth and a log number frames alike only when
-    every shared frame is the same moment in each."""
-    other = b.select("frame", pl.col("t_ns").cast(pl.Int64).alias("other_t_ns")).unique("frame")
-    joined = a.select("frame", pl.col("t_ns").cast(pl.Int64)).unique("frame").join(
-        other.with_columns(pl.col("frame").cast(a.schema["frame"])), on="frame", how="left" if missing else "inner")
-    return joined.filter(pl.col("other_t_ns").is_null() | (pl.col("t_ns") != pl.col("other_t_ns"))).sort("frame")
+    """Rows ``frame, t_ns, other_t_ns`` (one per frame, sorted) where table ``a``'s frame is at another
+    time in ``b`` (both with ``frame`` and ``t_ns`` columns); with ``missing``, also frames of ``a`` that
+    ``b`` lacks (``other_t_ns`` null). Only rows of ``a`` in :data:`TIMED_STATUSES` (every row when it
+    has no ``status``) are compared by time. A trajectory, a ground truth and a log number frames alike
+    only when every shared frame is the same moment in each."""
+    other = b.select(pl.col("frame").cast(a.schema["frame"]), pl.col("t_ns").cast(pl.Int64).alias("other_t_ns"),
+                     pl.lit(True).alias("_in_b")).unique("frame", keep="first", maintain_order=True)
+    timed = pl.col("status").is_in(TIMED_STATUSES) if "status" in a.columns else pl.lit(True)
+    rows = a.select("frame", pl.col("t_ns").cast(pl.Int64), timed.alias("_timed"))
+    joined = rows.join(other, on="frame", how="left" if missing else "inner")
+    bad = joined.filter(pl.col("_in_b").is_null() | (pl.col("_timed") & (pl.col("t_ns") != pl.col("other_t_ns"))))
+    return bad.sort("frame", maintain_order=True).unique("frame", keep="first", maintain_order=True).select(
+        "frame", "t_ns", "other_t_ns")
 
 
 def interpolated_times(frames: np.ndarray, times: np.ndarray, known: np.ndarray) -> np.ndarray:
@@ -94,3 +104,52 @@ def canonical_bytes(df: pl.DataFrame, float_bytes: Callable[[np.ndarray], bytes]
 
 def table_digest(df: pl.DataFrame) -> str:
     return hashlib.sha256(canonical_bytes(df)).hexdigest()
+
+
+def conform(df: pl.DataFrame, source: str, where: Callable[[int], str] = lambda i: f"row {i + 1}") -> pl.DataFrame:
+    """``df`` as read from ``source``, cast to :data:`SCHEMA` and checked (types, key columns present,
+    known statuses, lost rows without a position, one row per track and frame), else a
+    :class:`TrackreplayError` naming ``source`` and ``where(i)`` of the first offending row ``i``."""
+    absent = [c for c in COLUMNS if c not in df.columns]
+    if absent:
+        raise TrackreplayError(f"{source} lacks trajectory columns: {', '.join(absent)}")
+    df = df.select(_cast(df, name, dtype, source, where) for name, dtype in SCHEMA.items())
+    _refuse(df, pl.any_horizontal(pl.col(c).is_null() for c in ("tracker", "track_id", "frame", "status")), source, where,
+            lambda r: f"no {next(c for c in ('tracker', 'track_id', 'frame', 'status') if r[c] is None)} "
+                      "(every row needs tracker, track_id, frame and status)")
+    _refuse(df, pl.col("frame") < 0, source, where, lambda r: f"frame {r['frame']} is negative (frames count from 0)")
+    _refuse(df, ~pl.col("status").is_in(STATUSES), source, where,
+            lambda r: f"status {r['status']!r} is not one of {', '.join(STATUSES)}")
+    placed = [c for c in POSITION_FIELDS if c in SCHEMA]
+    _refuse(df, (pl.col("status") == "lost") & pl.any_horizontal(pl.col(c).is_not_null() for c in placed), source, where,
+            lambda r: f"a lost row of track {r['track_id']} on frame {r['frame']} carries a position "
+                      f"({next(c for c in placed if r[c] is not None)}); lost rows have none")
+    first = pl.struct(KEY).is_first_distinct()
+    _refuse(df, ~first, source, where, lambda r: f"a second row for track {r['track_id']} ({r['tracker']}) on frame "
+                                                 f"{r['frame']}: one row per track and frame")
+    return df
+
+
+def _cast(df: pl.DataFrame, name: str, dtype: pl.DataType, source: str, where: Callable[[int], str]) -> pl.Series:
+    """Column ``name`` as ``dtype``; a value that is not one (text in a number column, a fraction in an
+    integer column) is refused."""
+    col = df.get_column(name)
+    if col.dtype == dtype:
+        return col
+    out = col.cast(dtype, strict=False)
+    bad = col.is_not_null() & out.is_null()
+    if dtype == pl.Int64 and col.dtype.is_float():
+        bad = bad | (col.is_not_null() & (col != col.floor()).fill_null(True))
+    if bad.any():
+        i = int(bad.arg_max())
+        kind = "an integer" if dtype == pl.Int64 else "a number"
+        raise TrackreplayError(f"{source} {where(i)}: {name} is {col[i]!r}, not {kind}")
+    return out
+
+
+def _refuse(df: pl.DataFrame, bad: pl.Expr, source: str, where: Callable[[int], str], says: Callable[[dict], str]) -> None:
+    """Raise for the first row where ``bad`` holds: ``source where(i): says(row)``."""
+    hits = df.with_row_index("_i").filter(bad.fill_null(False))
+    if hits.height:
+        row = hits.row(0, named=True)
+        raise TrackreplayError(f"{source} {where(row['_i'])}: {says(row)}")

@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
-from trackreplay.replay.eval import evaluate, format_summary
+import polars as pl
+
+from trackreplay.replay.eval import check_frames, evaluate, format_summary
 from trackreplay.replay.export import read_trajectory
-from trackreplay.replay.groundtruth import read_groundtruth
+from trackreplay.replay.frames import image_times
+from trackreplay.replay.groundtruth import groundtruth_with_frames
 from trackreplay.replay.reader import LogReader
 
 
@@ -22,10 +26,13 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--per-frame", type=Path, help="also write the per-frame errors (.csv or .parquet)")
     p.add_argument("--mot", action="store_true",
                    help="multi-object metrics over every track: MOTA, MOTP, IDF1, ID switches on image boxes (IoU >= 0.5) "
-                        "and on 3-D positions (--max-distance-m); HOTA, DetA, AssA, LocA over alpha 0.05..0.95 "
-                        "with IoU and with max(0, 1 - d/max-distance-m) as the similarity")
+                        "and on 3-D positions (--max-distance-m; not applicable when the trajectory or the truth has no "
+                        "X, Y, Z); HOTA, DetA, AssA, LocA over alpha 0.05..0.95 with IoU and with max(0, 1 - d/max-distance-m) "
+                        "as the similarity; a box on a frame whose truth shows no object is a false positive")
     p.add_argument("--gt-topic", default=None, help="ground-truth topic (default /groundtruth/objects; "
                    "the groups scenes also write /groundtruth/groups)")
+    p.add_argument("--image-topic", help="the image topic the trajectory was replayed on, whose frames it numbers "
+                   "(default as replay's: /camera/image, else the stereo left, else the log's only image topic)")
     p.add_argument("--max-distance-m", type=float, default=1.0, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default 1 m)")
     p.set_defaults(func=run)
     return p
@@ -33,27 +40,55 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     traj = read_trajectory(args.trajectory)
-    gt = read_groundtruth(LogReader(args.log), *([args.gt_topic] if args.gt_topic else []))
+    reader = LogReader(args.log)
+    gt, annotated = groundtruth_with_frames(reader, *([args.gt_topic] if args.gt_topic else []))
+    check_frames(traj, str(args.trajectory), image_times(reader, args.image_topic), annotated, str(args.log))
     if args.mot:
-        from trackreplay.replay.mot import format_hota, format_mot, hota_metrics, mot_metrics
-
-        image = mot_metrics(traj, gt, space="image")
-        space = mot_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m)
-        image_hota = hota_metrics(traj, gt, space="image")
-        space_hota = hota_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m)
-        print(format_mot(image, "image boxes (IoU >= 0.5)"))
-        print(format_mot(space, f"3-D positions (<= {args.max_distance_m:g} m)"))
-        print(format_hota(image_hota, "image boxes (IoU similarity)"))
-        print(format_hota(space_hota, f"3-D positions (1 - d/{args.max_distance_m:g} m)"))
-        if args.json:
-            args.json.write_text(json.dumps({"image": image.as_dict(), "3d": space.as_dict(),
-                                             "hota": {"image": image_hota.as_dict(), "3d": space_hota.as_dict()}},
-                                            indent=2) + "\n")
-        return 0
+        return _run_mot(args, traj, gt, annotated["frame"])
     summary, frames = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
     print(format_summary(summary))
     if args.json:
-        args.json.write_text(json.dumps(summary.as_dict(), indent=2) + "\n")
+        _write_json(args.json, summary.as_dict())
     if args.per_frame:
         (frames.write_parquet if args.per_frame.suffix == ".parquet" else frames.write_csv)(args.per_frame)
     return 0
+
+
+def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> int:
+    """CLEAR MOT and HOTA over every annotated frame, on image boxes and, where both the trajectory and
+    the truth have them, on 3-D positions."""
+    from trackreplay.replay.mot import format_hota, format_mot, hota_metrics, mot_metrics, three_d_missing
+
+    image = mot_metrics(traj, gt, space="image", frames=frames)
+    image_hota = hota_metrics(traj, gt, space="image", frames=frames)
+    why_not = three_d_missing(traj, gt)
+    space = space_hota = None
+    if why_not is None:
+        space = mot_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m, frames=frames)
+        space_hota = hota_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m, frames=frames)
+    label = f"3-D positions (<= {args.max_distance_m:g} m)"
+    print(format_mot(image, "image boxes (IoU >= 0.5)"))
+    print(format_mot(space, label) if space else f"{label}: not applicable ({why_not})")
+    print(format_hota(image_hota, "image boxes (IoU similarity)"))
+    if space_hota:
+        print(format_hota(space_hota, f"3-D positions (1 - d/{args.max_distance_m:g} m)"))
+    if args.json:
+        _write_json(args.json, {"image": image.as_dict(), "3d": space and space.as_dict(),
+                                "hota": {"image": image_hota.as_dict(), "3d": space_hota and space_hota.as_dict()},
+                                "3d_not_applicable": why_not})
+    return 0
+
+
+def _write_json(path: Path, data: dict) -> None:
+    """Strict JSON: a metric that is undefined (no truth, no match) is null, not NaN."""
+    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
+
+
+def _finite(value: object) -> object:
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    return value

@@ -48,7 +48,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="also stream to a running Rerun viewer (default URL rerun+http://127.0.0.1:9876/proxy)")
     p.add_argument("--spawn", action="store_true", help="start a Rerun viewer and stream to it (needs a display)")
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
-    p.add_argument("--interpolate", choices=("none", *METHODS), default="linear", help="gap filling of the export (default linear)")
+    p.add_argument("--interpolate", choices=("none", *METHODS), help="gap filling of the export (default linear; "
+                   "not with --smooth, which fills gaps itself)")
     p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) that is interpolated; longer stays lost")
     p.add_argument("--smooth", action="store_true", help="export the offline RTS-smoothed trajectory (trackreplay smooth) "
                    "instead of interpolating; the digest is the causal replay's")
@@ -72,6 +73,9 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.smooth and args.interpolate is not None:
+        raise TrackreplayError(f"--interpolate {args.interpolate} and --smooth exclude each other: the smoother fills the "
+                               "gaps of the export itself (up to --max-gap frames)")
     if args.export:
         trajectory_format(args.export)  # before the replay, not after it
     request = request_from_args(args, args.rrd)
@@ -85,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
 
         write_trajectory(smooth_and_report(result.trajectory, args.log, args.max_gap, result.observations), args.export)
     elif args.export:
-        table = result.trajectory if args.interpolate == "none" else fill_gaps(result.trajectory, args.interpolate, args.max_gap)
+        method = args.interpolate or "linear"
+        table = result.trajectory if method == "none" else fill_gaps(result.trajectory, method, args.max_gap)
         write_trajectory(table, args.export)
     if args.export and result.extra_rows is not None:  # groups: the second table beside it, TRAJ.groups.parquet
         from trackreplay.replay.group_table import group_table, write_group_table

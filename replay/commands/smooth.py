@@ -7,6 +7,8 @@ from pathlib import Path
 
 from trackreplay.replay.commands.values import non_negative_int
 
+SUFFIXES = (".parquet", ".csv")
+
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("smooth", help="smooth every track over the whole log (offline RTS) and fill its gaps; "
@@ -58,10 +60,11 @@ def smooth_and_report(table, log: Path, max_gap: int, observations=None):
 def run(args: argparse.Namespace) -> int:
     from trackreplay.replay.export import read_trajectory, write_trajectory
 
-    if args.out.suffix.lower() == ".txt":
+    if args.out.suffix.lower() not in SUFFIXES:  # before the smoothing, not after it
         from trackreplay.schemas.errors import TrackreplayError
 
-        raise TrackreplayError(f"{args.out}: a smoothed trajectory is written as .parquet or .csv (it has std and fill columns)")
+        raise TrackreplayError(f"{args.out}: a smoothed trajectory is written as {' or '.join(SUFFIXES)} "
+                               "(it has std and fill columns, which MOTChallenge .txt cannot hold)")
     table = read_trajectory(args.trajectory)
     out = smooth_and_report(table, args.log, args.max_gap)
     write_trajectory(out, args.out)

@@ -128,3 +128,82 @@ def test_interpolated_times_known_values() -> None:
     assert t.tolist() == [10, 10, 10, 7, 0]  # the start held at the first known; 10 - 10/3 = 6.67 -> 7
     t = interpolated_times(np.array([0, 1, 2, 4]), np.array([100, 0, 0, 401]), np.array([True, False, False, True]))
     assert t.tolist() == [100, 175, 251, 401]  # 100 + 301/4 = 175.25 -> 175, 100 + 602/4 = 250.5 -> 251 (half up)
+
+
+def test_filled_rows_move_at_their_positions_rate() -> None:
+    """A review found filled rows' vx, vy interpolated on their own (y advancing 29.9 px/frame while
+    vy ramped 5.8 -> 46.2): a filled row's velocity is its positions' rate, measured rows keep theirs."""
+    frames = [0, 1, 2, 3, 8, 9, 10, 11]
+    rows = [state_row("flow", f, f, TrackState(1, x=float(f * f), y=3.0 * f, w=4.0, h=4.0, vx=100.0 + f, vy=-1.0))
+            for f in frames]
+    linear = fill_gaps(trajectory_table(rows), "linear", 5)
+    gap = linear.filter(pl.col("status") == "interpolated")
+    assert gap["frame"].to_list() == [4, 5, 6, 7]
+    assert gap["vx"].to_list() == pytest.approx([(64 - 9) / 5] * 4)  # the segment's slope, px/frame
+    assert gap["vy"].to_list() == pytest.approx([3.0] * 4)
+    measured = linear.filter(pl.col("status") == "measured")
+    assert measured["vx"].to_list() == [100.0 + f for f in frames] and measured["vy"].to_list() == [-1.0] * 8
+    cubic = fill_gaps(trajectory_table(rows), "cubic", 5)
+    from scipy.interpolate import CubicSpline
+
+    spline = CubicSpline(frames, [float(f * f) for f in frames], bc_type="natural")
+    gap = cubic.filter(pl.col("status") == "interpolated")
+    assert gap["x"].to_list() == pytest.approx(spline([4, 5, 6, 7]).tolist())
+    assert gap["vx"].to_list() == pytest.approx(spline([4, 5, 6, 7], 1).tolist())  # the spline's own derivative
+    assert cubic.filter(pl.col("status") == "measured")["vx"].to_list() == [100.0 + f for f in frames]
+
+
+def _written(tmp_path: Path, df: pl.DataFrame, name: str = "t.parquet") -> Path:
+    path = tmp_path / name
+    df.write_parquet(path) if path.suffix == ".parquet" else df.write_csv(path)
+    return path
+
+
+@pytest.mark.parametrize("change, says", [
+    (lambda d: d.with_columns(pl.format("{}x", "frame").alias("frame")), "row 1: frame is '0x', not an integer"),
+    (lambda d: d.with_columns(pl.col("frame").cast(pl.Float64) + 0.5), "row 1: frame is 0.5, not an integer"),
+    (lambda d: d.with_columns(pl.when(pl.col("frame") == 2).then(pl.lit("gone")).otherwise("status").alias("status")),
+     "row 3: status 'gone' is not one of measured, predicted, interpolated, lost"),
+    (lambda d: pl.concat([d, d.slice(1, 1)]), "row 4: a second row for track 1 (flow) on frame 1: one row per track and frame"),
+    (lambda d: d.with_columns(pl.when(pl.col("frame") == 1).then(pl.lit("lost")).otherwise("status").alias("status")),
+     "row 2: a lost row of track 1 on frame 1 carries a position (x); lost rows have none"),
+    (lambda d: d.with_columns(pl.col("frame") - 1), "row 1: frame -1 is negative"),
+    (lambda d: d.with_columns(pl.lit(None, dtype=pl.String).alias("status")), "row 1: no status"),
+])
+def test_malformed_tables_are_refused_naming_the_row(tmp_path: Path, change, says: str) -> None:
+    path = _written(tmp_path, change(_table([0, 1, 2], [1.0, 2.0, 3.0])))
+    with pytest.raises(TrackreplayError) as err:
+        read_trajectory(path)
+    assert str(err.value).startswith(f"{path} {says}")
+
+
+def test_a_csv_cell_that_is_not_a_number_is_one_sentence_naming_the_line(tmp_path: Path) -> None:
+    path = _written(tmp_path, _table([0, 1, 2], [1.0, 2.0, 3.0]), "t.csv")
+    lines = path.read_text().splitlines()
+    lines[2] = lines[2].replace(",2.0,", ",abc,", 1)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(TrackreplayError) as err:
+        read_trajectory(path)
+    assert str(err.value) == f"{path} line 3: x is 'abc', not a number"
+
+
+@pytest.mark.parametrize("verb", ["export", "smooth", "eval"])
+@pytest.mark.parametrize("case", ["text frame", "duplicate", "empty"])
+def test_every_verb_refuses_a_bad_or_empty_table(tmp_path: Path, capsys, verb: str, case: str) -> None:
+    """Once: a text frame column ended in an internal error (exit 70), duplicate rows made eval count
+    102 frames of a 51-frame log and smooth crash, an empty table was exported and smoothed to an empty file."""
+    from trackreplay.replay.cli import main
+
+    golden = Path(__file__).resolve().parents[1] / "golden"
+    table = read_trajectory(golden / "flow.trajectory.parquet")
+    bad = {"text frame": table.with_columns(pl.col("frame").cast(pl.String) + "x"),
+           "duplicate": pl.concat([table, table.head(1)]),
+           "empty": table.clear()}[case]
+    path = _written(tmp_path, bad)
+    out = tmp_path / "out.parquet"
+    argv = {"export": [str(path), str(out)], "smooth": [str(path), str(golden / "flow-sim1-24f.mcap"), "--out", str(out)],
+            "eval": [str(path), str(golden / "flow-sim1-24f.mcap")]}[verb]
+    assert main([verb, *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"trackreplay: error: {path} ") and "\n" not in err
+    assert not out.exists()

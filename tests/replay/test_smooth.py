@@ -216,3 +216,24 @@ def test_a_trajectory_of_another_log_is_refused(tmp_path: Path, capsys) -> None:
     assert main(["smooth", str(other), str(log), "--out", str(tmp_path / "s2.parquet")]) == 2
     assert "it was not replayed from this log" in capsys.readouterr().err
     assert not (tmp_path / "s2.parquet").exists()
+
+
+def test_a_wrong_output_suffix_is_refused_before_any_work(tmp_path: Path, capsys) -> None:
+    """`smooth --out x.json` once smoothed the whole log first, then suggested .txt, which smooth refuses."""
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    for name in ("s.json", "s.txt"):
+        assert main(["smooth", str(tmp_path / "missing.parquet"), str(log), "--out", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip()  # about the suffix, not the missing input: checked first
+        assert err == (f"trackreplay: error: {tmp_path / name}: a smoothed trajectory is written as .parquet or .csv "
+                       "(it has std and fill columns, which MOTChallenge .txt cannot hold)")
+
+
+def test_replay_smooth_refuses_interpolate(tmp_path: Path, capsys) -> None:
+    """`replay --smooth --interpolate cubic` silently smoothed instead: the two fill gaps differently."""
+    out = tmp_path / "t.parquet"
+    for method in ("cubic", "linear", "none"):
+        assert main(["replay", str(tmp_path / "missing.mcap"), "--smooth", "--interpolate", method,
+                     "--export", str(out), "--quiet"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"trackreplay: error: --interpolate {method} and --smooth exclude each other") and "\n" not in err
+    assert not out.exists()
