@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 from dataclasses import dataclass
@@ -32,6 +33,7 @@ class Mark:
     w: float
     h: float
     label: str = "target"
+    source: str = ""  # where it was given (a CSV's file:line), for messages; "" for --box
 
 
 def parse_box(text: str, frame: int, label: str) -> Mark:
@@ -67,7 +69,7 @@ def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
                     mark = parse_box(",".join(cells[1:5]), frame, cells[5] if len(cells) == 6 else default_label)
                 except SourceError as err:
                     raise SourceError(f"{path}:{line_no}: {err}") from None
-                marks.append(mark)
+                marks.append(dataclasses.replace(mark, source=f"{path}:{line_no}"))
     except FileNotFoundError:
         raise SourceError(f"{path} does not exist") from None
     if not marks:

@@ -46,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
     topic = image_topic(reader, args.image_topic)
     first = min(mk.frame for mk in marks)
     height, width = frame_image(reader, topic, first).shape[:2]  # also: the frame exists
-    check_inside(((mk.frame, mk.x, mk.y, mk.w, mk.h) for mk in marks), width, height, f"{args.log}: {topic}")
+    for mk in marks:  # (one at a time: a mark from a CSV is named by its file:line)
+        check_inside([(mk.frame, mk.x, mk.y, mk.w, mk.h)], width, height, mk.source or f"{args.log}: {topic}")
     if args.tracker:
         check_labels({mk.label for mk in marks}, args.tracker, registry.get(args.tracker).tracker_cls, "annotate")
         check_one_start_per_frame(marks, args.tracker, registry.get(args.tracker).tracker_cls, "annotate")

@@ -66,3 +66,11 @@ def test_two_golf_marks_on_a_frame_need_one_labelled_start(short_sim: Path, tmp_
     same = tmp_path / "same.mcap"  # the same box twice is one mark
     assert main(["annotate", str(short_sim), "--frame", "0", "--box", "10,10,8,8", "--box", "10,10,8,8", "--label", "ball",
                  "--tracker", "golf", "--out", str(same)]) == 0
+
+
+def test_a_csv_mark_outside_the_image_names_its_line(short_sim: Path, tmp_path: Path, capsys) -> None:
+    """A review: a --from-csv mark outside the picture was refused without its CSV line."""
+    marks = tmp_path / "marks.csv"
+    marks.write_text("frame,x,y,w,h\n0,10,10,8,8\n1,5000,10,8,8\n")
+    assert main(["annotate", str(short_sim), "--from-csv", str(marks), "--out", str(tmp_path / "o.mcap")]) == 2
+    assert f"{marks}:3: the box 5000,10,8,8 on frame 1 is not inside" in capsys.readouterr().err

@@ -211,17 +211,23 @@ def start_targets(mask: np.ndarray, offset: tuple[int, int], near: np.ndarray, c
     return BlobTargets(float(blobs.area[biggest]), float(min(max(roundness(blobs)[biggest], 0.6), 1.0)))
 
 
-def spills_over(mask: np.ndarray, offset: tuple[int, int], area: float) -> bool:
-    """The marked ball's blob (``area`` px, the biggest in ``mask``, a crop twice the marked box)
-    reaches the crop's edge: what the LUT picks out is not inside twice the box, so the box was not
-    drawn round a ball the colours tell apart (a 400 px box on grass: a 356 000 px "ball")."""
+def spills_over(mask: np.ndarray, offset: tuple[int, int], centre: tuple[float, float], size: tuple[float, float],
+                slack_px: float = 4.0) -> bool:
+    """What the LUT picks out at a marked box of ``size`` (w, h) round ``centre`` (``mask``: a crop
+    well beyond twice the box, top-left ``offset``) is wider or taller than twice the box (+
+    ``slack_px`` of blur): the box was not drawn round a ball the colours tell apart (a 400 px box on
+    grass: a 356 000 px "ball"). The blob taken: the biggest whose box holds the centre, else the nearest."""
     blobs = measure_blobs(mask, offset, moments=False)
-    k = np.flatnonzero(blobs.area == area)
-    if not k.size or mask.size == 0:
+    if not len(blobs.area):
         return False
-    x0, y0, w, h = (int(v) for v in blobs.bbox[int(k[0])])
-    ox, oy = int(offset[0]), int(offset[1])
-    return x0 <= ox or y0 <= oy or x0 + w >= ox + mask.shape[1] or y0 + h >= oy + mask.shape[0]
+    b = blobs.bbox.astype(np.float64)
+    holds = (b[:, 0] <= centre[0]) & (centre[0] <= b[:, 0] + b[:, 2]) & (b[:, 1] <= centre[1]) & (centre[1] <= b[:, 1] + b[:, 3])
+    if holds.any():  # the biggest blob whose box holds the mark's centre (a flood's centroid may lie anywhere)
+        k = int(np.flatnonzero(holds)[np.argmax(blobs.area[holds])])
+    else:
+        k = int(np.argmin(np.hypot(blobs.centroid[:, 0] - centre[0], blobs.centroid[:, 1] - centre[1])))
+    w, h = float(b[k, 2]), float(b[k, 3])
+    return w > 2.0 * size[0] + slack_px or h > 2.0 * size[1] + slack_px
 
 
 def shape_tolerance(area: np.ndarray, cfg: BlobConfig, scale: float) -> np.ndarray:

@@ -229,6 +229,13 @@ class GolfTracker(TrackerBase):
         share = float(sil.lut_scores[LUT_NAMES.index(name)])
         return share >= self.config.lut.other_min_share  # (NaN, a LUT not built: False)
 
+    def _spills_over(self, image: np.ndarray, region: InitRegion) -> bool:
+        """The marked box's colours pick out more than twice the box (:func:`.blobs.spills_over`), seen
+        in a crop four times the box and 16 px more each way."""
+        w, h = region.w * 4.0 + 32.0, region.h * 4.0 + 32.0
+        _, offset, mask = box_silhouette(image, np.array([region.x - w / 2, region.y - h / 2, w, h]), self.luts, self.lut_name)
+        return spills_over(mask, offset, (region.x, region.y), (region.w, region.h))
+
     def _seen_before(self, image: np.ndarray, camera: PtzCamera | None, point: np.ndarray, scale: float) -> bool:
         """A confirmed track's blob was already there, beside the ball, when the ball was last
         measured (``validate.confirm_not_seen_before``, :mod:`.seen_before`)."""
@@ -374,7 +381,7 @@ class GolfTracker(TrackerBase):
         box = np.array([region.x - region.w, region.y - region.h, 2 * region.w, 2 * region.h])
         ycc, offset, mask = box_silhouette(frame.image, box, self.luts, self.lut_name)
         found = start_targets(mask, offset, np.array([region.x, region.y]), cfg.blobs, scale)
-        if found is not None and spills_over(mask, offset, found.area):
+        if found is not None and self._spills_over(frame.image, region):
             raise LogError(f"the box marked on frame {region.frame} ({region.w:g}x{region.h:g} px round {region.x:g},{region.y:g}) "
                            "holds no ball the golf tracker can tell from its surroundings: the colours it picks out fill the "
                            "box and run past twice its size; draw the box round the ball alone (`trackreplay frame LOG "
