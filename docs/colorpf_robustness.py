@@ -17,7 +17,8 @@ Perturbations (ground truth transformed with the frames; all deterministic, one 
 - ``shift+3`` / ``shift-3``: the marked box moved by (+3, +3) / (-3, -3) px; ``scale0.8`` / ``scale1.25``:
   the marked box scaled about its centre (the frames and the truth unchanged);
 - ``reversed``: the frames backwards (the walker comes towards the camera, starting off the road);
-- ``half_fps``: every other frame (15 fps).
+- ``half_fps``: every other frame (15 fps);
+- ``grey``: the frames without colour (many OTB sequences are grey).
 
 Sub-pixel windows are resampled bilinearly (cv2.warpAffine); frames are written as PNG (lossless).
 "Confident wrong" counts the colour PF's ``measured`` rows whose centre is more than twice the true
@@ -104,6 +105,7 @@ def perturbations(images, gt) -> dict:
     noise = np.random.default_rng(11)
     out["noise"] = ([np.clip(im + noise.normal(0.0, 4.0, im.shape), 0, 255).astype(np.uint8) for im in images], gt, mark(gt), 30)
     out["blur"] = ([cv2.GaussianBlur(im, (0, 0), 1.2) for im in images], gt, mark(gt), 30)
+    out["grey"] = ([cv2.cvtColor(cv2.cvtColor(im, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for im in images], gt, mark(gt), 30)
     x, y, w, h = mark(gt)
     for name, box in (("shift+3", (x + 3, y + 3, w, h)), ("shift-3", (x - 3, y - 3, w, h)),
                       ("scale0.8", (x + 0.1 * w, y + 0.1 * h, 0.8 * w, 0.8 * h)),
