@@ -124,6 +124,10 @@ def config_from_toml(cls: type[C], path: str | Path, table: str | None = None) -
     """Read ``path`` into ``cls``: its ``[table]`` (with sub-tables) when present, else the top level."""
     data = read_toml(path)
     if table is not None and isinstance(data.get(table), dict):
+        others = sorted(k for k in data if k != table)
+        if others:  # a review: a [flow] table beside [groups] was silently ignored
+            raise TrackreplayError(f"{path}: {', '.join(repr(k) for k in others)} beside the [{table}] table would be "
+                                   f"ignored by the {table} tracker; keep only [{table}] (and its sub-tables)")
         return config_from_dict(cls, data[table], str(path), table)
     return config_from_dict(cls, data, str(path))
 

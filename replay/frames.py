@@ -328,7 +328,13 @@ def iter_frames(
                 raise LogError(f"{reader.path}: topic {topics.lens} is for {lens.width}x{lens.height} images "
                                f"but {where} is {image.shape[1]}x{image.shape[0]}")
         elif image.shape != shape:
-            raise LogError(f"{where} is {image.shape[1]}x{image.shape[0]} but earlier images are {shape[1]}x{shape[0]}")
+            if image.shape[:2] != shape[:2]:
+                raise LogError(f"{where} is {image.shape[1]}x{image.shape[0]} but earlier images are {shape[1]}x{shape[0]}")
+
+            def kind(s: tuple) -> str:  # (a grey right view of a colour left: the same size, another kind)
+                return "grey" if len(s) == 2 or s[2] == 1 else "colour" if s[2] == 3 else f"{s[2]}-channel"
+
+            raise LogError(f"{where} is {kind(image.shape)} but earlier images are {kind(shape)} (both {shape[1]}x{shape[0]})")
         return image, encoded, encoding
 
     def bundle(left: LogMessage, right: LogMessage | None) -> Frame:

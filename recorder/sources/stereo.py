@@ -19,6 +19,7 @@ Calibration file: JSON (``.json``) or OpenCV FileStorage (``.yaml``/``.yml``/``.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,7 +30,7 @@ import numpy as np
 
 from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_text, require_file
 from trackreplay.recorder.sources.images import check_count, list_images, read_image_files
-from trackreplay.recorder.sources.video import read_video
+from trackreplay.recorder.sources.video import read_video, video_fps
 from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
 from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 
@@ -146,10 +147,11 @@ def _camera(data: dict[str, Any], path: Path, prefix: str, fallback: CameraModel
 
     if fallback is None:
         width, height = get("width", required=True), get("height", required=True)
-        try:
-            width, height = int(width), int(height)
-        except (TypeError, ValueError):
-            raise SourceError(f"calibration {path}: width and height must be integers") from None
+        # whole numbers (OpenCV YAML reads 640 as 640.0), not "640", 640.5 or true
+        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and float(v).is_integer()
+                   for v in (width, height)):
+            raise SourceError(f"calibration {path}: width and height must be integers, not {width!r} and {height!r}")
+        width, height = int(width), int(height)
         if width <= 0 or height <= 0:
             raise SourceError(f"calibration {path}: width and height must be positive")
     else:
@@ -185,13 +187,20 @@ def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
     if baseline is None and "right_P" not in data:
         raise SourceError(f"calibration {path} needs 'baseline_m' or 'right_P' for a stereo pair")
     if baseline is not None:
-        try:
-            baseline = float(baseline)
-        except (TypeError, ValueError):
-            raise SourceError(f"calibration {path}: baseline_m is not a number") from None
-        if not baseline > 0:
-            raise SourceError(f"calibration {path}: baseline_m must be positive")
-    return Calibration(left, _camera(data, path, "right_", left, baseline), _pose(data, path))
+        if isinstance(baseline, bool) or not isinstance(baseline, (int, float)):  # (not "0.12", not true)
+            raise SourceError(f"calibration {path}: baseline_m is not a number")
+        baseline = float(baseline)
+        if not (math.isfinite(baseline) and baseline > 0):
+            raise SourceError(f"calibration {path}: baseline_m must be a finite positive number of metres, not {baseline!r}")
+    right = _camera(data, path, "right_", left, baseline)
+    # the baseline the right P implies (P_right[3] = -fx_right * baseline), as the replay reads it
+    implied = -right.P[3] / right.P[0] + 0.0  # (+ 0.0: no "-0" in the message)
+    if not (math.isfinite(implied) and implied > 0):
+        raise SourceError(f"calibration {path}: right_P puts the right camera {implied:g} m to the right of the left "
+                          "(need a finite positive baseline: P[3] = -fx * baseline_m < 0)")
+    if baseline is not None and "right_P" in data and not math.isclose(implied, baseline, rel_tol=1e-6):
+        raise SourceError(f"calibration {path}: baseline_m {baseline:g} and right_P ({implied:g} m) disagree; give one")
+    return Calibration(left, right, _pose(data, path))
 
 
 def pose_message(pose: RigPose, t_ns: int) -> m.FrameTransform:
@@ -236,6 +245,9 @@ class StereoSource:
         if not self.is_folders:
             require_file(self.left, "video")
             require_file(self.right, "video")
+            rates = video_fps(self.left), video_fps(self.right)
+            if all(r > 0 for r in rates) and abs(rates[0] - rates[1]) > 1e-3 * max(rates):  # frame k of each: not one moment
+                raise SourceError(f"stereo videos run at different rates: {self.left} {rates[0]:g} fps, {self.right} {rates[1]:g} fps")
             return None
         lf, rf = list_images(self.left), list_images(self.right)
         if len(lf) != len(rf):
@@ -257,6 +269,9 @@ class StereoSource:
                 raise SourceError(f"stereo videos lost different frames: {lf.where} is paired with {rf.where}")
             if lf.size != rf.size:
                 raise SourceError(f"{rf.where} is {rf.size[0]}x{rf.size[1]} but {lf.where} is {lf.size[0]}x{lf.size[1]}")
+            if (lf.pixels.ndim == 3) != (rf.pixels.ndim == 3):  # a replay would refuse the pair: one kind for both
+                grey, colour = (lf, rf) if lf.pixels.ndim == 2 else (rf, lf)
+                raise SourceError(f"{grey.where} is grey but {colour.where} is colour; record both views alike")
             count += 1
             yield lf, rf
         if next(right, None) is not None:

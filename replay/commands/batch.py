@@ -10,6 +10,7 @@ from trackreplay.replay import registry
 from trackreplay.replay.batch import BatchOptions, format_table, plan, run_ray, run_serial, summary_table
 from trackreplay.replay.batch_config import grid, parse_seeds
 from trackreplay.replay.export import METHODS
+from trackreplay.schemas.errors import TrackreplayError
 
 FAILED = 1  # some task failed (its row says why); the others' outputs are written
 
@@ -46,6 +47,12 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     tasks = plan(args.logs, args.tracker, parse_seeds(args.seeds), grid(args.sets), args.config)
     out = args.out.resolve()
+    if out.exists() and not out.is_dir():
+        raise TrackreplayError(f"--out {args.out} is a file, not a folder")
+    previous = [p for p in (out / "summary.parquet", out / "tasks") if p.exists()]
+    if previous:  # a review: old task folders beside the new ones contradicted the new summary
+        raise TrackreplayError(f"--out {args.out} holds an earlier batch's results ({previous[0].name}); "
+                               "give an empty or new folder")
     out.mkdir(parents=True, exist_ok=True)
     opts = BatchOptions(out=out, rrd=args.rrd, interpolate=args.interpolate, max_gap=args.max_gap)
     progress = not args.quiet and sys.stderr.isatty()

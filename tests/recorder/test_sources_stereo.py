@@ -80,8 +80,16 @@ def test_unequal_stereo_counts(tmp_path, make_images, make_video):
 
 @pytest.mark.parametrize("extra, match", [
     ({}, "needs 'baseline_m' or 'right_P'"),
-    ({"baseline_m": -1}, "baseline_m must be positive"),
+    ({"baseline_m": -1}, "baseline_m must be a finite positive number"),
     ({"baseline_m": 0.1, "K": [1, 2, 3]}, "K has 3 numbers, expected 9"),
+    # a review: accepted, then an empty trajectory with exit 0 (inf) or a replay refusing the log (right_P)
+    ({"baseline_m": 1e309}, "baseline_m must be a finite positive number"),
+    ({"baseline_m": "0.12"}, "baseline_m is not a number"),
+    ({"baseline_m": True}, "baseline_m is not a number"),
+    ({"right_P": [100, 0, 32, 0, 0, 100, 24, 0, 0, 0, 1, 0]}, "right_P puts the right camera 0 m to the right"),
+    ({"baseline_m": 0.5, "right_P": [100, 0, 32, -12, 0, 100, 24, 0, 0, 0, 1, 0]}, "baseline_m 0.5 and right_P \\(0.12 m\\) disagree"),
+    ({"baseline_m": 0.1, "width": "64"}, "width and height must be integers"),
+    ({"baseline_m": 0.1, "width": 64.5}, "width and height must be integers"),
 ])
 def test_bad_stereo_calibration(tmp_path, make_images, extra, match):
     left, right = make_images(tmp_path / "L", 2), make_images(tmp_path / "R", 2)
@@ -133,3 +141,24 @@ def test_rig_pose_in_the_calibration_reaches_the_log_and_the_reader(tmp_path, ma
 def test_bad_rig_pose_is_named(tmp_path, extra, match):
     with pytest.raises(SourceError, match=match):
         load_calibration(write_json(tmp_path / "c.json", baseline_m=0.12, **extra), stereo=True)
+
+
+def test_a_grey_right_view_of_a_colour_left_is_refused(tmp_path, make_images):
+    """A review: recorded (exit 0), then the replay refused it as "640x480 but earlier images are 640x480"."""
+    import cv2
+    import numpy as np
+
+    left, right = make_images(tmp_path / "L", 2), tmp_path / "R"
+    right.mkdir()
+    for k in range(2):
+        cv2.imwrite(str(right / f"frame{k}.png"), np.full((48, 64), 90, np.uint8))
+    with pytest.raises(SourceError, match=r"frame0\.png is grey but .*frame0\.jpg is colour; record both views alike"):
+        record(tmp_path / "out.mcap", stereo=(left, right), calibration=write_json(tmp_path / "c.json", baseline_m=0.1),
+               fps=10, quiet=True)
+
+
+def test_stereo_videos_at_different_rates_are_refused(tmp_path, make_video):
+    """A review: a 48 fps left and a 24 fps right were paired frame by frame, silently."""
+    lv, rv = make_video(tmp_path / "l.avi", 4, fps=48.0), make_video(tmp_path / "r.avi", 4, fps=24.0)
+    with pytest.raises(SourceError, match=r"stereo videos run at different rates: .*l\.avi 48 fps, .*r\.avi 24 fps"):
+        record(tmp_path / "out.mcap", stereo=(lv, rv), calibration=write_json(tmp_path / "c.json", baseline_m=0.1), quiet=True)

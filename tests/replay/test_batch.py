@@ -113,3 +113,13 @@ def test_a_parameter_given_as_300_0_and_400_is_a_number_column() -> None:
     tasks = plan([GOLF], "golf", [0], grid(["golf.search.max_px=300.0,400"]))
     table = summary_table([{"status": "ok"}, {"status": "ok"}], tasks)
     assert table["golf.search.max_px"].dtype == pl.Float64 and table["golf.search.max_px"].to_list() == [300.0, 400.0]
+
+
+def test_an_out_folder_with_an_earlier_batch_is_refused(short_sim: Path, tmp_path: Path, capsys) -> None:
+    """A review reran a batch into the same --out: the old task folders stayed beside the new ones,
+    contradicting the new summary."""
+    out = tmp_path / "out"
+    assert main(["batch", str(short_sim), "--out", str(out), "--serial", "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["batch", str(short_sim), "--out", str(out), "--serial", "--quiet"]) == 2
+    assert "holds an earlier batch's results (summary.parquet); give an empty or new folder" in capsys.readouterr().err

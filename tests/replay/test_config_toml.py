@@ -40,3 +40,19 @@ def test_a_file_is_resolved_over_the_defaults(tmp_path, capsys) -> None:
     path.write_text("[flow]\nepsilon = 0.75\n")
     assert main(["config", "flow", "--config", str(path)]) == 0
     assert "epsilon = 0.75" in capsys.readouterr().out
+
+
+def test_another_trackers_table_beside_this_ones_is_refused(tmp_path) -> None:
+    """A review concatenated `config groups` and `config flow`: the [flow] table was silently ignored."""
+    import pytest
+
+    from trackreplay.replay.config import load_config
+    from trackreplay.schemas.errors import TrackreplayError
+    from trackreplay.trackers.groups.config import GroupsConfig
+
+    path = tmp_path / "both.toml"
+    path.write_text("[groups]\nrate_hz = 24.0\n\n[flow]\nfovv = 3\n")
+    with pytest.raises(TrackreplayError, match=r"'flow' beside the \[groups\] table would be ignored"):
+        load_config(GroupsConfig, path, table="groups")
+    path.write_text("[groups]\nrate_hz = 24.0\n\n[groups.grouping]\nradius_m = 0.8\n")
+    assert load_config(GroupsConfig, path, table="groups").grouping.radius_m == 0.8

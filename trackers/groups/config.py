@@ -202,5 +202,12 @@ class GroupsConfig:
             raise ValueError("association.min_points and grouping.min_points must be at least 1")
         if not 0.0 <= self.association.alpha_s <= 1.0:
             raise ValueError("association.alpha_s must be in [0, 1]")
-        if not (np.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise ValueError("rate_hz must be a positive frame rate")
+        if not (np.isfinite(self.rate_hz) and 0 < self.rate_hz <= 100_000):
+            raise ValueError("rate_hz must be a positive frame rate of at most 100000")
+        # a review: each of these gave an empty trajectory, exit 0 (or, rate_hz 1e300, a division by zero)
+        if not (np.isfinite(self.grouping.radius_m) and self.grouping.radius_m > 0):
+            raise ValueError("grouping.radius_m must be a positive distance (m)")
+        if not 0.0 <= self.merge.keep_id_share <= 1.0:
+            raise ValueError("merge.keep_id_share must be in [0, 1]")
+        if not 0.0 <= self.background.threshold <= 255.0:
+            raise ValueError("background.threshold must be in [0, 255] grey levels")
