@@ -219,7 +219,8 @@ def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo
     w, h = first.size
     if calib is not None:
         if (calib.left.width, calib.left.height) != (w, h):
-            raise SourceError(f"calibration is for {calib.left.width}x{calib.left.height} images but {first.where} is {w}x{h}")
+            raise SourceError(f"calibration {calib.path} is for {calib.left.width}x{calib.left.height} images but "
+                              f"{first.where} is {w}x{h}")
         if stereo:
             rec.write(topics.left_calibration, calib.left.to_pb(t, "left"), t)
             rec.write(topics.right_calibration, calib.right.to_pb(t, "right"), t)

@@ -71,6 +71,7 @@ class Calibration:
     left: CameraModel  # the mono camera, or the left of a pair
     right: CameraModel | None = None
     pose: RigPose | None = None  # a pair's left camera in a world frame (Z up), when the file gives it
+    path: str = ""  # the file it was read from (for messages)
 
     @property
     def baseline_m(self) -> float | None:
@@ -182,7 +183,7 @@ def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
     data = _load_opencv(path) if path.suffix.lower() in (".yaml", ".yml", ".xml") else _load_json(path)
     left = _camera(data, path, "", None, None)
     if not stereo:
-        return Calibration(left)
+        return Calibration(left, path=str(path))
     baseline = data.get("baseline_m")
     if baseline is None and "right_P" not in data:
         raise SourceError(f"calibration {path} needs 'baseline_m' or 'right_P' for a stereo pair")
@@ -200,7 +201,7 @@ def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
                           "(need a finite positive baseline: P[3] = -fx * baseline_m < 0)")
     if baseline is not None and "right_P" in data and not math.isclose(implied, baseline, rel_tol=1e-6):
         raise SourceError(f"calibration {path}: baseline_m {baseline:g} and right_P ({implied:g} m) disagree; give one")
-    return Calibration(left, right, _pose(data, path))
+    return Calibration(left, right, _pose(data, path), str(path))
 
 
 def pose_message(pose: RigPose, t_ns: int) -> m.FrameTransform:
@@ -240,6 +241,9 @@ class StereoSource:
 
     def check(self, clock: FrameClock) -> int | None:
         """Validate before recording; the pair count when known."""
+        for side in (self.left, self.right):
+            if not side.exists():
+                raise SourceError(f"stereo input {side} does not exist")
         if self.left.is_dir() != self.right.is_dir():
             raise SourceError(f"stereo inputs {self.left} and {self.right} must both be folders or both be videos")
         if not self.is_folders:

@@ -100,7 +100,7 @@ def test_bad_stereo_calibration(tmp_path, make_images, extra, match):
 
 def test_calibration_size_must_match_images(tmp_path, make_images):
     folder = make_images(tmp_path / "img", 2, size=(32, 24))
-    with pytest.raises(SourceError, match=r"calibration is for 64x48 images but .*frame0\.jpg is 32x24"):
+    with pytest.raises(SourceError, match=r"calibration .*c\.json is for 64x48 images but .*frame0\.jpg is 32x24"):
         record(tmp_path / "out.mcap", images=folder, fps=10, calibration=write_json(tmp_path / "c.json"), quiet=True)
     bad = tmp_path / "bad.json"
     bad.write_text('{"width": 64,\n "height": }')
@@ -162,3 +162,11 @@ def test_stereo_videos_at_different_rates_are_refused(tmp_path, make_video):
     lv, rv = make_video(tmp_path / "l.avi", 4, fps=48.0), make_video(tmp_path / "r.avi", 4, fps=24.0)
     with pytest.raises(SourceError, match=r"stereo videos run at different rates: .*l\.avi 48 fps, .*r\.avi 24 fps"):
         record(tmp_path / "out.mcap", stereo=(lv, rv), calibration=write_json(tmp_path / "c.json", baseline_m=0.1), quiet=True)
+
+
+def test_a_missing_stereo_input_is_named(tmp_path, make_images):
+    """A review: `--stereo L nonexist` said "must both be folders or both be videos"."""
+    left = make_images(tmp_path / "L", 2)
+    with pytest.raises(SourceError, match=r"stereo input .*nonexist does not exist"):
+        record(tmp_path / "out.mcap", stereo=(left, tmp_path / "nonexist"),
+               calibration=write_json(tmp_path / "c.json", baseline_m=0.1), fps=10, quiet=True)
