@@ -139,7 +139,7 @@ def load_config(cls: type[C], source: ConfigSource = None, table: str | None = N
     if isinstance(source, cls):
         return source
     if isinstance(source, Mapping):
-        return config_from_dict(cls, source, f"{table or cls.__name__} config dict")
+        return config_from_dict(cls, source, f"{table or cls.__name__} config (--set or a dict)")
     if isinstance(source, str | Path):
         return config_from_toml(cls, source, table)
     raise TrackreplayError(f"a {cls.__name__} must be given as None, a {cls.__name__}, a dict or a TOML path, "

@@ -299,6 +299,21 @@ def _interp(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.nda
     return out
 
 
+def _interp_rate(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """The slope (per frame) of :func:`_interp`'s line at the ``where`` frames: the segment between the
+    known values around each (0 with a single known value; NaN with none)."""
+    ok = np.isfinite(values)
+    out = np.full(len(values), np.nan)
+    if ok.sum() == 1:
+        out[where] = 0.0
+    if ok.sum() < 2:
+        return out
+    fk, vk = frames[ok], values[ok]
+    i = np.clip(np.searchsorted(fk, frames[where]), 1, len(fk) - 1)
+    out[where] = (vk[i] - vk[i - 1]) / (fk[i] - fk[i - 1])
+    return out
+
+
 def _smooth_one(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[int, int] | None,
                 cameras: Mapping[int, PtzCamera] | None,
                 raw: pl.DataFrame | None = None) -> tuple[pl.DataFrame, TrackFit | None]:
@@ -574,6 +589,9 @@ def _smooth_group(track: pl.DataFrame, cfg: SmoothConfig, frame_times: Mapping[i
     for name in ("x", "y", "w", "h", "vx", "vy"):
         values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
         cols[name] = np.where(keep, _interp(f, values, filled), np.nan)
+    for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own (linear) positions do
+        values = np.where(has_pos, full[p].to_numpy().astype(float), np.nan)
+        cols[v] = np.where(filled & keep, _interp_rate(f, values, filled), cols[v])
     out = full.with_columns(
         *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in cols.items()),
         pl.Series("confidence", np.where(filled, np.nan, full["confidence"].to_numpy().astype(float)), dtype=pl.Float64, nan_to_null=True),

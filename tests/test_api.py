@@ -53,7 +53,7 @@ def test_seed_window_and_rrd_pass_through(tmp_path: Path) -> None:
 
 
 def test_a_bad_config_key_is_a_one_sentence_error() -> None:
-    with pytest.raises(TrackreplayError, match=r"^flow config dict: unknown key fovv; known: "):
+    with pytest.raises(TrackreplayError, match=r"^flow config \(--set or a dict\): unknown key fovv; known: "):
         trackreplay.replay_log(LOG, "flow", config={"fovv": 41})
 
 

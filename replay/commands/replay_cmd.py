@@ -61,6 +61,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayRequest:
+    if args.stereo_topics and args.image_topic:  # (the stereo pair's left is the image topic)
+        raise TrackreplayError("--stereo-topics and --image-topic both name the images; give one")
     if args.start is not None and args.end is not None and args.end <= args.start:
         raise TrackreplayError(f"--end {args.end:g} must be after --start {args.start:g}")
     return ReplayRequest(
@@ -76,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
     if args.smooth and args.interpolate is not None:
         raise TrackreplayError(f"--interpolate {args.interpolate} and --smooth exclude each other: the smoother fills the "
                                "gaps of the export itself (up to --max-gap frames)")
+    if args.smooth and not args.export:  # (it would smooth nothing anyone sees)
+        raise TrackreplayError("--smooth smooths the --export; give --export PATH")
     if args.export:
         trajectory_format(args.export)  # before the replay, not after it
     request = request_from_args(args, args.rrd)

@@ -37,11 +37,11 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                       help="procedural texture (default) or a photo bundled with scikit-image")
     flow.add_argument("--encoding", default=None, choices=("png", "jpeg", "raw"), help="image encoding (default png, lossless)")
     flow.add_argument("--frames", type=positive_int, default=None, help="number of frames, t = 0..frames-1 (paper: 51)")
-    golf = p.add_argument_group("golf-teeshot")
+    golf = p.add_argument_group("golf-teeshot (--fps and --duration also for groups-*: default 48 fps, 4 s after a 10-frame lead-in)")
     golf.add_argument("--size", default=None, choices=tuple(SIZES), help="frame size (default 720p)")
-    golf.add_argument("--fps", type=positive_float, default=None, help="frame rate (default 30; 60 also typical)")
+    golf.add_argument("--fps", type=positive_float, default=None, help="frame rate (golf default 30, at most 240; groups 48)")
     golf.add_argument("--duration", type=positive_float, default=None, metavar="S",
-                      help="seconds to record (default: until the ball has rested for 1 s)")
+                      help="seconds to record, at most 120 (golf default: until the ball has rested for 1 s; groups: 4)")
     golf.add_argument("--camera", default=None, choices=tuple(CAMERA_PLACES), help="camera behind (default) or beside the tee")
     golf.add_argument("--no-bounce", action="store_true", default=None, help="the ball checks into the turf and rolls out, no hop")
     golf.add_argument("--cut", type=non_negative_float, default=None, metavar="AT_S", help="a camera cut / fast zoom out at this time")
@@ -135,6 +135,10 @@ def _run_groups(args: argparse.Namespace) -> int:
         raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
     cfg = GroupSceneConfig(scene=args.scene, seed=args.seed, fps=48.0 if args.fps is None else args.fps,
                            duration=4.0 if args.duration is None else args.duration)
+    try:
+        cfg.validate()
+    except ValueError as err:  # before anything is written
+        raise TrackreplayError(f"synth {args.scene}: {err}") from None
     summary = write_group_scene(args.out, cfg)
     print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
     return 0

@@ -149,6 +149,10 @@ def test_an_empty_time_range_is_refused(short_sim: Path, capsys) -> None:
     (["replay", "LOG", "--start", "100", "--quiet"], "--start 100 s is after the log's end"),
     # a review: a wrong --export suffix was refused only after the whole replay (and its 166 MB .rrd)
     (["replay", "LOG", "--export", "OUT.json", "--rrd", "OUT", "--quiet"], "unknown trajectory format"),
+    # a review: --duration 1e9 ran until killed
+    (["synth", "groups-crossing", "OUT", "--duration", "1e9"], "duration at most 120 s"),
+    (["replay", "LOG", "--stereo-topics", "/a", "/b", "--image-topic", "/c", "--quiet"], "both name the images; give one"),
+    (["replay", "LOG", "--smooth", "--quiet"], "--smooth smooths the --export; give --export PATH"),
 ])
 def test_values_a_review_got_through_are_refused(argv, message, short_sim: Path, tmp_path: Path, capsys) -> None:
     """Each once ended in exit 0 with an unusable output, or in an internal error: now exit 2, one

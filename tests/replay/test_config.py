@@ -78,7 +78,7 @@ def test_invalid_values_name_the_table(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("values", [{"fov": 50}, {"neighbourhood": 4}, {"alpha": 1.0}, {"sigmas": []}, {"r_vel": 0}])
 def test_invalid_flow_values_are_one_sentence_errors(values) -> None:
-    with pytest.raises(TrackreplayError, match="^FlowConfig config dict: invalid FlowConfig"):
+    with pytest.raises(TrackreplayError, match="^FlowConfig config \\(--set or a dict\\): invalid FlowConfig"):
         load_config(FlowConfig, values)
 
 

@@ -237,3 +237,16 @@ def test_replay_smooth_refuses_interpolate(tmp_path: Path, capsys) -> None:
         err = capsys.readouterr().err.strip()
         assert err.startswith(f"trackreplay: error: --interpolate {method} and --smooth exclude each other") and "\n" not in err
     assert not out.exists()
+
+
+def test_a_filled_group_rows_velocity_is_its_positions_rate() -> None:
+    """A review: group tracks' filled rows got vx, vy interpolated on their own while x, y moved linearly."""
+    import numpy as np
+
+    from trackreplay.replay.smooth import _interp, _interp_rate
+
+    f = np.arange(8, dtype=float)
+    x = np.array([0.0, np.nan, np.nan, np.nan, 40.0, 41.0, np.nan, 45.0])
+    fill = ~np.isfinite(x)
+    assert np.allclose(_interp(f, x, fill)[fill], [10.0, 20.0, 30.0, 43.0])
+    assert np.allclose(_interp_rate(f, x, fill)[fill], [10.0, 10.0, 10.0, 2.0])  # the slope of the very line drawn

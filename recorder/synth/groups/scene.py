@@ -101,6 +101,8 @@ class GroupSceneConfig:
             raise ValueError(f"unknown scene {self.scene!r}; choose one of {', '.join(SCENES)}")
         if self.fps <= 0 or self.duration <= 0 or self.lead_in < 1 or self.start_s < 0:
             raise ValueError("fps and duration must be positive and lead_in at least 1 frame")
+        if not (self.fps <= 240.0 and self.duration <= 120.0):  # as the golf scene: a review's --duration 1e9 ran until killed
+            raise ValueError(f"fps must be at most 240 and duration at most 120 s, not {self.fps:g} and {self.duration:g}")
 
 
 @dataclass(frozen=True)
