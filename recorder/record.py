@@ -174,6 +174,7 @@ def record(
         raise SourceError(f"cannot write output {out} ({err.strerror})") from None
     rec = _Recording(writer)
     frames = 0
+    sources = 0  # the source's frames up to the last one read (more than `frames` when some did not decode)
     try:
         with tqdm(total=total, unit="frame", desc=out.name, file=sys.stderr, disable=quiet or not sys.stderr.isatty()) as bar:
             ptz = read_encoders(encoders) if encoders is not None else iter(())
@@ -193,8 +194,11 @@ def record(
                 if gt is not None:
                     objects = gt.objects_at(left.index)
                     if objects is not None:
-                        rec.write(topics.groundtruth, GroundTruthFrame(left.index, t, objects).to_pb(), t)
+                        # the log's frame number (its image's position), not the source's: a video frame that
+                        # did not decode leaves no image, and the truth of the frames after it stays with them
+                        rec.write(topics.groundtruth, GroundTruthFrame(frames, t, objects).to_pb(), t)
                 frames += 1
+                sources = left.index + 1
                 bar.update(1)
             while pending is not None:
                 rec.write(topics.encoders, pending.to_pb(), pending.t_ns)
@@ -209,7 +213,7 @@ def record(
     writer.close()
     lost = losses.warnings() if video is not None else ()
     return RecordReport(out, frames, writer.messages_written, dict(rec.counts), rec.start, rec.end,
-                        plane_warnings + lost + _warnings(gt, frames), frames_lost=bool(lost))
+                        plane_warnings + lost + _warnings(gt, sources), frames_lost=bool(lost))
 
 
 def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo: bool, calib: Calibration | None, lens_table,

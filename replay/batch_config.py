@@ -14,7 +14,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from trackreplay.replay.config import read_toml
+from trackreplay.replay.config import read_toml, tracker_table
 from trackreplay.schemas.errors import TrackreplayError
 
 
@@ -97,8 +97,7 @@ def apply_sets(tracker: str, base: str | Path | dict | None, sets: dict[str, Any
     elif isinstance(base, dict):
         config = copy.deepcopy(base)
     else:
-        data = read_toml(base)
-        config = copy.deepcopy(data[tracker]) if isinstance(data.get(tracker), dict) else data
+        config = copy.deepcopy(tracker_table(read_toml(base), tracker, base))
     for key, value in sets.items():
         path = key.split(".")
         if len(path) > 1 and path[0] == tracker:

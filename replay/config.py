@@ -124,12 +124,20 @@ def config_from_toml(cls: type[C], path: str | Path, table: str | None = None) -
     """Read ``path`` into ``cls``: its ``[table]`` (with sub-tables) when present, else the top level."""
     data = read_toml(path)
     if table is not None and isinstance(data.get(table), dict):
-        others = sorted(k for k in data if k != table)
-        if others:  # a review: a [flow] table beside [groups] was silently ignored
-            raise TrackreplayError(f"{path}: {', '.join(repr(k) for k in others)} beside the [{table}] table would be "
-                                   f"ignored by the {table} tracker; keep only [{table}] (and its sub-tables)")
-        return config_from_dict(cls, data[table], str(path), table)
+        return config_from_dict(cls, tracker_table(data, table, path), str(path), table)
     return config_from_dict(cls, data, str(path))
+
+
+def tracker_table(data: dict, table: str, path: str | Path) -> dict:
+    """A TOML file's ``[table]`` when it has one (else the whole file); anything beside that table
+    is refused: a review's [flow] table beside [groups] was silently ignored (also by ``batch --set``)."""
+    if not isinstance(data.get(table), dict):
+        return data
+    others = sorted(k for k in data if k != table)
+    if others:
+        raise TrackreplayError(f"{path}: {', '.join(repr(k) for k in others)} beside the [{table}] table would be "
+                               f"ignored by the {table} tracker; keep only [{table}] (and its sub-tables)")
+    return data[table]
 
 
 def load_config(cls: type[C], source: ConfigSource = None, table: str | None = None) -> C:

@@ -166,8 +166,8 @@ class ReplaySteps(Iterator[ReplayStep]):
         self.tracker: Tracker = self.entry.tracker_cls(self.config, tracker_rng(req.seed, req.tracker))
         marks = read_hints(reader, topics.hints, topics.image)
         check_labels({r.label for r in marks}, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
-        check_one_start_per_frame(marks, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
         inside = marks_in_window(marks, start_ns, end_ns)
+        check_one_start_per_frame(inside, req.tracker, self.entry.tracker_cls, f"{req.log}: topic {topics.hints}")
         check_can_track(req.tracker, self.entry.tracker_cls, inside, len(inside) < len(marks),
                         getattr(self.entry.tracker_cls, "needs", "") != "stereo" or read_stereo_rig(reader, topics) is not None,
                         req.log)

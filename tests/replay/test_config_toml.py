@@ -56,3 +56,18 @@ def test_another_trackers_table_beside_this_ones_is_refused(tmp_path) -> None:
         load_config(GroupsConfig, path, table="groups")
     path.write_text("[groups]\nrate_hz = 24.0\n\n[groups.grouping]\nradius_m = 0.8\n")
     assert load_config(GroupsConfig, path, table="groups").grouping.radius_m == 0.8
+
+
+def test_batch_sets_over_a_file_refuse_another_trackers_table_too(tmp_path) -> None:
+    """A code review: batch/diff --set read the file on their own and dropped the other table silently."""
+    import pytest
+
+    from trackreplay.replay.batch_config import apply_sets
+    from trackreplay.schemas.errors import TrackreplayError
+
+    path = tmp_path / "both.toml"
+    path.write_text("[golf]\nmax_predicted_frames = 4\n\n[colorpf]\nn_particles = 10\n")
+    with pytest.raises(TrackreplayError, match=r"'colorpf' beside the \[golf\] table would be ignored"):
+        apply_sets("golf", path, {"particles.n": 500})
+    path.write_text("[golf]\nmax_predicted_frames = 4\n")
+    assert apply_sets("golf", path, {"particles.n": 500}) == {"max_predicted_frames": 4, "particles": {"n": 500}}
