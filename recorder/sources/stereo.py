@@ -6,7 +6,9 @@ Calibration file: JSON (``.json``) or OpenCV FileStorage (``.yaml``/``.yml``/``.
 - ``K`` (or ``camera_matrix``): 3x3 intrinsics, nested or flat row-major;
 - ``D`` (or ``distortion_coefficients``): optional, default none; ``distortion_model`` optional
   (default ``plumb_bob``, or ``rational_polynomial`` for 8 coefficients);
-- ``R`` (3x3, default identity) and ``P`` (3x4, default ``[K | 0]``): optional;
+- ``R`` (3x3, default identity; or ``rectification_matrix``) and ``P`` (3x4, default ``[K | 0]``; or
+  ``projection_matrix``): optional. A ROS ``camera_info`` YAML (matrices as ``rows``, ``cols``,
+  ``data``) is read as it is;
 - stereo only: ``baseline_m`` (metres, the right camera ``baseline_m`` to the right of the left),
   or the right camera's own ``right_P``; ``right_K``/``right_D``/``right_R`` optional (default: the
   left's). The right ``P`` defaults to ``[right_K | (-fx * baseline_m, 0, 0)]``;
@@ -44,6 +46,8 @@ _ALIASES = {
     "height": ("height", "image_height"),
     "K": ("K", "camera_matrix"),
     "D": ("D", "distortion_coefficients"),
+    "R": ("R", "rectification_matrix"),
+    "P": ("P", "projection_matrix"),
 }
 
 
@@ -109,7 +113,11 @@ def _read_file_storage(path: Path) -> dict[str, Any]:
         for key in root.keys():
             node = root.getNode(key)
             if node.isMap() and not node.empty() and node.getNode("data").isSeq():
-                out[key] = node.mat().tolist()  # an opencv-matrix
+                if node.getNode("dt").empty():  # a ROS camera_info matrix: rows, cols and data, no OpenCV type
+                    data = node.getNode("data")
+                    out[key] = [data.at(i).real() for i in range(data.size())]
+                else:
+                    out[key] = node.mat().tolist()  # an opencv-matrix
             elif node.isSeq():
                 out[key] = [node.at(i).real() for i in range(node.size())]
             elif node.isReal() or node.isInt():

@@ -170,3 +170,20 @@ def test_a_missing_stereo_input_is_named(tmp_path, make_images):
     with pytest.raises(SourceError, match=r"stereo input .*nonexist does not exist"):
         record(tmp_path / "out.mcap", stereo=(left, tmp_path / "nonexist"),
                calibration=write_json(tmp_path / "c.json", baseline_m=0.1), fps=10, quiet=True)
+
+
+def test_a_ros_camera_info_yaml_is_read(tmp_path):
+    """A code review: ROS camera_info matrices ({rows, cols, data}, no OpenCV dt) made OpenCV's parser
+    assert, so a calibration written by ROS could not be read at all."""
+    from trackreplay.recorder.sources.stereo import load_calibration
+
+    path = tmp_path / "left.yaml"
+    path.write_text(
+        "image_width: 64\nimage_height: 48\ncamera_name: left\n"
+        "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [100.0, 0.0, 32.0, 0.0, 100.0, 24.0, 0.0, 0.0, 1.0]\n"
+        "distortion_model: plumb_bob\n"
+        "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0.1, 0.0, 0.0, 0.0, 0.0]\n"
+        "rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]\n"
+        "projection_matrix:\n  rows: 3\n  cols: 4\n  data: [90.0, 0.0, 30.0, 0.0, 0.0, 90.0, 22.0, 0.0, 0.0, 0.0, 1.0, 0.0]\n")
+    left = load_calibration(path).left
+    assert (left.width, left.height, left.K[0], left.D[0], left.P[0], left.P[2]) == (64, 48, 100.0, 0.1, 90.0, 30.0)
