@@ -76,7 +76,7 @@ def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.where(union > 0, inter / np.where(union > 0, union, 1), 0.0)
 
 
-def _same_frames(track: pl.DataFrame, obj: pl.DataFrame) -> None:
+def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] = ("the trajectory", "the ground truth")) -> None:
     """The trajectory and the ground truth number frames alike: a frame's time agrees in both (a log
     cut or recovered by a tool that did not renumber would compare each estimate with another moment)."""
     if "t_ns" not in track.columns or "t_ns" not in obj.columns:
@@ -84,7 +84,7 @@ def _same_frames(track: pl.DataFrame, obj: pl.DataFrame) -> None:
     both = frame_time_mismatches(track, obj)
     if both.height:
         f, t, g = both.row(0)
-        raise TrackreplayError(f"frame {f} is at t={t} ns in the trajectory but at t={g} ns in the ground truth "
+        raise TrackreplayError(f"frame {f} is at t={t} ns in {names[0]} but at t={g} ns in {names[1]} "
                                f"({both.height} frame(s) disagree): they come from different logs, or the log was cut or "
                                "recovered without renumbering its ground truth")
 
@@ -103,12 +103,7 @@ def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int], 
                  else f"is not one of the {len(log_times)} frames of {log_name}")
         raise TrackreplayError(f"{traj_name}: frame {f} (t={t} ns) {where} ({bad.height} frame(s) disagree): "
                                "the trajectory was not replayed from this log")
-    bad = frame_time_mismatches(traj, annotated)
-    if bad.height:
-        f, t, g = bad.row(0)
-        raise TrackreplayError(f"{traj_name}: frame {f} is at t={t} ns, as in the log, but at t={g} ns in the ground truth "
-                               f"of {log_name} ({bad.height} frame(s) disagree): the log was cut or recovered without "
-                               "renumbering its ground truth")
+    _same_frames(traj, annotated, (traj_name, f"the ground truth of {log_name}"))
 
 
 def per_frame(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> pl.DataFrame:

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
 
 import polars as pl
 
+from trackreplay.replay.commands.values import finite_json
 from trackreplay.replay.eval import check_frames, evaluate, format_summary
 from trackreplay.replay.export import read_trajectory
 from trackreplay.replay.frames import image_times
@@ -81,14 +81,4 @@ def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, fra
 
 def _write_json(path: Path, data: dict) -> None:
     """Strict JSON: a metric that is undefined (no truth, no match) is null, not NaN."""
-    path.write_text(json.dumps(_finite(data), indent=2, allow_nan=False) + "\n")
-
-
-def _finite(value: object) -> object:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    return value
+    path.write_text(json.dumps(finite_json(data), indent=2, allow_nan=False) + "\n")

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 from pathlib import Path
+
+from trackreplay.replay.commands.values import finite_json
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -19,16 +20,6 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--no-size", action="store_true", help="ignore the apparent ball size (lines of sight only)")
     p.set_defaults(func=run)
     return p
-
-
-def _clean(value):
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -61,7 +52,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {args.out}: {rows.height} rows")
     if args.report:
         args.report.parent.mkdir(parents=True, exist_ok=True)
-        args.report.write_text(json.dumps(_clean(fit.report.as_dict()), indent=2) + "\n")
+        args.report.write_text(json.dumps(finite_json(fit.report.as_dict()), indent=2, allow_nan=False) + "\n")
     if args.rrd:
         from trackreplay.replay.views.flight import write_flight_rrd
 

@@ -42,3 +42,14 @@ def positive_float(text: str) -> float:
     if value <= 0:
         raise argparse.ArgumentTypeError(f"{value:g} is not positive")
     return value
+
+
+def finite_json(value: object) -> object:
+    """``value`` with every non-finite float as None: strict JSON (null, never NaN) for a report."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: finite_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite_json(v) for v in value]
+    return value
