@@ -3,7 +3,9 @@
 The paper gives N = 1000 particles and the form of every step but no numeric value for
 sigma, alpha, the noise or the gates; the defaults below are ours and are explained per field.
 Pixel quantities are for a 1080-line frame and are scaled by ``image height / reference_height``
-at run time, so the same config suits 720p and 1080p.
+at run time, so the same config suits 720p and 1080p; by the marked ball's diameter over
+``reference_ball_px`` instead when that is larger (a ball big for its frame moves as far, in its
+own diameters, as the reference ball does).
 
 TOML (every table and key optional; ``trackreplay replay LOG --tracker golf --config golf.toml``)::
 
@@ -340,6 +342,9 @@ class GolfConfig:
     max_predicted_frames: int = 5  # misses reported as "predicted" before the track is "lost" (no position)
     trail_length: int = 600  # past measurements kept for the drawn trajectory
     reference_height: int = 1080  # the frame height the pixel parameters are given for
+    # ... and the ball diameter (px) they suit: a marked ball larger than this in a 1080-line frame
+    # scales them by its own size instead (tee balls in the synthetic shots: 14-15 px; 0: height only)
+    reference_ball_px: float = 16.0
     particles: ParticleConfig = field(default_factory=ParticleConfig)
     search: SearchConfig = field(default_factory=SearchConfig)
     lut: LutConfig = field(default_factory=LutConfig)
@@ -350,3 +355,7 @@ class GolfConfig:
     reinit: ReinitConfig = field(default_factory=ReinitConfig)
     validate: ValidateConfig = field(default_factory=ValidateConfig)
     snap: SnapConfig = field(default_factory=SnapConfig)
+
+    def __post_init__(self) -> None:
+        if not self.reference_height > 0 or not self.reference_ball_px >= 0:
+            raise ValueError("reference_height must be > 0 and reference_ball_px >= 0 (0: the height alone scales)")

@@ -91,6 +91,7 @@ class GolfTracker(TrackerBase):
         self._followed: bool | None = None  # this frame's ReinitPolicy.follows answer, once _predict asked
         self._pose_change: np.ndarray | None = None  # this frame's pose homography from the last frame's
         self._all_hints: tuple | None = None  # the frame bundle's all_hints last remembered
+        self._marked_diameter = 0.0  # the last mark's ball, measured from its silhouette (0: not measured)
 
     def prepare(self, marked: Marked) -> None:
         """Build the LUTs up front from ``(image, regions marked on it)`` (optional: else as frames come)."""
@@ -110,7 +111,7 @@ class GolfTracker(TrackerBase):
         self.luts.learn(frame.image, self.marks.on(frame.index))
         notice = self.notices.check(camera is not None, bool(self.marks))
         height, width = frame.image.shape[:2]
-        scale = height / cfg.reference_height
+        scale = self._scale(height)
         prev_camera = self._prev[0]
         # the pose change from the last frame to this one (None: a pose is missing), asked by several stages
         self._pose_change = pose_homography(prev_camera, camera) if camera is not None and prev_camera is not None else None
@@ -122,6 +123,7 @@ class GolfTracker(TrackerBase):
             reinit = self._predict(frame, camera, scale, compensated)  # §2.3 re-initialisation, or eq. (1)
         elif (region := self.marks.start_region(frame.index)) is not None:
             reinit = self._start(frame, region, scale)  # the first mark, and every later one: re-anchor
+            scale = self._scale(height)  # (the marked ball's size may widen it)
         else:
             self.intermediates = GolfIntermediates.idle(notice)
             self._prev = (camera, frame.index, frame.t_ns)
@@ -223,6 +225,20 @@ class GolfTracker(TrackerBase):
         return [TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))]
 
     # --- stages ------------------------------------------------------------------------------------
+    def _scale(self, height: int) -> float:
+        """The factor on every pixel parameter: the frame's height over ``reference_height``, or the
+        ball's diameter over ``reference_ball_px`` when that is larger. The parameters were set on
+        balls 14-16 px across at 1080 lines; a ball larger than that for its frame (a close camera, a
+        portrait clip turned on its side, a crop) moves and blurs as many of its own diameters a frame
+        as the reference ball does, so its gates and speeds grow with it. The diameter is the marked
+        ball's, then the targets' as the ball flies off and shrinks, never more than the marked one (a
+        blob that grows may be the ball merged with something white)."""
+        cfg = self.config
+        by_height = height / cfg.reference_height
+        if not self._marked_diameter or self.targets is None or cfg.reference_ball_px <= 0:
+            return by_height
+        return max(by_height, min(self._marked_diameter, self.targets.diameter) / cfg.reference_ball_px)
+
     def _background_here(self, sil: LutSilhouette, name: str) -> bool:
         """LUT ``name``'s background is at least ``lut.other_min_share`` of the search region (its
         score in :meth:`GolfLuts.choose`): a LUT says nothing about colours it never saw around the ball."""
@@ -387,6 +403,8 @@ class GolfTracker(TrackerBase):
                            "box and run past twice its size; draw the box round the ball alone (`trackreplay frame LOG "
                            f"{region.frame}` shows the pixel grid)")
         self.targets = found or BlobTargets(math.pi / 4.0 * region.w * region.h, cfg.blobs.initial_circularity)
+        self._marked_diameter = found.diameter if found is not None else 0.0  # (a box may be drawn loose)
+        scale = self._scale(frame.image.shape[0])
         if found is not None:
             self.range.learn_ball(ycc[..., 0], mask)
         if frame.camera is not None and name == "ground":  # a ball resting on the ground calibrates the range

@@ -362,3 +362,42 @@ def test_a_mark_round_no_ball_is_refused(backdrop, draw_ball):
     fitted = (InitRegion(0, 0, 640.0, 540.0, 14, 14, "ball"),)
     ok = [dataclasses.replace(f, hints=fitted if f.index == 0 else (), all_hints=fitted) for f in frames]
     assert statuses(run(ok))[0] == "measured"
+
+
+def test_a_ball_large_for_its_frame_scales_the_pixel_settings(backdrop, draw_ball):
+    # A 640x360 picture of a ball 20 px across (a close camera, or a portrait clip turned on its side):
+    # by the frame's height the pixel settings are a third of a 1080-line frame's, for a ball as large
+    # as one 60 px across there; struck, it goes 30 px a frame up (1.5 diameters). The marked ball's
+    # own size scales the settings (reference_ball_px): every frame held. By the height alone the
+    # strike's search is too small and the first frames of flight are missed.
+    base = backdrop(height=360, width=640)
+    path = [(320.0, 300.0)] * 6 + [(320.0 + 2 * k, 300.0 - 30 * k) for k in range(1, 7)]
+    mark = (InitRegion(0, 0, 320.0, 300.0, 24, 24, "ball"),)
+    frames = [Frame(k, k * NS, draw_ball(base, p, 10.0), hints=mark if k == 0 else (), all_hints=mark)
+              for k, p in enumerate(path)]
+
+    def held(config):
+        tracker = GolfTracker(config, np.random.default_rng(0))
+        return [k for k, f in enumerate(frames) if (s := tracker.step(f)) and s[0].status == "measured"
+                and np.hypot(s[0].x - path[k][0], s[0].y - path[k][1]) < 3]
+
+    assert held(GolfConfig()) == list(range(len(path)))
+    assert not {6, 7, 8} & set(held(GolfConfig(reference_ball_px=0.0)))  # by the height alone
+
+
+def test_the_pixel_scale_follows_the_ball_as_it_shrinks_never_past_the_marked_size(backdrop, draw_ball):
+    # Marked 20 px across in a 360-line frame, the ball flies off (shrinks to 8 px): the scale follows
+    # it down to the frame's own (1/3); when the blob grows again (merged with something white, or the
+    # camera zooming in) the scale stays at most the marked ball's.
+    base = backdrop(height=360, width=640)
+    radii = [10.0] * 4 + [9.0, 8.0, 7.0, 6.0, 5.0, 4.0, 4.0, 4.0] + [6.0, 9.0, 12.0] + [14.0] * 12
+    mark = (InitRegion(0, 0, 320.0, 200.0, 24, 24, "ball"),)
+    tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
+    scales = []
+    for k, r in enumerate(radii):
+        tracker.step(Frame(k, k * NS, draw_ball(base, (320.0, 200.0), r), hints=mark if k == 0 else (), all_hints=mark))
+        scales.append(tracker._scale(360))
+    marked = tracker._marked_diameter / GolfConfig().reference_ball_px
+    assert 1.1 < marked < 1.35 and abs(scales[0] - marked) < 1e-9
+    assert scales[11] < 0.7 * marked and min(scales) >= 360 / 1080  # followed down, never under the height's
+    assert max(scales) <= marked + 1e-9 and scales[-1] == max(scales)  # grown back larger than marked: capped
