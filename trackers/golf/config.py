@@ -189,8 +189,15 @@ class BlobConfig:
     streak_sigmas: float = 3.0
     streak_slack_px: float = 1.0
     streak_tolerance: float = 0.6
+    # Ours (golf.streak): a measured blob that is the bright end of a faint streak (a ball slowing
+    # during the exposure) is measured at the whole streak's centre, the streak grown from the blob
+    # over the top-hat at complete_streak of the blob's level (hysteresis), when no longer than the
+    # predicted motion allows. 0: off (the blob's own centroid). Synthetic 1080p shot: RMSE 1.53 -> 1.25 px.
+    complete_streak: float = 0.35
 
     def __post_init__(self) -> None:
+        if not 0.0 <= self.complete_streak < 1.0:
+            raise ValueError("blobs.complete_streak must be in [0, 1) (0: off)")
         if self.area_tolerance <= 1:
             raise ValueError("blobs.area_tolerance must exceed 1")
         if not 0 < self.target_rate <= 1:

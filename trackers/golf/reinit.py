@@ -97,11 +97,20 @@ class ReinitPolicy:
 
     def at_rest(self, frames: int, tolerance_px: float) -> bool:
         """The last ``frames`` measurements were on consecutive frames and all within
-        ``tolerance_px`` of their mean: the ball was lying still when last seen."""
-        recent = np.array(self.history, float).reshape(-1, 3)[-frames:]
+        ``tolerance_px`` of their mean, and the ball did not come into them fast (the measurement
+        on the frame before, if any, within ``3 * tolerance_px``): the ball was lying still when
+        last seen. (A clip with repeated frames, 30 fps shown at 60, shows a ball in flight at the
+        same place twice; taken as struck on the next miss, its samples' velocities opened up and
+        a wrong blob 60 px off was measured.)"""
+        history = np.array(self.history, float).reshape(-1, 3)
+        recent = history[-frames:]
         if len(recent) < frames or recent[-1, 0] - recent[0, 0] != frames - 1:
             return False
-        return bool(np.all(np.hypot(*(recent[:, 1:] - recent[:, 1:].mean(axis=0)).T) <= tolerance_px))
+        mean = recent[:, 1:].mean(axis=0)
+        if not bool(np.all(np.hypot(*(recent[:, 1:] - mean).T) <= tolerance_px)):
+            return False
+        before = history[-frames - 1] if len(history) > frames else None
+        return before is None or before[0] != recent[0, 0] - 1 or bool(np.hypot(*(before[1:] - mean)) <= 3.0 * tolerance_px)
 
     def centre_search(self, camera: PtzCamera | None, previous: PtzCamera | None, width: int, height: int,
                       pose_change: np.ndarray | None = None) -> bool:

@@ -48,6 +48,7 @@ from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
 from trackreplay.trackers.golf.seen_before import LastSighting, was_there_before
+from trackreplay.trackers.golf.streak import whole_streak
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, named_silhouette, previous_in_pose, top_hat)
 from trackreplay.trackers.golf.trail import Trail, TrailPoints
@@ -193,7 +194,7 @@ class GolfTracker(TrackerBase):
         estimate = self._estimate()  # eq. (3)
 
         if seen:
-            x, y, w, h = self._measured(frame, camera, gated, ycc, sil, check.confidence)
+            x, y, w, h = self._measured(frame, camera, gated, ycc, sil, check.confidence, hat, motion, scale)
             status, confidence = "measured", check.confidence
         else:
             self.misses += 1
@@ -449,12 +450,21 @@ class GolfTracker(TrackerBase):
         return x0 < margin or y0 < margin or x0 + w > shape[1] - margin or y0 + h > shape[0] - margin
 
     def _measured(self, frame: Frame, camera: PtzCamera | None, gated: GatedBlobs, ycc: np.ndarray,
-                  sil: LutSilhouette, confidence: float) -> tuple[float, float, float, float]:
+                  sil: LutSilhouette, confidence: float, hat: Callable[[], np.ndarray], motion: ApparentMotion | None,
+                  scale: float) -> tuple[float, float, float, float]:
         """The ball was seen: targets follow it, a confident one teaches the LUT of its background;
         with a pose the EKF takes (u, v, range)."""
         blobs, k, offset = gated.blobs, gated.selected, sil.offset
         x, y = (float(v) for v in blobs.centroid[k])
         w, h = (float(v) for v in blobs.size[k])
+        if motion is not None and self.config.blobs.complete_streak > 0:  # the bright end of a faint streak: its centre
+            bx, by, bw, bh = (int(v) for v in blobs.bbox[k])
+            ox, oy = int(offset[0]), int(offset[1])
+            pixels = sil.mask[by - oy:by - oy + bh, bx - ox:bx - ox + bw] > 0
+            whole = whole_streak(hat(), pixels, (bx, by), (ox, oy), motion, self.targets.diameter, self.config.blobs, scale,
+                                 low_fraction=self.config.blobs.complete_streak)
+            if whole is not None:
+                x, y = float(whole[0]), float(whole[1])
         # a blob at the picture's edge teaches nothing: the edge may cut it (its shape), and what is seen
         # there is a ball leaving or entering the picture, often a smear (its colours)
         teaches = not self._at_border(blobs.bbox[k], frame.image.shape)

@@ -143,11 +143,32 @@ def test_a_cloud_puff_too_big_for_the_ball_the_3d_filter_predicts_is_not_confirm
     """The default 720p shot at 240 fps, cut at 1 s: the ball leaves the picture's top, and once it
     is lost a cloud puff (96-133 px) moving with the tilting camera forms a tentative track that
     nothing else in view rivals. Found: confirmed, then 26 frames measured ~200 px off. The 3-D
-    filter has the ball far enough that a ball that big would be a few metres from the lens."""
+    filter has the ball far enough that a ball that big would be a few metres from the lens. (Since
+    blobs.complete_streak the ball is not lost there: the scene is replayed without it, as found.)"""
     path = tmp_path / "shot240.mcap"
     scene.write_golf_teeshot(path, scene.GolfSceneConfig(fps=240.0, duration=1.0))
-    out, gt = replay_steps(path)
+    as_found = {"blobs": {"complete_streak": 0.0}}
+    out, gt = replay_steps(path, config=as_found)
     assert measured_off_the_ball(out, gt) == []
     assert "too_near" in [inter.validation.verdict for _, _, inter in out]
-    off, _ = replay_steps(path, config={"validate": {"confirm_max_nearer": 0.0}})
+    off, _ = replay_steps(path, config={**as_found, "validate": {"confirm_max_nearer": 0.0}})
     assert measured_off_the_ball(off, gt)  # without the check the puff is taken (the test can fail)
+
+
+def test_a_streak_is_measured_at_its_centre_not_at_its_bright_end(tmp_path):
+    """The default 720p shot (seed 0): climbing off its bounce the ball slows during the exposure and
+    the far end of its streak is the brightest; one silhouette level kept that end alone, measured
+    9.7 px from the ball (frame 195). Grown by hysteresis over the top-hat (blobs.complete_streak),
+    the whole streak's centre is the ball's; no other frame moves by more than a pixel."""
+    path = tmp_path / "shot.mcap"
+    scene.write_golf_teeshot(path, scene.GolfSceneConfig(seed=0, duration=7.0))
+    errors = {}
+    for complete in (0.35, 0.0):
+        out, gt = replay_steps(path, config={"blobs": {"complete_streak": complete}})
+        errors[complete] = {f.index: math.hypot(s[0].x - gt[f.index]["x"], s[0].y - gt[f.index]["y"])
+                            for f, s, _ in out if s[0].status == "measured" and gt[f.index]["x"] is not None}
+    on, off = errors[0.35], errors[0.0]
+    assert on.keys() == off.keys()
+    fixed = [f for f in on if off[f] > 5.0 >= on[f]]
+    assert fixed and all(on[f] < 1.0 for f in fixed)
+    assert all(on[f] <= off[f] + 1.0 for f in on)

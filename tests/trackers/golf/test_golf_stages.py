@@ -5,7 +5,7 @@ import pytest
 
 from trackreplay.schemas.records import InitRegion, LensEntry, LensTable, PtzReading
 from trackreplay.trackers.geometry.ptz import PtzCamera, pan_tilt_towards
-from trackreplay.trackers.golf.config import EkfConfig, ReinitConfig, SearchConfig
+from trackreplay.trackers.golf.config import EkfConfig, GolfConfig, ReinitConfig, SearchConfig
 from trackreplay.trackers.golf.landing import BallisticEkf
 from trackreplay.trackers.golf.marks import Marks
 from trackreplay.trackers.golf.notices import ENCODER_GAP_NOTICE, NO_ENCODER_NOTICE, NO_HINTS_NOTICE, Notices
@@ -126,3 +126,24 @@ def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
     for k in range(6):
         followed.measured(k, 630.0 + k, 350.0 - k)
     assert followed.choose(index=20, misses=6, camera=None, **args).kind == "lost_centre"
+
+
+def test_a_ball_seen_twice_in_one_place_in_flight_is_not_at_rest():
+    """A clip with repeated frames (30 fps shown at 60) shows a ball in flight at the same place on two
+    frames. Taken as lying still, its next miss opened a strike's search and a wrong blob 60 px off
+    was measured (the iron shot re-encoded at JPEG quality 50). Still twice after coming in at 24 px
+    a frame is no ball at rest; still on the tee, or rolling to a stop, is."""
+    cfg = GolfConfig()
+    flying = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)
+    for frame, y in ((0, 650.0), (1, 626.0), (2, 602.0), (3, 602.0)):  # 24 px a frame, then the same picture twice
+        flying.measured(frame, 640.0, y)
+    assert not flying.at_rest(2, 1.5)
+    for start, steps in ((0, (0.0, 0.0, 0.0, 0.0)), (10, (0.0, 3.0, 4.0, 4.2))):  # on the tee; rolling to a stop
+        still = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)
+        for k, y in enumerate(steps):
+            still.measured(start + k, 640.0, 650.0 + y)
+        assert still.at_rest(2, 1.5)
+    marked = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)  # two sightings only: nothing came before
+    marked.measured(5, 640.0, 650.0)
+    marked.measured(6, 640.0, 650.5)
+    assert marked.at_rest(2, 1.5)
