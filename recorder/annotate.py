@@ -45,6 +45,8 @@ def parse_box(text: str, frame: int, label: str) -> Mark:
         raise SourceError(f"box {text!r} must be four finite numbers x,y,w,h (nan or inf is no place in an image)")
     if w <= 0 or h <= 0:
         raise SourceError(f"box {text!r} has a non-positive width or height")
+    if w < 1 or h < 1:
+        raise SourceError(f"box {text!r} is under a pixel wide or high: it covers no whole pixel of the picture")
     return Mark(frame, x, y, w, h, label)
 
 

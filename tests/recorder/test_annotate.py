@@ -39,6 +39,9 @@ def test_in_place_is_atomic_and_bad_marks_are_named(short_sim: Path, tmp_path: P
     bad.write_text("frame,x,y,w,h\n0,1,2,3\n")
     assert main(["annotate", str(log), "--from-csv", str(bad), "--in-place"]) == 2
     assert "bad.csv:2: expected frame,x,y,w,h[,label], got 4 columns" in capsys.readouterr().err
+    # a box under a pixel (a review: 0.3 x 0.3 px was accepted, then the colour PF crashed on it)
+    assert main(["annotate", str(log), "--frame", "0", "--box=0.1,0.1,0.3,0.3", "--in-place"]) == 2
+    assert "covers no whole pixel" in capsys.readouterr().err and log.read_bytes() == before
     assert main(["annotate", str(log), "--frame", "0", "--box", "1,1,2,2", "--in-place"]) == 0
     assert len(read_hints(LogReader(log), T.ANNOTATIONS_INIT)) == 2
 

@@ -350,6 +350,10 @@ class ColorPfConfig:
     # and after lost_after such frames in a row "lost" (no position) until the colour is found again.
     measured_fraction: float = 0.5
     lost_after: int = 10
+    # Once "lost", the colour must match on reacquire_frames consecutive frames, each estimate within
+    # its box's size of the one before, before a row is "measured" again (until then "lost"): one
+    # frame's match on an empty road after the target had left the picture was "measured" (a review).
+    reacquire_frames: int = 3
     # S_mark - S_back below this: the background matches the reference about as well as the marked
     # box (a dark, unsaturated target on a dark road: otb_crossing, 0.72 vs 0.76), so it cannot set
     # the scale; c = S / S_mark then, as without a background (and a notice says so).
@@ -374,5 +378,7 @@ class ColorPfConfig:
             raise ValueError("n_particles must be at least 1")
         if self.noise < 0 or self.min_noise_px < 0 or self.lost_after < 1 or not 0.0 <= self.measured_fraction <= 1.0:
             raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, 0 <= measured_fraction <= 1")
+        if self.reacquire_frames < 1:
+            raise ValueError("reacquire_frames must be >= 1 (1: one frame's match is measured again)")
         if self.min_separation < 0:
             raise ValueError("min_separation must be >= 0")

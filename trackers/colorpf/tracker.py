@@ -48,6 +48,7 @@ import dataclasses
 
 import numpy as np
 
+from trackreplay.schemas.errors import LogError
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import saturated_share
 from trackreplay.trackers.base import TrackerBase, TrackState
@@ -67,10 +68,12 @@ from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 
-GREY_SHARE = 0.005  # fewer saturated pixels than this share of the marked frame: a grey picture
-GREY_NOTICE = ("the marked frame has no colour (under 0.5 % of its pixels saturated: a grey sequence), so H-S "
-               "histograms carry nothing; the brightness histogram of Perez et al. is used instead "
-               "(likelihood.histogram = \"hsv\": H-S of coloured pixels, V of the rest)")
+GREY_SHARE = 0.005  # fewer saturated pixels than this share around the marked box: a grey picture
+GREY_CONTEXT = 3.0  # ... in the marked box times this per axis: where the particles' boxes will be (a coloured
+# logo or timestamp elsewhere in a grey frame says nothing about the target's colours)
+GREY_NOTICE = ("the marked box and its surroundings have no colour (under 0.5 % of the pixels within 3x the box "
+               "saturated: a grey sequence), so H-S histograms carry nothing; the brightness histogram of Perez et al. "
+               "is used instead (likelihood.histogram = \"hsv\": H-S of coloured pixels, V of the rest)")
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
@@ -120,6 +123,7 @@ class ColorPfTracker(TrackerBase):
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
         self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
+        self._rematch: tuple[int, np.ndarray, int] | None = None  # lost: the last matching frame, centre, run length
         self.hold_run = 0  # hold.enabled: held frames in a row
         self._velocity_steps = 0  # hold.enabled: displacements between vouched estimates measured so far
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
@@ -198,7 +202,12 @@ class ColorPfTracker(TrackerBase):
         assert mark is not None and self.background is not None
         height, width = frame.image.shape[:2]
         box = marked_box((mark.x, mark.y, mark.w, mark.h), width, height)
-        if cfg.likelihood.histogram == "hs" and saturated_share(frame.image, cfg.likelihood.s_min) < GREY_SHARE:
+        if box[2] <= box[0] or box[3] <= box[1]:
+            raise LogError(f"the box marked on frame {mark.frame} ({mark.w:g}x{mark.h:g} px round {mark.x:g},{mark.y:g}) "
+                           f"covers no whole pixel of the {width}x{height} picture: mark the target with a box of at least a pixel")
+        x0, y0, x1, y1 = marked_box((mark.x, mark.y, GREY_CONTEXT * mark.w, GREY_CONTEXT * mark.h), width, height)
+        context = frame.image[y0:y1, x0:x1]
+        if cfg.likelihood.histogram == "hs" and saturated_share(context, cfg.likelihood.s_min) < GREY_SHARE:
             # no hue or saturation to histogram: every box would score alike, and confidently
             self.model = ColourModel(dataclasses.replace(cfg.likelihood, histogram="hsv"))
             self._say(GREY_NOTICE)
@@ -323,6 +332,22 @@ class ColorPfTracker(TrackerBase):
         self.pf.particles[:, :2] += prev[:2] + velocity - estimate[:2]  # the cloud moves with it
         return self.pf.estimate(), True
 
+    def _reacquiring(self, index: int, estimate: np.ndarray, weigh_only: bool) -> bool:
+        """Called on a frame whose colour matches: True while a lost track's match has not yet held on
+        ``reacquire_frames`` consecutive frames, each estimate within its box's size of the last."""
+        if weigh_only or self.misses < self.config.lost_after:
+            self._rematch = None
+            return False
+        last = self._rematch
+        run = 1
+        if last is not None and last[0] == index - 1 and bool(np.all(np.abs(estimate[:2] - last[1]) <= estimate[2:4])):
+            run = last[2] + 1
+        self._rematch = (index, estimate[:2].copy(), run)
+        if run < self.config.reacquire_frames:
+            return True
+        self._rematch = None
+        return False
+
     def _vouch(self, index: int, estimate: np.ndarray, vouched: bool) -> None:
         """``hold.enabled``: the track's velocity from consecutive vouched estimates (exponentially smoothed)."""
         if not vouched:
@@ -411,7 +436,8 @@ class ColorPfTracker(TrackerBase):
             # the background scores (nearly) as well as the mark: it cannot scale the confidence
             self._say(f"the marked box scores S = {self._s_mark:.2f} against the reference and the background "
                       f"{s_back:.2f}: H-S colour barely tells this target from the background, so the confidence "
-                      "is S relative to the mark's alone (as without a background) and says little")
+                      "is S relative to the mark's alone (as without a background) and says little: such frames are "
+                      "\"predicted\", not \"measured\"")
             s_back = 0.0
         confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
         rate = cfg.reference.update_rate
@@ -421,7 +447,12 @@ class ColorPfTracker(TrackerBase):
         if (self.template is not None and t_rate > 0 and telling and not weigh_only
                 and confidence >= cfg.reference.update_above):
             self.template.blend(image, estimate, t_rate)
-        if confidence >= cfg.measured_fraction:
+        if confidence >= cfg.measured_fraction and self._reacquiring(frame.index, estimate, weigh_only):
+            status = "lost"  # lost, and the colour matches again: not yet on reacquire_frames frames in a row
+        elif confidence >= cfg.measured_fraction and not separated and not weigh_only:
+            # the background scores about as well as the mark: the colour match vouches for nothing; not a miss either
+            status, self.misses = "predicted", 0
+        elif confidence >= cfg.measured_fraction:
             status, self.misses, self.placed_run = "measured", 0, 0
             if cfg.neighbour_check and background is not None and self.reference.p_square > 0 and not weigh_only:
                 # a neighbour holds more foreground than the marked box did: the estimate is on or against

@@ -256,3 +256,55 @@ def test_adaptive_reference_only_with_a_background_built_reference(scene_log):
     assert tracker.reference.kind == "mixed" and tracker.adapted is not None
     assert not np.array_equal(tracker.adapted, tracker.reference.histogram)
     assert tracker.adapted.sum() == pytest.approx(1.0)
+
+
+def test_a_grey_picture_with_a_coloured_logo_is_still_tracked_on_brightness():
+    """A review: a grey clip with a red channel logo (1 % of the frame) kept the H-S histograms (the
+    whole frame counted as coloured), and rows were `measured` at confidence 1 up to 233 px off.
+    What counts is the colour around the marked box (3x it), where the particles' boxes will be."""
+    mark = InitRegion(0, 0, 35.5, 29.5, 12, 20, "target")
+    frames = []
+    for f in _frames(6, [mark]):
+        g = np.repeat(f.image.mean(axis=2, keepdims=True).astype(np.uint8), 3, axis=2)
+        g[0:4, 0:20] = (0, 0, 255)  # the logo, far from the target
+        frames.append(dataclasses.replace(f, image=g))
+    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    notices = [(tracker.step(f), tracker.intermediates.notice)[1] for f in frames]
+    assert tracker.model.config.histogram == "hsv" and "no colour" in notices[0]
+
+
+def test_a_match_the_background_scores_as_well_is_not_measured():
+    """The background scores as well as the mark (min_separation out of reach): the colour vouches for
+    nothing, so no frame after the mark is `measured`, and none counts as a miss either."""
+    frames, mark = _scene_with_background()
+    tracker = ColorPfTracker(ColorPfConfig(min_separation=1.0), np.random.default_rng(0))
+    states = [s for f in frames for s in tracker.step(f)]
+    assert states[0].status == "measured"  # the marked frame: the user saw it there
+    assert {s.status for s in states[1:]} == {"predicted"}
+
+
+def test_a_lost_track_is_measured_again_only_after_its_colour_holds_three_frames():
+    """A review: the walker gone from the picture, one frame's colour match on the empty road turned
+    a `lost` track `measured`. Now the match must hold on reacquire_frames consecutive frames, in one
+    place, first; a target that does come back is measured again after them."""
+    mark = InitRegion(0, 0, 35.5, 29.5, 12, 20, "target")
+    tracker = ColorPfTracker(ColorPfConfig(lost_after=3), np.random.default_rng(0))
+    for f in _frames(3, [mark]):
+        tracker.step(f)
+    grey = np.full((60, 80, 3), 70, np.uint8)
+    back = _frames(6, [mark])[3].image  # the target again, where it was on frame 3
+    seq = [grey] * 4 + [back] + [grey] * 4 + [back] * 4  # one frame's match, then a match that holds
+    statuses = [tracker.step(Frame(index=3 + i, t_ns=(3 + i) * 33_000_000, image=im, all_hints=(mark,)))[0].status
+                for i, im in enumerate(seq)]
+    assert statuses[:4] == ["predicted", "predicted", "lost", "lost"]
+    assert statuses[4] == "lost"  # one frame's match: still lost
+    assert statuses[9:] == ["lost", "lost", "measured", "measured"]
+
+
+def test_a_mark_covering_no_whole_pixel_is_refused_in_one_sentence():
+    from trackreplay.schemas.errors import LogError
+
+    mark = InitRegion(0, 0, 0.25, 0.25, 0.3, 0.3, "target")
+    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    with pytest.raises(LogError, match="covers no whole pixel"):
+        tracker.step(_frames(1, [mark])[0])
