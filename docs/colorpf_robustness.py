@@ -106,6 +106,12 @@ def perturbations(images, gt) -> dict:
     out["noise"] = ([np.clip(im + noise.normal(0.0, 4.0, im.shape), 0, 255).astype(np.uint8) for im in images], gt, mark(gt), 30)
     out["blur"] = ([cv2.GaussianBlur(im, (0, 0), 1.2) for im in images], gt, mark(gt), 30)
     out["grey"] = ([cv2.cvtColor(cv2.cvtColor(im, cv2.COLOR_BGR2GRAY), cv2.COLOR_GRAY2BGR) for im in images], gt, mark(gt), 30)
+    logo = []
+    for im in out["grey"][0]:
+        im = im.copy()
+        im[5:25, 5:50] = (0, 0, 255)  # a red channel logo, 1 % of the frame, far from the walker
+        logo.append(im)
+    out["grey_logo"] = (logo, gt, mark(gt), 30)
     x, y, w, h = mark(gt)
     for name, box in (("shift+3", (x + 3, y + 3, w, h)), ("shift-3", (x - 3, y - 3, w, h)),
                       ("scale0.8", (x + 0.1 * w, y + 0.1 * h, 0.8 * w, 0.8 * h)),
@@ -113,16 +119,28 @@ def perturbations(images, gt) -> dict:
         out[name] = (images, gt, box, 30)
     out["reversed"] = (images[::-1], gt[::-1], mark(gt[::-1]), 30)
     out["half_fps"] = (images[::2], gt[::2], mark(gt[::2]), 15)
+    # a still 240-px-wide view the walker leaves by its left edge at frame 92 (truth there: a box cut by
+    # the edge, then none): the track must go lost, not find him again on the empty road
+    left, right = 110, 350
+    cut = gt.copy()
+    cut[:, 0] -= left
+    x0, x1 = np.maximum(cut[:, 0], 0), np.minimum(cut[:, 0] + cut[:, 2], right - left)
+    cut[:, 2] = np.where(x1 > x0, x1 - x0, 0.0)
+    cut[:, 0] = x0
+    cut[cut[:, 2] <= 0] = np.nan  # out of the picture: no truth
+    out["leaves_view"] = ([np.ascontiguousarray(im[:, left:right]) for im in images], cut, mark(cut), 30)
     return out
 
 
 def confident_wrong(traj: pl.DataFrame, gt: pl.DataFrame) -> int:
-    j = traj.filter(pl.col("status") == "measured").join(gt.filter(pl.col("id") == 1), on="frame", suffix="_gt")
+    """``measured`` rows more than twice the true box's diagonal off, or where the target is not in the picture."""
+    j = traj.filter(pl.col("status") == "measured").join(gt.filter(pl.col("id") == 1), on="frame", suffix="_gt", how="left")
     if not len(j):
         return 0
-    d = np.hypot(j["x"] - j["x_gt"], j["y"] - j["y_gt"]).to_numpy()
-    diag = np.hypot(j["w_gt"], j["h_gt"]).to_numpy()
-    return int((d > 2 * diag).sum())
+    d = np.hypot(j["x"] - j["x_gt"], j["y"] - j["y_gt"]).to_numpy().astype(float)
+    diag = np.hypot(j["w_gt"], j["h_gt"]).to_numpy().astype(float)
+    absent = j["x_gt"].is_null().to_numpy() | ~np.isfinite(d)
+    return int(((d > 2 * diag) & ~absent).sum() + absent.sum())
 
 
 def run(name: str, seq, tmp: Path, py: Path, config: dict) -> dict:
