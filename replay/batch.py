@@ -26,6 +26,7 @@ message order the engine fixes as it does everywhere.
 from __future__ import annotations
 
 import json
+import math
 import os
 import socket
 import tempfile
@@ -40,15 +41,30 @@ import polars as pl
 from trackreplay.replay import registry
 from trackreplay.replay.batch_config import apply_sets
 from trackreplay.replay.config import load_config
+from trackreplay.replay.outputs import write_bytes, write_json, write_parquet
 from trackreplay.schemas.errors import TrackreplayError
 
-METRICS = ("coverage", "centre_error_mean", "centre_error_rmse", "precision_at_20px", "success_auc",
-           "velocity_rmse_x", "velocity_rmse_y")
+SINGLE_METRICS = ("coverage", "centre_error_mean", "centre_error_rmse", "precision_at_20px", "success_auc",
+                  "velocity_rmse_x", "velocity_rmse_y")
+# Multi-object trackers (registry's multi_object): `eval --mot`'s figures, on image boxes (IoU >= 0.5)
+# and on 3-D positions (<= 1 m) where the trajectory and the truth have them.
+MOT_METRICS = ("mota", "motp", "idf1", "id_switches", "hota", "mota_3d", "motp_3d", "idf1_3d", "id_switches_3d", "hota_3d")
+METRICS = SINGLE_METRICS + MOT_METRICS
+MOT_MAX_DISTANCE_M = 1.0  # as `eval --mot`'s default
+NOT_RUN = "not_run"
 INSTALL_HINT = "pip install 'trackreplay[cluster]' (or pip install ray)"
 
 
 class RayMissing(TrackreplayError):
     exit_code = 2
+
+
+class BatchInterrupted(KeyboardInterrupt):
+    """Ctrl-C or SIGTERM (``cause``) during a batch; ``rows`` holds the finished tasks' rows by index."""
+
+    def __init__(self, cause: KeyboardInterrupt, rows: dict[int, dict[str, Any]]) -> None:
+        super().__init__(str(cause))
+        self.cause, self.rows = cause, rows
 
 
 @dataclass(frozen=True)
@@ -131,17 +147,17 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
         row.update(digest=result.digest, frames=result.frames, frames_lost=len(result.report.lost),
                    seconds=round(result.seconds, 4))
         table = result.trajectory if opts.interpolate == "none" else fill_gaps(result.trajectory, opts.interpolate, opts.max_gap)
-        table.write_parquet(out / "trajectory.parquet")
+        write_parquet(table, out / "trajectory.parquet")
         summary = result.summary(task.log) | {"params": task.params}
         summary["frame_digests"] = sidecar_path(out / "summary.json").name
-        result.frame_digests.table().write_parquet(sidecar_path(out / "summary.json"))
-        (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        write_parquet(result.frame_digests.table(), sidecar_path(out / "summary.json"))
+        write_json(out / "summary.json", summary)
         if result.report.lost:  # as `replay` exits 7: the run finished, but not over the whole log
             lost = [f.index for f in result.report.lost]
             row.update(status="frames_lost", error=f"{len(lost)} frame(s) could not be read (frames {lost[0]}-{lost[-1]}: "
                                                   f"{result.report.lost[0].reason}); `trackreplay recover` salvages the log")
         if _has_groundtruth(log):
-            metrics = _metrics(table, log)
+            metrics = _metrics(table, log, registry.get(task.tracker).multi_object)
             if "error" in metrics and row["status"] == "ok":
                 row["error"] = metrics["error"]
             row.update({k: v for k, v in metrics.items() if k != "error"})
@@ -161,17 +177,43 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
     return row
 
 
-def _metrics(table: pl.DataFrame, log: Path) -> dict[str, Any]:
+def _metrics(table: pl.DataFrame, log: Path, multi_object: bool = False) -> dict[str, Any]:
+    """The eval metrics of the task's trajectory: single-object (``eval``) or, for a tracker of many
+    objects, multi-object (``eval --mot``); ``error`` says why there are none."""
     from trackreplay.replay.eval import evaluate
-    from trackreplay.replay.groundtruth import read_groundtruth
+    from trackreplay.replay.groundtruth import groundtruth_with_frames
     from trackreplay.replay.reader import LogReader
 
     try:
-        summary, _ = evaluate(table, read_groundtruth(LogReader(log)))
+        gt, annotated = groundtruth_with_frames(LogReader(log))
+        if multi_object:
+            return _mot_metrics(table, gt, annotated["frame"])
+        summary, _ = evaluate(table, gt)
     except TrackreplayError as err:  # e.g. a trajectory with no positioned rows: no metrics (why, in the row), not a failure
         return {"error": f"no metrics: {err}"}
     values = summary.as_dict()
-    return {m: values[m] for m in METRICS}
+    return {m: values[m] for m in SINGLE_METRICS}
+
+
+def _mot_metrics(table: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> dict[str, Any]:
+    """MOTA, MOTP, IDF1, ID switches and HOTA as `eval --mot` gives them; the 3-D ones only where both
+    sides have X, Y, Z (else None, and why in ``error`` when nothing else is missing)."""
+    from trackreplay.replay.mot import hota_metrics, mot_metrics, three_d_missing
+
+    out: dict[str, Any] = {}
+    spaces = [("", "image")]
+    why_not = three_d_missing(table, gt)
+    if why_not is None:
+        spaces.append(("_3d", "3d"))
+    else:
+        out["error"] = f"no 3-D metrics: {why_not}"
+    for suffix, space in spaces:
+        mot = mot_metrics(table, gt, space=space, max_distance_m=MOT_MAX_DISTANCE_M, frames=frames)
+        out |= {f"mota{suffix}": mot.mota, f"motp{suffix}": mot.motp, f"idf1{suffix}": mot.idf1,
+                f"id_switches{suffix}": mot.id_switches,
+                f"hota{suffix}": hota_metrics(table, gt, space=space, max_distance_m=MOT_MAX_DISTANCE_M, frames=frames).hota}
+    # undefined (MOTP with no match): null, as `eval --mot --json` writes it
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in out.items()}
 
 
 def _write_files(row: dict[str, Any], opts: BatchOptions) -> dict[str, Any]:
@@ -180,13 +222,20 @@ def _write_files(row: dict[str, Any], opts: BatchOptions) -> dict[str, Any]:
         out = opts.out / "tasks" / row["task"]
         out.mkdir(parents=True, exist_ok=True)
         for name, data in files.items():
-            (out / name).write_bytes(data)
+            write_bytes(out / name, data)
     return row
 
 
 def _error_row(task: BatchTask, err: BaseException) -> dict[str, Any]:
     return {"task": task.name, "log": str(task.log), "tracker": task.tracker, "seed": task.seed,
             "params": json.dumps(task.params, sort_keys=True), "status": "error", "error": _one_line(err)}
+
+
+def not_run_row(task: BatchTask) -> dict[str, Any]:
+    """The row of a task an interrupt stopped before it finished."""
+    return {"task": task.name, "log": str(task.log), "tracker": task.tracker, "seed": task.seed,
+            "params": json.dumps(task.params, sort_keys=True), "status": NOT_RUN,
+            "error": "the batch was interrupted before this replay finished"}
 
 
 def _progress(total: int, enabled: bool):
@@ -196,12 +245,18 @@ def _progress(total: int, enabled: bool):
 
 
 def run_serial(tasks: list[BatchTask], opts: BatchOptions, progress: bool = False) -> list[dict[str, Any]]:
-    rows = []
+    """The tasks one after another in this process; an interrupt raises :class:`BatchInterrupted`."""
+    rows: dict[int, dict[str, Any]] = {}
     with _progress(len(tasks), progress) as bar:
-        for task in tasks:
-            rows.append(run_task(task, opts))
-            bar.update()
-    return rows
+        try:
+            for task in tasks:
+                rows[task.index] = run_task(task, opts)
+                bar.update()
+        except BatchInterrupted:
+            raise
+        except KeyboardInterrupt as err:
+            raise BatchInterrupted(err, rows) from None
+    return [rows[t.index] for t in tasks]
 
 
 def import_ray():
@@ -233,7 +288,10 @@ def start_ray(address: str | None, workers: int | None) -> bool:
             os.environ["RAY_AUTH_MODE"] = "token"
     try:
         ray.init(**kwargs)
-    except ConnectionError as err:
+    except ValueError as err:  # "Invalid address format: nonsense"
+        raise TrackreplayError(f"--address {address}: cannot join a Ray cluster there ({err}); give auto, HOST:PORT "
+                               f"or ray://HOST:10001") from None
+    except (ConnectionError, SystemExit) as err:  # SystemExit: Ray gives up on a GCS that never answers
         raise TrackreplayError(f"cannot join the Ray cluster at {address} ({_one_line(err)}); a cluster with token "
                                f"authentication needs its token here (~/.ray/auth_token or RAY_AUTH_TOKEN)") from None
     return True
@@ -245,6 +303,8 @@ def run_ray(tasks: list[BatchTask], opts: BatchOptions, *, address: str | None =
     """Run every task as one Ray task (1 CPU each); rows in task order."""
     ray = import_ray()
     started_here = start_ray(address, workers)
+    refs: dict[Any, BatchTask] = {}
+    rows: dict[int, dict[str, Any]] = {}
     try:
         remote = ray.remote(num_cpus=1, max_retries=0)(run_task)
         shipped: dict[Path, Any] = {}
@@ -255,8 +315,6 @@ def run_ray(tasks: list[BatchTask], opts: BatchOptions, *, address: str | None =
                 except OSError as err:
                     shipped[log] = None
                     print(f"trackreplay: warning: cannot read {log} ({err.strerror}); its tasks fail", flush=True)
-        refs = {}
-        rows: dict[int, dict[str, Any]] = {}
         for task in tasks:
             if ship_logs and shipped.get(task.log) is None:
                 rows[task.index] = _error_row(task, TrackreplayError(f"cannot read {task.log}"))
@@ -278,6 +336,14 @@ def run_ray(tasks: list[BatchTask], opts: BatchOptions, *, address: str | None =
                         on_row(row)
                     bar.update()
         return [rows[t.index] for t in tasks]
+    except KeyboardInterrupt as err:
+        for ref, task in refs.items():  # stop the tasks still running (their outputs are incomplete)
+            if task.index not in rows:
+                try:
+                    ray.cancel(ref, force=True)
+                except Exception:  # noqa: BLE001 - a task that ended meanwhile; the shutdown below ends the rest
+                    pass
+        raise BatchInterrupted(err, rows) from None
     finally:
         if started_here:
             ray.shutdown()
@@ -295,7 +361,8 @@ def summary_table(rows: list[dict[str, Any]], tasks: list[BatchTask]) -> pl.Data
         for c in data:
             data[c].append(task.params.get(c) if c in keys else row.get(c))
     schema = {"task": pl.String, "log": pl.String, "tracker": pl.String, "seed": pl.Int64, "digest": pl.String,
-              "frames": pl.Int64, "frames_lost": pl.Int64, "seconds": pl.Float64, **{m: pl.Float64 for m in METRICS}, "status": pl.String,
+              "frames": pl.Int64, "frames_lost": pl.Int64, "seconds": pl.Float64,
+              **{m: pl.Int64 if m.startswith("id_switches") else pl.Float64 for m in METRICS}, "status": pl.String,
               "error": pl.String, "node": pl.String, "task_seconds": pl.Float64}
     columns = []
     for c, values in data.items():
@@ -312,7 +379,8 @@ def summary_table(rows: list[dict[str, Any]], tasks: list[BatchTask]) -> pl.Data
 
 
 SHORT = {"centre_error_mean": "ce_mean", "centre_error_rmse": "ce_rmse", "precision_at_20px": "p@20px",
-         "success_auc": "auc", "velocity_rmse_x": "v_rmse_x", "velocity_rmse_y": "v_rmse_y", "coverage": "cover"}
+         "success_auc": "auc", "velocity_rmse_x": "v_rmse_x", "velocity_rmse_y": "v_rmse_y", "coverage": "cover",
+         "id_switches": "idsw", "id_switches_3d": "idsw_3d"}
 
 
 def format_table(table: pl.DataFrame) -> str:

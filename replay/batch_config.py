@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from trackreplay.replay.config import read_toml, tracker_table
+from trackreplay.replay.engine import check_seed
 from trackreplay.schemas.errors import TrackreplayError
 
 
@@ -44,7 +45,7 @@ def _split_values(text: str) -> list[str]:
             continue
         cur.append(ch)
     parts.append("".join(cur))
-    return [p for p in parts if p.strip()]
+    return parts
 
 
 def parse_assignment(text: str) -> tuple[str, Any]:
@@ -58,9 +59,10 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 def parse_set(text: str) -> tuple[str, list[Any]]:
     """``golf.particles.n=500,1000`` -> ("golf.particles.n", [500, 1000])."""
     key, eq, values = text.partition("=")
-    if not eq or not key.strip() or not values.strip():
+    parts = _split_values(values)
+    if not eq or not key.strip() or not all(p.strip() for p in parts):  # `n=,` or `n=1,,2`: a value is missing
         raise TrackreplayError(f"--set {text!r}: expected KEY=V1[,V2...], e.g. golf.particles.n=500,1000")
-    return key.strip(), [parse_value(v) for v in _split_values(values)]
+    return key.strip(), [parse_value(v) for v in parts]
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -69,24 +71,38 @@ def parse_seeds(text: str) -> list[int]:
     for part in _split_values(text):
         lo, dash, hi = part.strip().partition("-")
         try:
-            rng = range(int(lo), int(hi) + 1) if dash else [int(lo)]
+            lo_n, hi_n = int(lo), int(hi) if dash else int(lo)
         except ValueError:
             raise TrackreplayError(f"--seeds {text!r}: expected N, N-M or a comma list of them") from None
-        if dash and int(hi) < int(lo):
+        if hi_n < lo_n:
             raise TrackreplayError(f"--seeds {text!r}: range {part} is empty")
-        seeds += [s for s in rng if s not in seeds]
+        for bound in (lo_n, hi_n):
+            check_seed(bound, f"--seeds {text!r}: seed")
+        seen = set(seeds)
+        seeds += [s for s in range(lo_n, hi_n + 1) if s not in seen]
     if not seeds:
         raise TrackreplayError(f"--seeds {text!r}: no seeds")
     return seeds
 
 
-def grid(sets: list[str]) -> list[dict[str, Any]]:
-    """The cross product of ``--set`` options: one dict (key path -> value) per combination."""
+def key_path(tracker: str | None, key: str) -> list[str]:
+    """A ``--set`` key as a path in the tracker's table: ``golf.particles.n`` -> [particles, n]."""
+    path = key.split(".")
+    return path[1:] if tracker is not None and len(path) > 1 and path[0] == tracker else path
+
+
+def grid(sets: list[str], tracker: str | None = None) -> list[dict[str, Any]]:
+    """The cross product of ``--set`` options: one dict (key path -> value) per combination. A key
+    given twice, in any spelling (``golf.particles.n`` and ``particles.n`` for golf), is refused."""
     parsed = [parse_set(s) for s in sets]
     keys = [k for k, _ in parsed]
-    dupes = sorted({k for k in keys if keys.count(k) > 1})
-    if dupes:
-        raise TrackreplayError(f"--set {dupes[0]} given twice; list its values once, comma-separated")
+    seen: dict[str, str] = {}
+    for key in keys:
+        norm = ".".join(key_path(tracker, key))
+        if norm in seen:
+            same = f" (as {seen[norm]})" if seen[norm] != key else ""
+            raise TrackreplayError(f"--set {key} given twice{same}; list its values once, comma-separated")
+        seen[norm] = key
     return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in parsed))]
 
 
@@ -99,9 +115,7 @@ def apply_sets(tracker: str, base: str | Path | dict | None, sets: dict[str, Any
     else:
         config = copy.deepcopy(tracker_table(read_toml(base), tracker, base))
     for key, value in sets.items():
-        path = key.split(".")
-        if len(path) > 1 and path[0] == tracker:
-            path = path[1:]
+        path = key_path(tracker, key)
         node = config
         for i, part in enumerate(path[:-1]):
             child = node.setdefault(part, {})

@@ -30,13 +30,15 @@ def median_seconds(fn: Callable[[], object], repeats: int) -> float:
 
 
 def read_decode(log: Path, topic: str | None = None) -> int:
-    """Read every image of the log and decode it, as a replay must; returns the count."""
+    """Read every image a replay reads and decode it (both images of a stereo pair); returns the
+    number of frames (images on the frame topic)."""
     reader = LogReader(log)
-    topic = topic or FrameTopics.detect(reader).image
+    frames = FrameTopics.detect(reader, topic)
+    topics = [frames.image] + ([frames.right] if frames.right else [])
     n = 0
-    for item in reader.messages([topic]):
-        decode_image(item.decode(), item.schema, f"{log}: {topic} message {item.index}")
-        n += 1
+    for item in reader.messages(topics):
+        decode_image(item.decode(), item.schema, f"{log}: {item.topic} message {item.index}")
+        n += item.topic == frames.image
     return n
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import errno
 import importlib
+import os
 import shlex
 import signal
 import sys
@@ -34,6 +35,50 @@ def _terminate(signum, frame) -> None:
 def _interrupted(signum, frame) -> None:
     interrupt(KeyboardInterrupt())  # Ctrl-C, likewise
 
+
+class StdoutGuard:
+    """``sys.stdout`` that goes quiet, without an error, once its reader has closed the pipe
+    (``trackreplay diff A B | head -1``): the verb runs on and its own exit status is kept."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+        self.pipe_closed = False
+
+    def write(self, text: str) -> int:
+        if not self.pipe_closed:
+            try:
+                return self.stream.write(text)
+            except BrokenPipeError:
+                self.close_pipe()
+        return len(text)
+
+    def flush(self) -> None:
+        if not self.pipe_closed:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self.close_pipe()
+
+    def close_pipe(self) -> None:
+        self.pipe_closed = True
+        # The stream still holds what it could not write: aim its descriptor at /dev/null so the
+        # interpreter's flush at exit succeeds instead of changing the exit status to 120.
+        try:
+            fd = self.stream.fileno()
+        except (OSError, ValueError, AttributeError):
+            return
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+
+def _detail(err: BaseException) -> str:
+    """``: what was kept`` when the interrupted verb said so (batch), else nothing."""
+    return f": {err}" if str(err) else ""
+
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
 VERBS = ("record", "synth", "info", "recover", "annotate", "frame", "filter", "replay_cmd", "config_cmd", "batch", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
 
@@ -58,20 +103,24 @@ def main(argv: list[str] | None = None) -> int:
     previous = (signal.signal(signal.SIGTERM, _terminate), signal.signal(signal.SIGINT, _interrupted)) if _main_thread() else None
     # Logs written by this verb record the command line in their provenance.
     token = command_line.set(shlex.join(["trackreplay", *(sys.argv[1:] if argv is None else argv)]))
+    stdout = sys.stdout
+    sys.stdout = guard = StdoutGuard(stdout)
     try:
         return int(args.func(args) or 0)
     except TrackreplayError as err:
         print(f"trackreplay: error: {err}", file=sys.stderr)
         return err.exit_code
-    except Terminated:
-        print("trackreplay: terminated (SIGTERM)", file=sys.stderr)
+    except Terminated as err:
+        print(f"trackreplay: terminated (SIGTERM){_detail(err)}", file=sys.stderr)
         return TERMINATED
-    except KeyboardInterrupt:
-        print("trackreplay: interrupted", file=sys.stderr)
+    except KeyboardInterrupt as err:
+        print(f"trackreplay: interrupted{_detail(err)}", file=sys.stderr)
         return INTERRUPTED
-    except BrokenPipeError:
-        return 0
     except OSError as err:
+        if isinstance(err, BrokenPipeError) and err.filename is None:
+            guard.close_pipe()  # stdout's reader went away outside the guard: the status is unknown, but not 0
+            print("trackreplay: error: cannot write the output: its reader closed the pipe", file=sys.stderr)
+            return OutputError.exit_code
         # An OSError that no verb anticipated: still one sentence naming the file.
         where = f" {err.filename}" if err.filename else ""
         if err.errno in NO_SPACE:
@@ -89,6 +138,7 @@ def main(argv: list[str] | None = None) -> int:
         _debug(args)
         return INTERNAL_ERROR
     finally:
+        sys.stdout = stdout
         command_line.reset(token)
         if previous is not None:
             signal.signal(signal.SIGTERM, previous[0])

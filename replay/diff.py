@@ -177,9 +177,10 @@ def sidecar_path(summary: Path) -> Path:
 
 
 def write_sidecar(frames: FrameDigests, path: Path) -> Path:
+    from trackreplay.replay.outputs import write_parquet
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    frames.table().write_parquet(path)
-    return path
+    return write_parquet(frames.table(), path)
 
 
 def read_sidecar(path: Path) -> FrameDigests:

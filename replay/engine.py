@@ -44,6 +44,18 @@ from trackreplay.trackers.frame import Frame
 from trackreplay.schemas.errors import TrackreplayError
 
 
+# OpenCV's cv2.setRNGSeed takes a C int: every seed a replay accepts must fit one.
+SEED_LIMIT = 2**31
+
+
+def check_seed(seed: object, name: str = "seed") -> int:
+    """``seed`` as an int if it is one in 0 .. 2**31 - 1; else one sentence naming ``name``."""
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or not 0 <= seed < SEED_LIMIT:
+        raise TrackreplayError(f"{name} {seed!r} is not a valid seed: give an integer from 0 to {SEED_LIMIT - 1} "
+                               "(OpenCV's random generator takes a 32-bit int)")
+    return int(seed)
+
+
 def tracker_rng(seed: int, tracker: str) -> np.random.Generator:
     """Generator from ``--seed`` and the tracker's name (stable across processes and machines)."""
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(zlib.crc32(tracker.encode()),)))
@@ -76,8 +88,7 @@ class ReplayRequest:
 
     def __post_init__(self) -> None:
         """The checks the CLI's argument parser makes, for callers of the Python API too."""
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int | np.integer) or self.seed < 0:
-            raise TrackreplayError(f"seed must be a non-negative integer, not {self.seed!r}")
+        check_seed(self.seed)
         for name in ("start_s", "end_s"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)

@@ -14,6 +14,9 @@ class TrackerEntry:
     config_cls: type
     tracker_cls: type
     view: Any  # module with blueprint(name) and log(rec, frame, intermediates, states)
+    # Tracks every object in view at once: evaluated with multi-object metrics (MOTA, IDF1), since the
+    # single-object ones pair one track with one ground-truth object.
+    multi_object: bool = False
 
 
 def _flow() -> TrackerEntry:
@@ -45,7 +48,7 @@ def _groups() -> TrackerEntry:
     from trackreplay.trackers.groups.config import GroupsConfig
     from trackreplay.trackers.groups.tracker import GroupTracker
 
-    return TrackerEntry("groups", GroupsConfig, GroupTracker, view)
+    return TrackerEntry("groups", GroupsConfig, GroupTracker, view, multi_object=True)
 
 
 _ENTRIES: dict[str, Callable[[], TrackerEntry]] = {"flow": _flow, "golf": _golf, "groups": _groups, "colorpf": _colorpf}

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from trackreplay.replay.commands.values import positive_int
 from trackreplay.replay import registry
 from trackreplay.replay.bench import format_timing, time_replay
+from trackreplay.replay.outputs import write_json
+from trackreplay.schemas.errors import OutputError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -23,12 +24,14 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.json and not args.json.parent.is_dir():  # before minutes of timing, not after
+        raise OutputError(f"cannot write --json {args.json}: the folder {args.json.parent} does not exist")
     timing = time_replay(args.log, args.tracker, args.repeats, args.config)
     print(format_timing(f"{args.tracker} on {args.log}", timing))
     if args.json:
-        args.json.write_text(json.dumps({
+        write_json(args.json, {
             "log": str(args.log), "tracker": args.tracker, "frames": timing.frames,
             "read_decode_s": timing.read_decode_s, "replay_s": timing.replay_s, "replay_rrd_s": timing.replay_rrd_s,
             "throughput_ratio": timing.throughput_ratio, "rerun_ratio": timing.rerun_ratio, "rrd_bytes": timing.rrd_bytes,
-        }, indent=2) + "\n")
+        })
     return 0

@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
+from trackreplay.replay.commands.values import seed_int
 from trackreplay.replay.engine import ReplayRequest, replay
 from trackreplay.replay.eval import evaluate, format_summary
 from trackreplay.replay.export import fill_gaps, write_trajectory
@@ -18,7 +19,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="synthesise flow-sim1, track it, write .mcap/.rrd/.parquet, evaluate")
     p.add_argument("--out", type=Path, default=Path("demo-out"), help="output folder (default ./demo-out)")
     p.add_argument("--scene", default="flow-sim1", choices=("flow-sim1", "flow-sim2", "flow-sim3"))
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=seed_int, default=0, help="seed of the scene and the replay (default 0)")
     p.set_defaults(func=run)
     return p
 

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from trackreplay.replay import registry
 from trackreplay.replay.batch_config import apply_sets, parse_assignment
+from trackreplay.replay.commands.values import seed_int
+from trackreplay.replay.engine import check_seed
 from trackreplay.replay.diff import RunSpec, diff_recordings, diff_runs, load_side, load_summary, recording_of_run
 from trackreplay.schemas.errors import TrackreplayError
 
@@ -21,8 +23,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "(--a seed=1, --b golf.particles.n=500, --b config=other.toml).")
     p.add_argument("a", help="summary .json or log .mcap")
     p.add_argument("b", help="summary .json or log .mcap")
-    p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker for .mcap operands (default flow)")
-    p.add_argument("--seed", type=int, default=0, help="seed for .mcap operands (default 0)")
+    p.add_argument("--tracker", choices=registry.NAMES, help="tracker for .mcap operands (default flow)")
+    p.add_argument("--seed", type=seed_int, help="seed for .mcap operands (default 0)")
     p.add_argument("--config", type=Path, help="tracker config TOML for .mcap operands")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
                    help="config value for both .mcap operands (golf.particles.n=500)")
@@ -34,22 +36,44 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def _spec(log: Path, args: argparse.Namespace, overrides: list[str]) -> RunSpec:
-    seed, config, sets = args.seed, args.config, {}
+    tracker = args.tracker or "flow"
+    seed, config, sets = args.seed or 0, args.config, {}
     for text in [*args.sets, *overrides]:
         key, value = parse_assignment(text)
         if key == "seed":
-            if not isinstance(value, int):
-                raise TrackreplayError(f"seed must be an integer, not {value!r}")
-            seed = value
+            seed = check_seed(value)
         elif key == "config":
             config = Path(str(value))
         else:
             sets[key] = value
-    return RunSpec(log, args.tracker, seed, apply_sets(args.tracker, config, sets) if sets else config)
+    return RunSpec(log, tracker, seed, apply_sets(tracker, config, sets) if sets else config)
+
+
+def _check_run_options(kinds: list[tuple[str, Path]], args: argparse.Namespace) -> None:
+    """Refuse run options that would be ignored: they apply to a .mcap operand only."""
+    logs = [kind == "log" for kind, _ in kinds]
+    for side, overrides, (kind, path) in (("--a", args.a_sets, kinds[0]), ("--b", args.b_sets, kinds[1])):
+        if overrides and kind != "log":
+            raise TrackreplayError(f"{side} {overrides[0]} applies only to a .mcap operand (a log replayed here), "
+                                   f"and {path} is a {'replay summary' if kind == 'summary' else '.rrd file'}")
+    if not any(logs):
+        given = [name for name, value in (("--tracker", args.tracker), ("--seed", args.seed), ("--config", args.config),
+                                          ("--set", args.sets)) if value not in (None, [])]
+        if given:
+            raise TrackreplayError(f"{given[0]} applies only to a .mcap operand (a log replayed here), and neither "
+                                   f"{args.a} nor {args.b} is one")
+
+
+def _mismatch(a: tuple[str | None, str | None], b: tuple[str | None, str | None]) -> str:
+    """A first line when A and B, as (tracker, log file name), replay different trackers or logs."""
+    parts = [f"{what} ({x} vs {y})" for what, x, y in (("tracker", a[0], b[0]), ("log", a[1], b[1])) if x and y and x != y]
+    return f"A and B replay a different {' and '.join(parts)}" if parts else ""
 
 
 def run(args: argparse.Namespace) -> int:
     kinds = [load_side(args.a), load_side(args.b)]
+    _check_run_options(kinds, args)
+    head = ""
     if any(kind == "rrd" for kind, _ in kinds):
         from trackreplay.replay.diff_rrd import diff_rrd
 
@@ -59,9 +83,17 @@ def run(args: argparse.Namespace) -> int:
     elif all(kind == "log" for kind, _ in kinds):
         result = diff_runs(_spec(kinds[0][1], args, args.a_sets), _spec(kinds[1][1], args, args.b_sets))
     else:
-        sides = []
+        sides, ids = [], []
         for (kind, path), overrides in zip(kinds, (args.a_sets, args.b_sets)):
-            sides.append(load_summary(path)[1] if kind == "summary" else recording_of_run(_spec(path, args, overrides)))
+            if kind == "summary":  # a summary records its tracker and log
+                summary, recording = load_summary(path)
+                ids.append((summary.get("tracker"), Path(str(summary["log"])).name if summary.get("log") else None))
+                sides.append(recording)
+            else:
+                spec = _spec(path, args, overrides)
+                ids.append((spec.tracker, path.name))
+                sides.append(recording_of_run(spec))
+        head = _mismatch(*ids)
         result = diff_recordings(*sides)
-    print(result.report())
+    print("\n".join(filter(None, [head, result.report()])))
     return 0 if result.identical else DIFFERENT

@@ -4,16 +4,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 from pathlib import Path
 
-from trackreplay.replay.commands.values import non_negative_float, non_negative_int, positive_int
+from trackreplay.replay.commands.values import non_negative_float, non_negative_int, positive_int, seed_int
 from trackreplay.schemas.errors import TrackreplayError
 
 from trackreplay.replay import registry
 from trackreplay.replay.engine import ReplayRequest, replay
 from trackreplay.replay.export import METHODS, fill_gaps, trajectory_format, write_trajectory
+from trackreplay.replay.outputs import write_json
 
 
 # The replay finished but skipped damaged or undecodable frames (docs/exit_codes.md).
@@ -27,7 +27,7 @@ class DigestMismatch(TrackreplayError):
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
     p.add_argument("--config", type=Path, help="tracker config TOML (keys of the tracker's config dataclass)")
-    p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the tracker's random generator (default 0)")
+    p.add_argument("--seed", type=seed_int, default=0, help="seed of the tracker's random generator (default 0)")
     p.add_argument("--image-topic", help="image topic (default /camera/image, else the stereo left, else the log's "
                    "only image topic)")
     p.add_argument("--stereo-topics", nargs=2, metavar=("LEFT", "RIGHT"), help="stereo pair: left and right image topics")
@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
 
         summary["frame_digests"] = write_sidecar(result.frame_digests, sidecar_path(args.summary)).name
         args.summary.parent.mkdir(parents=True, exist_ok=True)
-        args.summary.write_text(json.dumps(summary, indent=2) + "\n")
+        write_json(args.summary, summary)
     print(f"{result.tracker}: {result.frames} frames, digest {result.digest}")
     if result.report.outside_encoder_coverage:
         print(f"warning: {len(result.report.outside_encoder_coverage)} frames outside encoder coverage", file=sys.stderr)

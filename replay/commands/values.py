@@ -30,6 +30,16 @@ def positive_int(text: str) -> int:
     return value
 
 
+def seed_int(text: str) -> int:
+    """A replay seed: an integer OpenCV's generator accepts (0 .. 2**31 - 1)."""
+    from trackreplay.replay.engine import SEED_LIMIT
+
+    value = _number(int, text)
+    if not 0 <= value < SEED_LIMIT:
+        raise argparse.ArgumentTypeError(f"{value} is not a valid seed; give an integer from 0 to {SEED_LIMIT - 1}")
+    return value
+
+
 def non_negative_float(text: str) -> float:
     value = _number(float, text)
     if value < 0:

@@ -30,3 +30,22 @@ def reference_side() -> Callable[..., Any]:
         return json.loads(out.stdout)
 
     return run
+
+
+@pytest.fixture
+def disk_full_at(monkeypatch: pytest.MonkeyPatch) -> Callable[[str], None]:
+    """``disk_full_at(name)``: the disk fills up (ENOSPC) as a file called ``name`` is completed, i.e. when
+    its ``name.partial`` is synced; a writer that wrote ``name`` directly never syncs and so never fails."""
+    import errno
+
+    real = os.fsync
+
+    def fail_for(name: str) -> None:
+        def fsync(fd: int) -> None:
+            if os.readlink(f"/proc/self/fd/{fd}").endswith(f"/{name}.partial"):
+                raise OSError(errno.ENOSPC, "No space left on device")
+            real(fd)
+
+        monkeypatch.setattr(os, "fsync", fsync)
+
+    return fail_for

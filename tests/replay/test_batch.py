@@ -123,3 +123,126 @@ def test_an_out_folder_with_an_earlier_batch_is_refused(short_sim: Path, tmp_pat
     capsys.readouterr()
     assert main(["batch", str(short_sim), "--out", str(out), "--serial", "--quiet"]) == 2
     assert "holds an earlier batch's results (summary.parquet); give an empty or new folder" in capsys.readouterr().err
+
+
+GROUPS = GOLF.parent / "groups-crossing-320x240.mcap"
+
+
+def test_a_multi_object_tracker_gets_the_metrics_of_eval_mot(tmp_path: Path) -> None:
+    """A review: groups rows paired track 1 with person 1 (centre error 301 px, AUC 0); a tracker of
+    many objects is scored as `eval --mot` scores its exported trajectory."""
+    from trackreplay.replay.batch import MOT_METRICS, SINGLE_METRICS, run_task, summary_table
+    from trackreplay.replay.groundtruth import groundtruth_with_frames
+    from trackreplay.replay.mot import hota_metrics, mot_metrics
+    from trackreplay.replay.reader import LogReader
+
+    (task,) = plan([GROUPS], "groups", [0], [])
+    row = run_task(task, BatchOptions(out=tmp_path))
+    assert row["status"] == "ok" and row["error"] is None
+    assert all(row[m] is None for m in SINGLE_METRICS)
+    traj = pl.read_parquet(tmp_path / "tasks" / task.name / "trajectory.parquet")
+    gt, annotated = groundtruth_with_frames(LogReader(GROUPS))
+    image = mot_metrics(traj, gt, frames=annotated["frame"])
+    space = mot_metrics(traj, gt, space="3d", max_distance_m=1.0, frames=annotated["frame"])
+    assert (row["mota"], row["idf1"], row["id_switches"]) == (image.mota, image.idf1, image.id_switches)
+    assert (row["mota_3d"], row["motp_3d"], row["idf1_3d"]) == (space.mota, space.motp, space.idf1)
+    assert row["hota_3d"] == hota_metrics(traj, gt, space="3d", frames=annotated["frame"]).hota
+    assert 0 < row["mota_3d"] <= 1 and row["hota"] > 0
+    table = summary_table([row], [task])
+    assert set(MOT_METRICS) <= set(table.columns) and table["id_switches"].dtype == pl.Int64
+    (single,) = plan([GOLF], "golf", [0], [])
+    golf = run_task(single, BatchOptions(out=tmp_path / "golf"))
+    assert golf["success_auc"] > 0 and all(golf[m] is None for m in MOT_METRICS)
+
+
+def test_a_ray_address_that_cannot_be_joined_is_one_sentence_and_leaves_no_folder(short_sim: Path, tmp_path: Path) -> None:
+    """A review: exit 70, and an empty --out left behind. (A process of its own: this module's Ray is running.)"""
+    import subprocess
+
+    pytest.importorskip("ray")
+    out = tmp_path / "new" / "out"
+    proc = subprocess.run([sys.executable, "-m", "trackreplay", "batch", str(short_sim), "--address", "nonsense",
+                           "--out", str(out), "--quiet"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr
+    ours = [line for line in proc.stderr.splitlines() if line.startswith("trackreplay:")]
+    assert ours == ["trackreplay: error: --address nonsense: cannot join a Ray cluster there (Invalid address format: "
+                    "nonsense); give auto, HOST:PORT or ray://HOST:10001"]
+    assert not (tmp_path / "new").exists()
+
+
+@pytest.mark.parametrize("name", ["trajectory.parquet", "summary.frames.parquet", "summary.json"])
+def test_a_task_output_is_complete_or_absent(name: str, short_sim: Path, tmp_path: Path, disk_full_at) -> None:
+    """A review: batch wrote its outputs under their final names, so a full disk or a kill left truncated ones."""
+    from trackreplay.replay.batch import run_task
+
+    disk_full_at(name)
+    (task,) = plan([short_sim], "flow", [0], [])
+    row = run_task(task, BatchOptions(out=tmp_path))
+    assert row["status"] == "error" and f"cannot write {tmp_path / 'tasks' / task.name / name}" in row["error"]
+    left = {p.name for p in (tmp_path / "tasks" / task.name).iterdir()}
+    assert name not in left and not any(n.endswith(".partial") for n in left)
+
+
+def test_the_batch_summary_is_complete_or_absent(short_sim: Path, tmp_path: Path, disk_full_at, capsys) -> None:
+    disk_full_at("summary.parquet")
+    out = tmp_path / "out"
+    assert main(["batch", str(short_sim), "--out", str(out), "--serial", "--quiet"]) == 5
+    assert "cannot write" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["tasks"]
+
+
+def test_ctrl_c_keeps_the_finished_rows_in_a_summary(short_sim: Path, tmp_path: Path, monkeypatch, capsys) -> None:
+    """A review: Ctrl-C left finished task folders but no summary, and the folder could not be reused."""
+    from trackreplay.replay import batch
+
+    real = batch.run_task
+
+    def interrupted_on_the_third(task, opts, log_bytes=None):
+        if task.index == 2:  # half-way through its outputs
+            (opts.out / "tasks" / task.name).mkdir(parents=True)
+            (opts.out / "tasks" / task.name / "trajectory.parquet.partial").write_bytes(b"PAR1")
+            raise KeyboardInterrupt
+        return real(task, opts, log_bytes)
+
+    monkeypatch.setattr(batch, "run_task", interrupted_on_the_third)
+    out = tmp_path / "out"
+    assert main(["batch", str(short_sim), "--seeds", "0-4", "--out", str(out), "--serial", "--quiet"]) == 130
+    captured = capsys.readouterr()
+    assert captured.err.strip() == (f"trackreplay: interrupted: kept the outputs of the 2 of 5 replays that had finished "
+                                    f"and a summary of all 5 in {out / 'summary.parquet'} (the others' status is not_run)")
+    table = pl.read_parquet(out / "summary.parquet")
+    assert table["status"].to_list() == ["ok", "ok", "not_run", "not_run", "not_run"]
+    assert table["seed"].to_list() == [0, 1, 2, 3, 4] and table["digest"].null_count() == 3
+    assert sorted(p.name for p in (out / "tasks").iterdir()) == sorted(table["task"][:2])  # the unfinished one is gone
+    assert "not run: the batch was interrupted" in captured.out
+
+
+def test_ctrl_c_before_any_replay_finished_keeps_nothing(short_sim: Path, tmp_path: Path, monkeypatch, capsys) -> None:
+    from trackreplay.replay import batch
+
+    def interrupted(task, opts, log_bytes=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(batch, "run_task", interrupted)
+    out = tmp_path / "out"
+    assert main(["batch", str(short_sim), "--out", str(out), "--serial", "--quiet"]) == 130
+    assert "no replay had finished; nothing was kept" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_ctrl_c_on_ray_returns_the_finished_rows(local_ray, short_sim: Path, tmp_path: Path, monkeypatch) -> None:
+    from trackreplay.replay.batch import BatchInterrupted
+
+    real, calls = local_ray.wait, []
+
+    def wait(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(local_ray, "wait", wait)
+    tasks = plan([short_sim], "flow", [0, 1, 2], [])
+    with pytest.raises(BatchInterrupted) as stop:
+        run_ray(tasks, BatchOptions(out=tmp_path))
+    assert len(stop.value.rows) == 1 and next(iter(stop.value.rows.values()))["status"] == "ok"

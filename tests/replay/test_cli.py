@@ -99,3 +99,39 @@ def test_truncated_and_corrupt_logs(flow_sim1: Path, tmp_path: Path, capsys: pyt
     assert main(["replay", str(corrupt), "--quiet", "--strict"]) == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert err.startswith("trackreplay: error: ") and "corrupt.mcap" in err and "without --strict" in err
+
+
+@pytest.mark.parametrize("name", ["s.frames.parquet", "s.json"])
+def test_the_replay_summary_is_complete_or_absent(name: str, disk_full_at, short_sim: Path, tmp_path: Path, capsys) -> None:
+    """A review: --summary (and its per-frame sidecar) were written under their final names."""
+    disk_full_at(name)
+    assert main(["replay", str(short_sim), "--summary", str(tmp_path / "s.json"), "--quiet"]) == 5
+    assert f"cannot write {tmp_path / name}" in capsys.readouterr().err
+    left = {p.name for p in tmp_path.iterdir()}
+    assert name not in left and not any(n.endswith(".partial") for n in left)
+
+
+def _closed_pipe_run(*argv: str) -> subprocess.CompletedProcess:
+    """``trackreplay ARGV | true``: stdout is a pipe whose reader has already gone."""
+    import os
+
+    read, write = os.pipe()
+    os.close(read)
+    try:
+        return subprocess.run([sys.executable, "-m", "trackreplay", *argv], stdout=write, stderr=subprocess.PIPE,
+                              text=True, timeout=120)
+    finally:
+        os.close(write)
+
+
+def test_a_closed_stdout_keeps_the_exit_status(short_sim: Path, tmp_path: Path) -> None:
+    """A review: `diff A B | true` exited 0 for two different runs (1 without the pipe)."""
+    golden = Path(__file__).resolve().parents[1] / "golden" / "flow-sim1-24f.mcap"
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    assert main(["replay", str(short_sim), "--summary", str(a), "--quiet"]) == 0
+    assert main(["replay", str(golden), "--summary", str(b), "--quiet"]) == 0
+    differ = _closed_pipe_run("diff", str(a), str(b))
+    assert differ.returncode == 1 and differ.stderr == ""
+    assert _closed_pipe_run("diff", str(a), str(a)).returncode == 0
+    missing = _closed_pipe_run("batch", str(tmp_path / "missing.mcap"), "--serial", "--quiet", "--out", str(tmp_path / "bp"))
+    assert missing.returncode == 1 and "Traceback" not in missing.stderr

@@ -124,7 +124,13 @@ def test_missing_output_folder_is_one_sentence(short_sim: Path, tmp_path: Path, 
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["replay", "LOG", "--seed", "-1"], "argument --seed: -1 is negative"),
+    (["replay", "LOG", "--seed", "-1"], "argument --seed: -1 is not a valid seed; give an integer from 0 to 2147483647"),
+    # a review: a seed past OpenCV's C int was an internal error (exit 70)
+    (["replay", "LOG", "--seed", "2147483648"], "argument --seed: 2147483648 is not a valid seed"),
+    (["diff", "A.json", "B.json", "--seed", "2147483648"], "argument --seed: 2147483648 is not a valid seed"),
+    (["batch", "LOG", "--workers", "-1"], "argument --workers: -1 is not positive; give 1 or more"),
+    (["batch", "LOG", "--workers", "0"], "argument --workers: 0 is not positive; give 1 or more"),
+    (["batch", "LOG", "--max-gap", "-3"], "argument --max-gap: -3 is negative; give 0 or more"),
     (["replay", "LOG", "--start", "nan"], "argument --start: 'nan' is not a finite number"),
     (["bench", "LOG", "--repeats", "0"], "argument --repeats: 0 is not positive"),
     (["synth", "flow-sim1", "OUT", "--frames", "0"], "argument --frames: 0 is not positive"),

@@ -99,3 +99,44 @@ def test_a_summary_without_sidecar_is_a_clear_error(tmp_path: Path, capsys: pyte
     assert main(["diff", str(s), str(s)]) == 2
     assert "no per-frame digests" in capsys.readouterr().err
     assert main(["diff", str(tmp_path / "x.txt"), str(s)]) == 2
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--tracker", "golf"], "--tracker applies only to a .mcap operand (a log replayed here), and neither"),
+    (["--seed", "3"], "--seed applies only to a .mcap operand"),
+    (["--set", "golf.particles.n=5"], "--set applies only to a .mcap operand"),
+    (["--config", "c.toml"], "--config applies only to a .mcap operand"),
+    (["--a", "seed=1"], "--a seed=1 applies only to a .mcap operand (a log replayed here), and A.json is a replay summary"),
+    (["--b", "particles.n=5"], "--b particles.n=5 applies only to a .mcap operand (a log replayed here), and B.json is a"),
+])
+def test_run_options_on_summaries_are_refused(extra, message, short_sim: Path, tmp_path: Path, capsys) -> None:
+    """A review: they were silently ignored when an operand is a summary."""
+    a, b = tmp_path / "A.json", tmp_path / "B.json"
+    for s in (a, b):
+        assert main(["replay", str(short_sim), "--summary", str(s), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["diff", str(a), str(b), *extra]) == 2
+    err = capsys.readouterr().err.replace(str(tmp_path) + "/", "")
+    assert err.count("\n") == 1 and message in err
+    # one side a log: the options apply to it
+    assert main(["diff", str(a), str(short_sim), "--b", "seed=0"]) == 0
+
+
+def test_summaries_of_different_trackers_or_logs_say_so_first(short_sim: Path, tmp_path: Path, capsys) -> None:
+    flow, golf = tmp_path / "flow.json", tmp_path / "golf.json"
+    assert main(["replay", str(short_sim), "--summary", str(flow), "--quiet"]) == 0
+    assert main(["replay", str(GOLF), "--tracker", "golf", "--summary", str(golf), "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["diff", str(flow), str(golf)]) == 1
+    assert capsys.readouterr().out.splitlines()[0] == (
+        "A and B replay a different tracker (flow vs golf) and log (short.mcap vs golf-teeshot-640x360.mcap)")
+    assert main(["diff", str(flow), str(GOLF), "--tracker", "golf"]) == 1
+    assert capsys.readouterr().out.startswith("A and B replay a different tracker (flow vs golf) and log")
+    assert main(["diff", str(flow), str(short_sim)]) == 0
+    assert capsys.readouterr().out.startswith("identical: 12 frames")
+
+
+def test_a_seed_opencv_cannot_take_is_one_sentence(short_sim: Path, capsys) -> None:
+    assert main(["diff", str(short_sim), str(short_sim), "--b", f"seed={10**40}"]) == 2
+    assert capsys.readouterr().err.strip() == (f"trackreplay: error: seed {10**40} is not a valid seed: give an integer "
+                                               f"from 0 to 2147483647 (OpenCV's random generator takes a 32-bit int)")

@@ -119,8 +119,9 @@ def test_a_mark_outside_the_replayed_window_starts_nothing(tmp_path) -> None:
     ({"start_s": 1.0, "end_s": 0.5}, "end_s 0.5 must be after start_s 1"),
     ({"start_s": -5.0}, "start_s must be a finite number of seconds >= 0"),
     ({"start_s": float("nan")}, "start_s must be a finite number"),
-    ({"seed": -1}, "seed must be a non-negative integer"),
-    ({"seed": "1"}, "seed must be a non-negative integer"),
+    ({"seed": -1}, "seed -1 is not a valid seed: give an integer from 0 to 2147483647"),
+    ({"seed": "1"}, "seed '1' is not a valid seed"),
+    ({"seed": 2**31}, "seed 2147483648 is not a valid seed: give an integer from 0 to 2147483647"),  # cv2's C int
 ])
 def test_the_python_api_checks_what_the_cli_parser_checks(kwargs, message) -> None:
     """A review found replay_log(start_s=1, end_s=0.5) returning 0 frames and seed=-1 failing deep in numpy."""
