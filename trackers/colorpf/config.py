@@ -358,6 +358,10 @@ class ColorPfConfig:
     # box (a dark, unsaturated target on a dark road: otb_crossing, 0.72 vs 0.76), so it cannot set
     # the scale; c = S / S_mark then, as without a background (and a notice says so).
     min_separation: float = 0.05
+    # A marked box of fewer pixels than this holds too few for a histogram to tell the target by (a
+    # review: a 3x3 mark drifted onto a static patch and stayed "measured" at 0.79, 86-107 px off):
+    # it is tracked, said once, and its rows are at most "predicted".
+    min_box_pixels: int = 64
     # Ours: once eq. (7)'s background exists, a "measured" estimate is reported "predicted" when one of
     # the four boxes of its size beside it (left, right, above, below) holds more foreground than the
     # marked box did (P_detect / P_square): the box is on or against a moving region larger than the
@@ -380,5 +384,5 @@ class ColorPfConfig:
             raise ValueError("noise, min_noise_px must be >= 0, lost_after >= 1, 0 <= measured_fraction <= 1")
         if self.reacquire_frames < 1:
             raise ValueError("reacquire_frames must be >= 1 (1: one frame's match is measured again)")
-        if self.min_separation < 0:
-            raise ValueError("min_separation must be >= 0")
+        if self.min_separation < 0 or self.min_box_pixels < 0:
+            raise ValueError("min_separation and min_box_pixels must be >= 0")

@@ -124,6 +124,7 @@ class ColorPfTracker(TrackerBase):
         self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
         self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
         self._rematch: tuple[int, np.ndarray, int] | None = None  # lost: the last matching frame, centre, run length
+        self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
         self.hold_run = 0  # hold.enabled: held frames in a row
         self._velocity_steps = 0  # hold.enabled: displacements between vouched estimates measured so far
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
@@ -205,6 +206,12 @@ class ColorPfTracker(TrackerBase):
         if box[2] <= box[0] or box[3] <= box[1]:
             raise LogError(f"the box marked on frame {mark.frame} ({mark.w:g}x{mark.h:g} px round {mark.x:g},{mark.y:g}) "
                            f"covers no whole pixel of the {width}x{height} picture: mark the target with a box of at least a pixel")
+        pixels = int((box[2] - box[0]) * (box[3] - box[1]))
+        self._too_small = pixels < cfg.min_box_pixels
+        if self._too_small:
+            self._say(f"the box marked on frame {mark.frame} holds {pixels} pixels, too few for a colour histogram to tell "
+                      f"the target by (min_box_pixels = {cfg.min_box_pixels}): it is followed, but its rows are \"predicted\", "
+                      "never \"measured\"; mark a larger box if the target allows")
         x0, y0, x1, y1 = marked_box((mark.x, mark.y, GREY_CONTEXT * mark.w, GREY_CONTEXT * mark.h), width, height)
         context = frame.image[y0:y1, x0:x1]
         if cfg.likelihood.histogram == "hs" and saturated_share(context, cfg.likelihood.s_min) < GREY_SHARE:
@@ -449,8 +456,9 @@ class ColorPfTracker(TrackerBase):
             self.template.blend(image, estimate, t_rate)
         if confidence >= cfg.measured_fraction and self._reacquiring(frame.index, estimate, weigh_only):
             status = "lost"  # lost, and the colour matches again: not yet on reacquire_frames frames in a row
-        elif confidence >= cfg.measured_fraction and not separated and not weigh_only:
-            # the background scores about as well as the mark: the colour match vouches for nothing; not a miss either
+        elif confidence >= cfg.measured_fraction and not weigh_only and (not separated or self._too_small):
+            # the background scores about as well as the mark, or the box is too small for a histogram: the
+            # colour match vouches for little; not a miss either
             status, self.misses = "predicted", 0
         elif confidence >= cfg.measured_fraction:
             status, self.misses, self.placed_run = "measured", 0, 0
