@@ -16,6 +16,8 @@ allows (:func:`~trackreplay.trackers.golf.blobs.streak_excess`). Otherwise nothi
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import cv2
 import numpy as np
 
@@ -25,17 +27,21 @@ from trackreplay.trackers.golf.config import BlobConfig
 from trackreplay.trackers.golf.silhouette import median_and_mad
 
 
-def whole_streak(hat: np.ndarray, blob_pixels: np.ndarray, corner: tuple[int, int], offset: tuple[int, int],
+def whole_streak(top_hat: Callable[[], np.ndarray], blob_pixels: np.ndarray, corner: tuple[int, int], offset: tuple[int, int],
                  motion: ApparentMotion | None, diameter: float, cfg: BlobConfig, scale: float, *, low_fraction: float = 0.35,
                  noise_sigmas: float = 4.0, min_growth: float = 1.5) -> np.ndarray | None:
     """The centroid (frame pixels) of the streak the blob belongs to, or None (keep the blob's).
 
-    ``hat``: the search crop's white top-hat (uint8), top-left ``offset`` in the frame;
+    ``top_hat()``: the search crop's white top-hat (uint8), top-left ``offset`` in the frame (asked
+    for only when a streak is expected);
     ``blob_pixels``: the blob's pixels (bool) in its bounding box, whose top-left is ``corner`` in
     the frame. The lower level: ``low_fraction`` of the blob's median top-hat, and at least
     ``noise_sigmas`` robust sigmas above the crop's median."""
-    if motion is None or hat.size == 0 or not blob_pixels.any() or not float(np.hypot(*motion.velocity)) >= diameter:
+    if motion is None or not blob_pixels.any() or not float(np.hypot(*motion.velocity)) >= diameter:
         return None  # (no streak is expected of a ball predicted to move less than its diameter)
+    hat = top_hat()
+    if hat.size == 0:
+        return None
     bx, by = corner[0] - offset[0], corner[1] - offset[1]
     bh, bw = blob_pixels.shape
     if bx < 0 or by < 0 or by + bh > hat.shape[0] or bx + bw > hat.shape[1]:

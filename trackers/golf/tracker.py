@@ -461,7 +461,7 @@ class GolfTracker(TrackerBase):
             bx, by, bw, bh = (int(v) for v in blobs.bbox[k])
             ox, oy = int(offset[0]), int(offset[1])
             pixels = sil.mask[by - oy:by - oy + bh, bx - ox:bx - ox + bw] > 0
-            whole = whole_streak(hat(), pixels, (bx, by), (ox, oy), motion, self.targets.diameter, self.config.blobs, scale,
+            whole = whole_streak(hat, pixels, (bx, by), (ox, oy), motion, self.targets.diameter, self.config.blobs, scale,
                                  low_fraction=self.config.blobs.complete_streak)
             if whole is not None:
                 x, y = float(whole[0]), float(whole[1])

@@ -28,7 +28,7 @@ def test_the_bright_end_is_grown_to_the_whole_streak():
     assert pixels.all()
     offset = (100, 200)  # the crop's top-left in the frame
     moving = ApparentMotion(np.array([0.0, 35.0]), 4.0)
-    centre = whole_streak(hat, pixels, (box[0] + 100, box[1] + 200), offset, moving, 8.0, BlobConfig(), 1.0)
+    centre = whole_streak(lambda: hat, pixels, (box[0] + 100, box[1] + 200), offset, moving, 8.0, BlobConfig(), 1.0)
     assert centre is not None
     # the streak's centre (49.5 rows down the crop; its faintest rows, under 35 % of the blob's level,
     # are left out: 47.5), not the blob's (35.5)
@@ -41,10 +41,10 @@ def test_no_growth_where_no_streak_is_expected_or_possible():
     pixels = blob_of(hat, 60, box)
     corner = (box[0], box[1])
     cfg = BlobConfig()
-    assert whole_streak(hat, pixels, corner, (0, 0), ApparentMotion(np.array([0.0, 3.0]), 1.0), 8.0, cfg, 1.0) is None  # slower than its diameter
-    assert whole_streak(hat, pixels, corner, (0, 0), ApparentMotion(np.array([0.0, 12.0]), 0.5), 8.0, cfg, 1.0) is None  # longer than 12 px a frame makes
-    assert whole_streak(hat, pixels, corner, (0, 0), ApparentMotion(np.array([35.0, 0.0]), 0.5), 8.0, cfg, 1.0) is None  # across the motion
-    assert whole_streak(hat, pixels, corner, (0, 0), None, 8.0, cfg, 1.0) is None  # no prediction (lost)
+    assert whole_streak(lambda: hat, pixels, corner, (0, 0), ApparentMotion(np.array([0.0, 3.0]), 1.0), 8.0, cfg, 1.0) is None  # slower than its diameter
+    assert whole_streak(lambda: hat, pixels, corner, (0, 0), ApparentMotion(np.array([0.0, 12.0]), 0.5), 8.0, cfg, 1.0) is None  # longer than 12 px a frame makes
+    assert whole_streak(lambda: hat, pixels, corner, (0, 0), ApparentMotion(np.array([35.0, 0.0]), 0.5), 8.0, cfg, 1.0) is None  # across the motion
+    assert whole_streak(lambda: hat, pixels, corner, (0, 0), None, 8.0, cfg, 1.0) is None  # no prediction (lost)
     flat = streak_hat(top=80.0, bottom=80.0)  # already the whole streak: nothing to grow
-    assert whole_streak(flat, blob_of(flat, 60, (26, 30, 8, 40)), corner, (0, 0),
+    assert whole_streak(lambda: flat, blob_of(flat, 60, (26, 30, 8, 40)), corner, (0, 0),
                         ApparentMotion(np.array([0.0, 35.0]), 4.0), 8.0, cfg, 1.0) is None
