@@ -49,6 +49,11 @@ class Scenery:
         if len(self._previous):
             self._previous = apply_homography(H, self._previous)
 
+    def add(self, point: np.ndarray) -> None:
+        """A point known to be scenery (a blob refused as ``seen_before``: it was beside the ball before
+        the loss): refused like the others while a blob still sits on it."""
+        self.points = np.concatenate([self.points, np.asarray(point, float).reshape(1, 2)])
+
     def on_scenery(self, blobs: Blobs, scale: float) -> np.ndarray:
         """(K,) bool: the blobs that sit on a scenery point."""
         return _holds(blobs.bbox, self.points, self.still_px * scale).any(axis=1)

@@ -168,16 +168,19 @@ class GolfTracker(TrackerBase):
         check = self.validator.validate(index=frame.index, gated=gated, predicted=search.centre, spread=search.spread,
                                         diameter=diameter, size=(width, height), scale=scale, lost=lost,
                                         entry_only=not self._centre_search(camera, prev_camera, width, height),
-                                        seen=seen_gated)
+                                        seen=seen_gated, repeat=self._repeated(frame.image, search.box))
         if check.verdict == "confirmed" and self._too_near(camera):
             check = dataclasses.replace(check, verdict="too_near", confidence=0.0)
         if check.verdict == "confirmed" and self._seen_before(frame.image, camera, gated.blobs.centroid[check.candidate], scale):
             check = dataclasses.replace(check, verdict="seen_before", confidence=0.0)
+            # ... and stays refused: otherwise, in the gate, it draws the samples to it and is measured there
+            self.scenery.add(gated.blobs.centroid[check.candidate])
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there
             point = gated.blobs.centroid[check.candidate]
             sigma = cfg.particles.init_spread_px * scale
             velocity, unsure = self.validator.confirmed_velocity()
+            motion = ApparentMotion(np.asarray(velocity, float), float(unsure))  # the confirmed track's, for .streak
             self.pf.initialise(state(point, velocity), spread_sigma(sigma, max(cfg.particles.init_velocity_spread_px * scale, unsure)))
             reinit = Reinit("confirmed", point.copy(), np.full(2, sigma))
             area, rnd = self.validator.confirmed_shape()  # the ball's size starts again from what was confirmed
@@ -239,6 +242,15 @@ class GolfTracker(TrackerBase):
         if not self._marked_diameter or self.targets is None or cfg.reference_ball_px <= 0:
             return by_height
         return max(by_height, min(self._marked_diameter, self.targets.diameter) / cfg.reference_ball_px)
+
+    def _repeated(self, image: np.ndarray, box: np.ndarray) -> bool:
+        """The search region shows exactly what it showed on the frame before (a repeated picture: 30 fps
+        shown at 50 or 60 by copying frames; a camera's noise makes two real pictures differ)."""
+        previous = self._prev_image
+        if previous is None or previous.shape != image.shape:
+            return False
+        x, y, w, h = (int(v) for v in box)
+        return bool(np.array_equal(image[y:y + h, x:x + w], previous[y:y + h, x:x + w]))
 
     def _background_here(self, sil: LutSilhouette, name: str) -> bool:
         """LUT ``name``'s background is at least ``lut.other_min_share`` of the search region (its

@@ -103,15 +103,19 @@ class Tentative:
     rows: list[tuple[int, float, float]]
     shapes: list[tuple[float, float]]
     in_view: list[tuple[float, float]] = field(default_factory=list)
+    repeats: list[bool] = field(default_factory=list)  # the row's frame showed the picture before it again
 
     def __post_init__(self) -> None:
         if not self.in_view:
             self.in_view = [row[1:] for row in self.rows]
+        if not self.repeats:
+            self.repeats = [False] * len(self.rows)
 
-    def add(self, index: int, point: tuple[float, float], shape: tuple[float, float]) -> None:
+    def add(self, index: int, point: tuple[float, float], shape: tuple[float, float], repeat: bool = False) -> None:
         self.rows.append((index, *point))
         self.in_view.append(point)
         self.shapes.append(shape)
+        self.repeats.append(repeat)
 
     def expected(self) -> np.ndarray:
         """Constant-velocity extrapolation of its last two points to the next frame (its last point
@@ -214,7 +218,7 @@ class Validator:
 
     def validate(self, *, index: int, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
                  size: tuple[int, int], scale: float, lost: bool, entry_only: bool = False,
-                 seen: tuple[Validation | None, np.ndarray, bool] | None = None) -> Validation:
+                 seen: tuple[Validation | None, np.ndarray, bool] | None = None, repeat: bool = False) -> Validation:
         """The frame's verdict. ``entry_only``: the camera does not follow the ball, so once the
         prediction has left the picture a new tentative track may only start near the border (a
         ball comes back into a fixed view through its edge, not out of a white cap mid-picture).
@@ -242,7 +246,8 @@ class Validator:
             evidence = evidence.copy()
             for j in np.flatnonzero(evidence):
                 evidence[j] = blob_fit(gated, int(j), self.blobs, scale) >= cfg.min_fit
-        k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only, evidence=evidence)
+        k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only, evidence=evidence,
+                              repeat=repeat)
         if k >= 0 and fit >= cfg.confirm_fit:
             if self._ambiguous(gated, k, scale):
                 return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
@@ -286,17 +291,24 @@ class Validator:
         return math.hypot(rows[-1][1] - rows[0][1], rows[-1][2] - rows[0][2]) < min_move
 
     def _fit(self, track: Tentative, scale: float, min_move: float = 0.0) -> float:
-        if len(track.rows) < self.cfg.confirm_frames:
+        """The track fit of the last ``confirm_frames`` distinct pictures of the track (0: fewer). A row
+        taken on a frame that showed the picture before it again (``repeat``: a clip with repeated
+        frames, 30 fps at 50 or 60) is no new sighting (a review: ball and cup liner "seen" on three
+        frames that were two pictures, then liner pieces measured after the ball dropped)."""
+        n = self.cfg.confirm_frames
+        distinct = [j for j in range(len(track.rows)) if j == 0 or not track.repeats[j]]
+        if len(distinct) < n:
             return 0.0
-        rows = np.array(track.rows[-self.cfg.confirm_frames:], float)
+        last = distinct[-n:]
+        rows = np.array([track.rows[j] for j in last], float)
         if min_move > 0 and float(np.hypot(*(rows[-1, 1:] - rows[0, 1:]))) < min_move:
             return 0.0
-        shapes = np.array(track.shapes[-self.cfg.confirm_frames:], float).reshape(-1, 2)
+        shapes = np.array([track.shapes[j] for j in last], float).reshape(-1, 2)
         return track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, self.cfg.confirm_min_area_px)
 
     def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float,
                 border: tuple[tuple[int, int], float] | None = None, must_move: bool = False,
-                evidence: np.ndarray | None = None) -> tuple[int, float]:
+                evidence: np.ndarray | None = None, repeat: bool = False) -> tuple[int, float]:
         """Continue the tentative tracks with this frame's shape-accepted blobs (each track takes the
         blob nearest its extrapolation, longest tracks first; a blob extends one track), start a track
         from every blob left over (only within ``border = ((width, height), margin)`` of the picture's
@@ -323,7 +335,7 @@ class Validator:
             if dist[j] <= reach:
                 free[j] = False
                 k = int(ok[j])
-                track.add(index, (float(c[k, 0]), float(c[k, 1])), (float(gated.blobs.area[k]), float(rounds[k])))
+                track.add(index, (float(c[k, 0]), float(c[k, 1])), (float(gated.blobs.area[k]), float(rounds[k])), repeat)
                 kept.append((track, k))
         starts = ok[free]
         if border is not None and starts.size:

@@ -328,10 +328,12 @@ def test_a_white_thing_beside_the_ball_before_the_loss_is_not_confirmed_after_it
     base = backdrop()
     regions = (InitRegion(0, 0, 640.0, 380.0, 14, 14, "ball"),)
     frames = []
+    noise = np.random.default_rng(5)  # a camera's: no two pictures alike (a repeated picture is no new sighting)
     for k, p in enumerate(positions):
         img = draw_ball(base, liner, 9.0)
         if p is not None:
             img = draw_ball(img, p, 5.0)
+        img = np.clip(img + noise.normal(0.0, 2.0, img.shape), 0, 255).astype(np.uint8)
         frames.append(Frame(k, k * NS, img, hints=tuple(r for r in regions if r.frame == k), all_hints=regions))
     tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
     out = [(tracker.step(f), tracker.intermediates) for f in frames]
@@ -394,8 +396,10 @@ def test_the_pixel_scale_follows_the_ball_as_it_shrinks_never_past_the_marked_si
     mark = (InitRegion(0, 0, 320.0, 200.0, 24, 24, "ball"),)
     tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
     scales = []
+    noise = np.random.default_rng(5)  # a camera's: no two pictures alike (a repeated picture is no new sighting)
     for k, r in enumerate(radii):
-        tracker.step(Frame(k, k * NS, draw_ball(base, (320.0, 200.0), r), hints=mark if k == 0 else (), all_hints=mark))
+        image = np.clip(draw_ball(base, (320.0, 200.0), r) + noise.normal(0.0, 2.0, base.shape), 0, 255).astype(np.uint8)
+        tracker.step(Frame(k, k * NS, image, hints=mark if k == 0 else (), all_hints=mark))
         scales.append(tracker._scale(360))
     marked = tracker._marked_diameter / GolfConfig().reference_ball_px
     assert 1.1 < marked < 1.35 and abs(scales[0] - marked) < 1e-9

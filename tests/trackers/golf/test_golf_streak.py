@@ -48,3 +48,18 @@ def test_no_growth_where_no_streak_is_expected_or_possible():
     flat = streak_hat(top=80.0, bottom=80.0)  # already the whole streak: nothing to grow
     assert whole_streak(lambda: flat, blob_of(flat, 60, (26, 30, 8, 40)), corner, (0, 0),
                         ApparentMotion(np.array([0.0, 35.0]), 4.0), 8.0, cfg, 1.0) is None
+
+
+def test_a_region_beside_the_ball_is_no_streak():
+    """A review: on a repeated picture of a round ball the lagging prediction still expected a
+    streak; the region grown into a bright patch beside the ball moved the measurement 20 px sideways.
+    A streak lies along the motion: a region across it, or off to the side, is not taken."""
+    hat = np.random.default_rng(0).integers(0, 4, (120, 80)).astype(np.uint8)
+    hat[40:48, 30:38] = 80  # the round ball, 8 x 8
+    hat[38:50, 38:60] = 30  # a fainter patch beside it (sand), 22 px to the right
+    pixels = hat[40:48, 30:38] >= 60
+    moving_down = ApparentMotion(np.array([0.0, 30.0]), 3.0)
+    assert whole_streak(lambda: hat, pixels, (30, 40), (0, 0), moving_down, 8.0, BlobConfig(), 1.0) is None
+    moving_right = ApparentMotion(np.array([30.0, 0.0]), 3.0)  # along the patch: that is a streak
+    centre = whole_streak(lambda: hat, pixels, (30, 40), (0, 0), moving_right, 8.0, BlobConfig(), 1.0)
+    assert centre is not None and centre[0] > 40

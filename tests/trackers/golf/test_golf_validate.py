@@ -100,3 +100,25 @@ def test_a_piece_beside_a_ball_merged_with_scenery_is_not_measured():
         verdict[refused_as] = found.verdict
     assert verdict[ELONGATED] == verdict[CIRCULARITY] == "merged_nearer"  # shown in the Rerun view as the reason
     assert verdict[AREA_LARGE] == "measured"  # a blob refused for its size is no merged ball: the piece stands
+
+
+def test_a_repeated_picture_is_no_new_sighting_for_a_confirmation():
+    """A review: the approach clip retimed to 50 fps (30 fps pictures, some shown twice) confirmed ball
+    and cup liner from three frames that were two pictures, then measured liner pieces after the ball
+    dropped. A row taken on a frame that repeats the picture before it is no new sighting; a ball
+    that merely moves less than a pixel (a far ball at 240 fps) is one."""
+    from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
+    from trackreplay.trackers.golf.validate import Tentative, Validator
+
+    validator = Validator(ValidateConfig(), BlobConfig())
+    shape = (20.0, 0.9)
+    track = Tentative([(0, 10.0, 10.0)], [shape])
+    track.add(1, (10.0, 10.0), shape, repeat=True)  # the same picture again
+    track.add(2, (14.0, 10.5), shape)
+    assert validator._fit(track, 1.0) == 0.0  # three frames, two pictures
+    track.add(3, (18.0, 11.0), shape)
+    assert validator._fit(track, 1.0) > 0.0  # the third distinct picture
+    slow = Tentative([(0, 10.0, 10.0)], [shape])
+    slow.add(1, (10.0, 10.0), shape)  # the same place, but a new picture (noise, other things moved)
+    slow.add(2, (10.0, 10.0), shape)
+    assert validator._fit(slow, 1.0) > 0.0
