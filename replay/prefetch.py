@@ -6,6 +6,7 @@ the GIL, so on two cores reading overlaps tracking.
 
 from __future__ import annotations
 
+import atexit
 import queue
 import threading
 from collections.abc import Iterator
@@ -13,6 +14,17 @@ from typing import TypeVar
 
 T = TypeVar("T")
 _END = object()
+_RUNNING: dict[threading.Thread, threading.Event] = {}  # live workers and their stop events
+
+
+@atexit.register
+def _stop_workers() -> None:
+    """At interpreter exit, stop the workers of generators left unfinished (a script that breaks out
+    of ``iter_steps`` and ends): a daemon thread killed inside a decode aborted the process
+    (``terminate called without an active exception``, exit 134)."""
+    for worker, stop in list(_RUNNING.items()):
+        stop.set()
+        worker.join(timeout=5)
 
 
 class _Failure:
@@ -48,6 +60,7 @@ def prefetch(items: Iterator[T], depth: int = 4) -> Iterator[T]:
             buffer.put(_Failure(err))
 
     worker = threading.Thread(target=produce, name="trackreplay-prefetch", daemon=True)
+    _RUNNING[worker] = stop
     worker.start()
     try:
         while True:
@@ -60,3 +73,4 @@ def prefetch(items: Iterator[T], depth: int = 4) -> Iterator[T]:
     finally:
         stop.set()
         worker.join(timeout=5)
+        _RUNNING.pop(worker, None)

@@ -25,3 +25,25 @@ def test_consumer_stopping_early_ends_the_worker() -> None:
     gen = prefetch(iter(range(10**6)), depth=2)
     assert next(gen) == 0
     gen.close()  # must not hang
+
+
+def test_a_replay_left_unfinished_has_its_reader_stopped_at_exit():
+    """A review: breaking out of ``iter_steps`` and letting the script end killed the interpreter
+    (exit 134, "terminate called without an active exception": the daemon reader thread was killed
+    inside a decode). At exit the readers of unfinished generators are stopped and joined."""
+    import threading
+    import time
+
+    from trackreplay.replay.prefetch import _stop_workers
+
+    def endless():
+        while True:
+            time.sleep(0.005)  # a decode
+            yield 1
+
+    gen = prefetch(endless(), depth=2)
+    assert next(gen) == 1  # the worker runs; the generator is left unfinished
+    workers = [t for t in threading.enumerate() if t.name == "trackreplay-prefetch" and t.is_alive()]
+    assert workers
+    _stop_workers()  # what the interpreter runs at exit (atexit)
+    assert not any(t.is_alive() for t in workers)
