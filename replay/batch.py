@@ -50,7 +50,6 @@ SINGLE_METRICS = ("coverage", "centre_error_mean", "centre_error_rmse", "precisi
 # and on 3-D positions (<= 1 m) where the trajectory and the truth have them.
 MOT_METRICS = ("mota", "motp", "idf1", "id_switches", "hota", "mota_3d", "motp_3d", "idf1_3d", "id_switches_3d", "hota_3d")
 METRICS = SINGLE_METRICS + MOT_METRICS
-MOT_MAX_DISTANCE_M = 1.0  # as `eval --mot`'s default
 NOT_RUN = "not_run"
 INSTALL_HINT = "pip install 'trackreplay[cluster]' (or pip install ray)"
 
@@ -208,10 +207,10 @@ def _mot_metrics(table: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> di
     else:
         out["error"] = f"no 3-D metrics: {why_not}"
     for suffix, space in spaces:
-        mot = mot_metrics(table, gt, space=space, max_distance_m=MOT_MAX_DISTANCE_M, frames=frames)
+        mot = mot_metrics(table, gt, space=space, frames=frames)
         out |= {f"mota{suffix}": mot.mota, f"motp{suffix}": mot.motp, f"idf1{suffix}": mot.idf1,
                 f"id_switches{suffix}": mot.id_switches,
-                f"hota{suffix}": hota_metrics(table, gt, space=space, max_distance_m=MOT_MAX_DISTANCE_M, frames=frames).hota}
+                f"hota{suffix}": hota_metrics(table, gt, space=space, frames=frames).hota}
     # undefined (MOTP with no match): null, as `eval --mot --json` writes it
     return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in out.items()}
 

@@ -287,12 +287,15 @@ def three_d_missing(traj: pl.DataFrame, gt: pl.DataFrame) -> str | None:
     return None
 
 
+MAX_DISTANCE_M = 1.0  # the 3-D match distance (m) by default: `eval --mot`'s and `batch`'s
+
+
 def mot_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", min_iou: float = 0.5,
-                max_distance_m: float = 1.0, frames: Iterable[int] | None = None) -> MotSummary:
+                max_distance_m: float = MAX_DISTANCE_M, frames: Iterable[int] | None = None) -> MotSummary:
     return clear_mot(frames_from_tables(traj, gt, space=space, min_iou=min_iou, max_distance_m=max_distance_m, frames=frames))
 
 
-def hota_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", max_distance_m: float = 1.0,
+def hota_metrics(traj: pl.DataFrame, gt: pl.DataFrame, *, space: str = "image", max_distance_m: float = MAX_DISTANCE_M,
                  frames: Iterable[int] | None = None) -> HotaSummary:
     return hota(frames_from_tables(traj, gt, space=space, max_distance_m=max_distance_m, similarity=True, frames=frames))
 

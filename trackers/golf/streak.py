@@ -21,7 +21,7 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-from trackreplay.trackers.foreground.blobs import measure_blobs
+from trackreplay.trackers.foreground.blobs import Blobs, measure_blobs
 from trackreplay.trackers.golf.blobs import ApparentMotion, streak_excess
 from trackreplay.trackers.golf.config import BlobConfig
 from trackreplay.trackers.golf.silhouette import median_and_mad
@@ -72,7 +72,7 @@ def whole_streak(top_hat: Callable[[], np.ndarray], blob_pixels: np.ndarray, cor
     return streak.centroid[0]
 
 
-def along_the_motion(streak, blob_pixels: np.ndarray, corner: tuple[int, int], velocity: np.ndarray,
+def along_the_motion(streak: Blobs, blob_pixels: np.ndarray, corner: tuple[int, int], velocity: np.ndarray,
                      max_angle_deg: float = 30.0, min_elongation: float = 1.5) -> bool:
     """The grown region is a streak of this motion: elongated (major over minor axis at least
     ``min_elongation``) within ``max_angle_deg`` of the velocity, and the centre moved from the blob's
@@ -80,13 +80,12 @@ def along_the_motion(streak, blob_pixels: np.ndarray, corner: tuple[int, int], v
     of a round ball the lagging prediction still expected a streak, and the region grown into a
     bunker beside the ball moved the measurement 20 px sideways.)"""
     u = np.asarray(velocity, float) / float(np.hypot(*velocity))
-    sxx, syy, sxy = (float(v) for v in streak.covariance[0])
-    half = float(np.hypot(0.5 * (sxx - syy), sxy))
-    major, minor = 0.5 * (sxx + syy) + half, 0.5 * (sxx + syy) - half
+    major, minor = (float(v) for v in streak.axes[0])
     if not major >= min_elongation ** 2 * max(minor, 1e-9):
         return False
-    axis = np.array([np.cos(0.5 * np.arctan2(2.0 * sxy, sxx - syy)), np.sin(0.5 * np.arctan2(2.0 * sxy, sxx - syy))])
-    if abs(float(axis @ u)) < np.cos(np.radians(max_angle_deg)):
+    sxx, syy, sxy = (float(v) for v in streak.covariance[0])
+    angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)  # the major axis's direction
+    if abs(float(np.cos(angle) * u[0] + np.sin(angle) * u[1])) < np.cos(np.radians(max_angle_deg)):
         return False
     ys, xs = np.nonzero(blob_pixels)
     shift = streak.centroid[0] - np.array([corner[0] + xs.mean(), corner[1] + ys.mean()])

@@ -32,6 +32,7 @@ from trackreplay.schemas.errors import LogError
 from trackreplay.trackers.base import Marked, TrackerBase, TrackState
 from trackreplay.trackers.filters.particles import ParticleFilter, squared_deviations
 from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.box import clip_box, crop
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography, zoom_area_ratio
 from trackreplay.trackers.golf.blobs import (STILL, ApparentMotion, BlobTargets, GatedBlobs, refuse, roundness, select_ball,
                                              spills_over, start_targets)
@@ -249,8 +250,9 @@ class GolfTracker(TrackerBase):
         previous = self._prev_image
         if previous is None or previous.shape != image.shape:
             return False
-        x, y, w, h = (int(v) for v in box)
-        return bool(np.array_equal(image[y:y + h, x:x + w], previous[y:y + h, x:x + w]))
+        x0, y0, w, h = (float(v) for v in box)
+        corners = clip_box(x0, y0, x0 + w, y0 + h, image.shape[1], image.shape[0])  # as the silhouettes crop it
+        return bool(np.array_equal(crop(image, corners)[0], crop(previous, corners)[0]))
 
     def _background_here(self, sil: LutSilhouette, name: str) -> bool:
         """LUT ``name``'s background is at least ``lut.other_min_share`` of the search region (its

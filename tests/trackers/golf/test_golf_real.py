@@ -15,9 +15,11 @@ APPROACH = REAL / "golf_broadcast_approach" / "demo.mp4"
 IRON = REAL / "golf_iron_shot_sky"
 
 
-def marked_log(tmp: Path, video: Path, marks: str, encoding: str = "jpeg") -> Path:
+def marked_log(tmp: Path, video: Path, marks: str, encoding: str = "jpeg", source: list[str] | None = None) -> Path:
+    """Record ``video`` (or the record options ``source``, e.g. an image folder) and mark it with ``marks`` rows."""
     (tmp / "marks.csv").write_text("frame,x,y,w,h\n" + marks)
-    for args in (["record", str(tmp / "clip.mcap"), "--video", str(video), "--encoding", encoding],
+    recorded = source if source is not None else ["--video", str(video), "--encoding", encoding]
+    for args in (["record", str(tmp / "clip.mcap"), *recorded],
                  ["annotate", str(tmp / "clip.mcap"), "--from-csv", str(tmp / "marks.csv"), "--label", "ball",
                   "--out", str(tmp / "marked.mcap")]):
         try:
@@ -87,15 +89,9 @@ def test_iron_shot_turned_on_its_side_is_still_followed(tmp_path):
         ok, image = capture.read()
         assert ok
         cv2.imwrite(str(frames / f"{i:04d}.jpg"), cv2.rotate(image, cv2.ROTATE_90_CLOCKWISE), [cv2.IMWRITE_JPEG_QUALITY, 95])
-    (tmp_path / "marks.csv").write_text("frame,x,y,w,h\n18,242,593,22,22\n")  # frame 458, box turned with the picture
-    for args in (["record", str(tmp_path / "clip.mcap"), "--images", str(frames), "--fps", "60", "--quiet"],
-                 ["annotate", str(tmp_path / "clip.mcap"), "--from-csv", str(tmp_path / "marks.csv"), "--label", "ball",
-                  "--out", str(tmp_path / "marked.mcap")]):
-        try:
-            cli(args)
-        except SystemExit as exc:
-            assert not exc.code
-    traj = replay(ReplayRequest(log=tmp_path / "marked.mcap", tracker="golf")).trajectory
+    # frame 458, the box turned with the picture
+    log = marked_log(tmp_path, frames, "18,242,593,22,22\n", source=["--images", str(frames), "--fps", "60", "--quiet"])
+    traj = replay(ReplayRequest(log=log, tracker="golf")).trajectory
     ref = pl.read_csv(IRON / "reference.csv")  # turned: x' = 1279 - y, y' = x; frames from 440
     turned = ref.select((pl.col("frame") - 440).alias("frame"), (1279 - pl.col("y")).alias("x"), pl.col("x").alias("y"))
     measured, d = against(traj, turned)
