@@ -31,6 +31,14 @@ def position_sigma(box_wh: np.ndarray, noise: float, min_px: float) -> np.ndarra
     return np.maximum(noise * np.asarray(box_wh, dtype=np.float64), min_px)
 
 
+def vouched_prediction(vouched_frame: int, vouched_xy: np.ndarray, velocity: np.ndarray, index: int) -> np.ndarray:
+    """``hold.anchor = "vouched"``: the centre on frame ``index`` from the last vouched estimate (frame
+    ``vouched_frame``, centre ``vouched_xy``) moving at ``velocity`` per frame: the constant-velocity
+    prediction over the frames since, not from the last estimate (which no cue vouched for)."""
+    frames = index - vouched_frame
+    return np.asarray(vouched_xy, dtype=np.float64)[:2] + np.asarray(velocity, dtype=np.float64) * frames
+
+
 def standing_box(xy: np.ndarray, h0: float | np.ndarray, model: WeakPerspectiveSize, plane: GroundPlane | None,
                  side: float, ratio: float, omega: np.ndarray | float = 0.0,
                  iterations: int = 4) -> tuple[np.ndarray, np.ndarray]:

@@ -58,6 +58,16 @@ def horizon_side(plane: GroundPlane, points: np.ndarray) -> np.ndarray:
     return np.asarray(points, dtype=np.float64).reshape(-1, 2) @ H[2, :2] + H[2, 2]
 
 
+def region_area(area: float, region_wh: np.ndarray, rate: float) -> float:
+    """``refine.size_follows = "area"``: without a ground plane, ``S'`` (the size state, eq. (9) with
+    ``Z = Z_0``) moved ``rate`` of the way to the area of the foreground region's box ``(w_r, h_r)``.
+    From ``S'`` itself, not from the PF's weighted-mean box (which carries that frame's colour-weighted
+    ``omega``: fed back, the state would random-walk); the region's aspect is not used (see
+    ``RefineConfig.size_follows``)."""
+    w, h = (float(v) for v in np.asarray(region_wh, dtype=np.float64)[:2])
+    return (1.0 - rate) * float(area) + rate * w * h
+
+
 class WeakPerspectiveSize:
     """``S`` fixed at the mark; per particle ``S'`` from its own foot point's distance (eq. 9)."""
 

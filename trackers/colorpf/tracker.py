@@ -60,10 +60,11 @@ from trackreplay.trackers.colorpf.foreground import (IDENTITY, brightness_gain, 
                                                      scene_changed)
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
-from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition
+from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition, vouched_prediction
 from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
                                                     subtract_and_mix)
-from trackreplay.trackers.colorpf.size import WeakPerspectiveSize, foot_points, ground_distance, horizon_side
+from trackreplay.trackers.colorpf.size import (WeakPerspectiveSize, foot_points, ground_distance, horizon_side,
+                                              region_area)
 from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
@@ -297,7 +298,8 @@ class ColorPfTracker(TrackerBase):
                            estimate: np.ndarray) -> tuple[np.ndarray, bool]:
         """``refine.mode = "foreground"``: the estimate's centre on the foreground region it sits on
         (:func:`.foreground.foreground_region`), the cloud moved with it; without a ground plane the
-        size (and so the aspect) follows the region's box, smoothed. No region: the estimate as it is."""
+        size follows the region's box, smoothed (``refine.size_follows``: the area S', the aspect kept;
+        or, "box", w and h from the estimate's, the aspect with them). No region: the estimate as it is."""
         cfg, ref = self.config, self.reference
         assert ref is not None and self.size is not None and self.aspect is not None
         layout = self.layout if cfg.refine.layout else IDENTITY
@@ -311,19 +313,25 @@ class ColorPfTracker(TrackerBase):
         self.pf.particles[:, :2] += region[:2] - estimate[:2]  # the cloud moves with the estimate
         if cfg.size.mode == "geometry" and not self.size.has_distance and cfg.refine.size_rate > 0:
             a = cfg.refine.size_rate
-            wh = (1.0 - a) * estimate[2:4] + a * region[2:4]
+            if cfg.refine.size_follows == "area":  # S' from the state and the region's area; R the aspect stage's
+                self.size.area0 = region_area(self.size.area0, region[2:4], a)
+                wh = np.array(box_from_area(self.size.area0, self.aspect.ratio), dtype=np.float64)  # eq. (12)
+            else:  # "box"
+                wh = (1.0 - a) * estimate[2:4] + a * region[2:4]
+                self.size.area0 = float(wh[0] * wh[1])  # S' without a plane (eq. 9 with Z = Z_0)
+                self.aspect.ratio = float(wh[1] / wh[0])
             self.pf.particles[:, 2:4] *= wh / estimate[2:4]
-            self.size.area0 = float(wh[0] * wh[1])  # S' without a plane (eq. 9 with Z = Z_0)
-            self.aspect.ratio = float(wh[1] / wh[0])
         return self.pf.estimate(), True
 
     def _hold(self, image: np.ndarray, background: np.ndarray, gain: float, prev: np.ndarray,
-              estimate: np.ndarray) -> tuple[np.ndarray, bool]:
+              estimate: np.ndarray, index: int) -> tuple[np.ndarray, bool]:
         """``hold.enabled``: when a box of the estimate's size beside it holds more foreground than the
         marked box did (the neighbour check's condition: a larger moving region, whose colour and
-        foreground match the target's as well), the estimate's centre is the prediction ``prev + v``
-        (eq. (2) with the track's velocity as drift), the cloud moved with it; at most
-        ``hold.max_frames`` frames in a row."""
+        foreground match the target's as well), the estimate's centre on frame ``index`` is the
+        prediction (eq. (2) with the track's velocity as drift), the cloud moved with it; at most
+        ``hold.max_frames`` frames in a row. The prediction (``hold.anchor``): the last vouched estimate
+        plus the velocity times the frames since (none when that was more than ``hold.max_frames``
+        frames ago), or ``prev + v``."""
         cfg, ref = self.config, self.reference
         assert ref is not None
         if self.hold_run >= cfg.hold.max_frames or self._velocity_steps == 0:
@@ -334,9 +342,17 @@ class ColorPfTracker(TrackerBase):
         if shares.max() <= ref.p_detect / ref.p_square:
             self.hold_run = 0
             return estimate, False
+        vouched = cfg.hold.anchor == "vouched"
+        if vouched and (self._vouched is None or index - self._vouched[0] > cfg.hold.max_frames):
+            return estimate, False  # no vouched position recent enough to predict from
         self.hold_run += 1
-        velocity = self.camera_transform[:2, :2] @ self.track_velocity  # (camera.compensate: into this view)
-        self.pf.particles[:, :2] += prev[:2] + velocity - estimate[:2]  # the cloud moves with it
+        if vouched:  # in the marked frame's view (as _vouch keeps it), then into this one (camera.compensate)
+            assert self._vouched is not None
+            centre = vouched_prediction(*self._vouched, self.track_velocity, index)
+            target = apply(self.camera_transform, centre)[0]
+        else:  # the velocity into this view (camera.compensate)
+            target = prev[:2] + self.camera_transform[:2, :2] @ self.track_velocity
+        self.pf.particles[:, :2] += target - estimate[:2]  # the cloud moves with it
         return self.pf.estimate(), True
 
     def _reacquiring(self, index: int, estimate: np.ndarray, weigh_only: bool) -> bool:
@@ -419,7 +435,7 @@ class ColorPfTracker(TrackerBase):
         held = False  # hold.enabled: the estimate is the motion prediction (a larger moving region beside it)
         if (cfg.hold.enabled and not weigh_only and not placed and background is not None
                 and self.reference.p_square > 0 and self.misses < cfg.lost_after):
-            estimate, held = self._hold(image, background, gain, prev, estimate)
+            estimate, held = self._hold(image, background, gain, prev, estimate, frame.index)
         if not weigh_only:
             s = cfg.motion.smoothing
             self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])

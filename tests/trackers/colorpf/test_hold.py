@@ -56,14 +56,15 @@ def test_a_larger_mover_passing_behind_the_target_does_not_carry_the_box_away():
     assert max(free.values()) > 30.0  # without the hold the car takes the box with it
 
 
-def _tracker(enabled: bool = True) -> ColorPfTracker:
-    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(enabled=enabled)), np.random.default_rng(0))
+def _tracker(enabled: bool = True, **hold) -> ColorPfTracker:
+    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(enabled=enabled, **hold)), np.random.default_rng(0))
     tracker.reference = SimpleNamespace(p_detect=216, p_square=432)  # the mark's foreground share: 0.5
     rng = np.random.default_rng(1)
     tracker.pf.particles = np.column_stack([rng.normal(100.0, 2.0, 40), rng.normal(90.0, 2.0, 40),
                                             np.full(40, 12.0), np.full(40, 36.0)])
     tracker.track_velocity = np.array([-1.0, 0.5])
     tracker._velocity_steps = 3  # a velocity measured between vouched estimates
+    tracker._vouched = (10, np.array([98.0, 91.0]))  # the last of them: frame 10
     return tracker
 
 
@@ -78,7 +79,7 @@ def test_no_hold_before_a_velocity_is_measured():
     tracker = _tracker()
     tracker._velocity_steps = 0
     estimate = tracker.pf.estimate()
-    out, held = tracker._hold(image, background, 1.0, np.array([98.0, 91.0, 12.0, 36.0]), estimate)
+    out, held = tracker._hold(image, background, 1.0, np.array([98.0, 91.0, 12.0, 36.0]), estimate, 11)
     assert not held and np.array_equal(out, estimate)
 
 
@@ -87,23 +88,45 @@ def test_the_estimate_is_the_prediction_only_beside_a_larger_region():
     image = background.copy()
     image[72:108, 94:106] = 20  # the target, under the estimate
     tracker = _tracker()
-    prev = np.array([98.0, 91.0, 12.0, 36.0])
+    prev = np.array([98.0, 91.0, 12.0, 36.0])  # frame 10's, vouched for
     estimate = tracker.pf.estimate()
-    out, held = tracker._hold(image, background, 1.0, prev, estimate)
+    out, held = tracker._hold(image, background, 1.0, prev, estimate, 11)
     assert not held and np.array_equal(out, estimate)  # nothing beside it: the PF's estimate
     image[30:72, 60:160] = 20  # a region larger than the target right above it
     before = tracker.pf.particles.copy()
-    out, held = tracker._hold(image, background, 1.0, prev, estimate)
+    out, held = tracker._hold(image, background, 1.0, prev, estimate, 11)
     assert held and np.allclose(out[:2], prev[:2] + [-1.0, 0.5])  # the last estimate plus the velocity
     assert np.allclose(tracker.pf.particles[:, :2] - before[:, :2], out[:2] - estimate[:2])  # the cloud with it
     assert tracker.hold_run == 1
     tracker.hold_run = tracker.config.hold.max_frames
-    assert not tracker._hold(image, background, 1.0, prev, tracker.pf.estimate())[1]  # at most max_frames in a row
+    assert not tracker._hold(image, background, 1.0, prev, tracker.pf.estimate(), 12)[1]  # at most max_frames in a row
+
+
+def test_the_prediction_starts_from_the_last_vouched_estimate():
+    """hold.anchor = "vouched": the hold trips only once the larger region fills a neighbouring box; on
+    the frames before, the colour already pulls the estimate towards it (otb_crossing: 4-7 px up onto
+    the car on the frame before the hold, every tracker seed), and no cue vouched for those frames."""
+    background = np.full((200, 200, 3), 100, np.uint8)
+    image = background.copy()
+    image[72:108, 94:106] = 20
+    image[30:72, 60:160] = 20  # the larger region beside it: the hold's condition
+    drifted = np.array([97.0, 85.0, 12.0, 36.0])  # frame 12's estimate, 6 px up towards the region, not vouched
+    tracker = _tracker()  # the defaults; vouched (98, 91) on frame 10, velocity (-1, 0.5)
+    estimate = tracker.pf.estimate()
+    out, held = tracker._hold(image, background, 1.0, drifted, estimate, 13)
+    assert held and np.allclose(out[:2], [98.0 - 3.0, 91.0 + 1.5])  # 3 frames on from the vouched one
+    tracker = _tracker(anchor="estimate")  # the previous behaviour: from the last estimate
+    out, held = tracker._hold(image, background, 1.0, drifted, tracker.pf.estimate(), 13)
+    assert held and np.allclose(out[:2], drifted[:2] + [-1.0, 0.5])
+    tracker = _tracker()  # the vouched estimate too old to predict from: no hold
+    late = 10 + tracker.config.hold.max_frames + 1
+    out, held = tracker._hold(image, background, 1.0, drifted, tracker.pf.estimate(), late)
+    assert not held
 
 
 def test_the_velocity_comes_from_vouched_estimates_only():
     tracker = _tracker()
-    tracker.track_velocity = np.zeros(2)
+    tracker.track_velocity, tracker._vouched = np.zeros(2), None
     tracker._vouch(10, np.array([100.0, 50.0, 12.0, 36.0]), True)
     tracker._vouch(11, np.array([0.0, 0.0, 12.0, 36.0]), False)  # not vouched for: ignored
     tracker._vouch(12, np.array([96.0, 52.0, 12.0, 36.0]), True)  # 2 frames later: (-2, 1) per frame

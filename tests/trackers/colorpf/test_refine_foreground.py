@@ -1,12 +1,13 @@
 """The foreground-region refinement (refine.mode = "foreground", colorpf.foreground.foreground_region)."""
 
+import dataclasses
 from types import SimpleNamespace
 
 import numpy as np
 
 from trackreplay.replay.engine import ReplayRequest, replay
 from trackreplay.trackers.colorpf.aspect import AspectEstimate
-from trackreplay.trackers.colorpf.config import AspectConfig, ColorPfConfig
+from trackreplay.trackers.colorpf.config import AspectConfig, ColorPfConfig, RefineConfig
 from trackreplay.trackers.colorpf.foreground import IDENTITY, foreground_region, region_layout
 from trackreplay.trackers.colorpf.size import WeakPerspectiveSize
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker
@@ -94,6 +95,32 @@ def test_the_cloud_moves_with_the_estimate_and_the_size_follows_only_without_a_p
     assert placed and np.allclose(refined[2:], [0.8 * 12 + 0.2 * 10, 0.8 * 36 + 0.2 * 30], atol=0.1)
     assert np.isclose(tracker.size.area0, refined[2] * refined[3]) and np.isclose(tracker.aspect.ratio,
                                                                                   refined[3] / refined[2])
+
+
+def test_without_a_plane_the_region_moves_the_area_state_and_the_aspect_stays():
+    """refine.size_follows = "area": the region sets S' (smoothed from S' itself, not from the PF's
+    weighted-mean box, which carries that frame's colour-weighted omega) and eq. (12) the box with the
+    aspect stage's R. otb_crossing: the head against the sunlit crossing and the legs over its stripes
+    became foreground from frame ~50, and the region's box grew taller than the walker."""
+    image, background = _scene()
+    image[74:122, 100:112] = 20  # the region is taller (12 x 48): a part that did not differ from the floor now does
+    tracker = _tracker(False)  # S' = 432, R = 3 (12 x 36)
+    tracker.pf.particles[:, 2:4] = [14.0, 42.0]  # the colour's weighted mean is another box than the state
+    estimate = tracker.pf.estimate()
+    region, why = _region(image, background, estimate)
+    assert why == "" and region[3] / region[2] > 3.5
+    refined, placed = tracker._refine_foreground(image, background, 1.0, estimate)
+    area = 0.8 * 432.0 + 0.2 * region[2] * region[3]
+    assert placed and np.isclose(tracker.size.area0, area)
+    assert tracker.aspect.ratio == 3.0  # R stays the aspect stage's (aspect.mode "fixed": the mark's)
+    assert np.allclose(refined[2:], [np.sqrt(area / 3.0), 3.0 * np.sqrt(area / 3.0)])
+    # "box" (the previous behaviour): w and h each from the estimate's box, the aspect with them
+    tracker = _tracker(False)
+    tracker.config = dataclasses.replace(tracker.config, refine=RefineConfig(size_follows="box"))
+    tracker.pf.particles[:, 2:4] = [14.0, 42.0]
+    refined, placed = tracker._refine_foreground(image, background, 1.0, tracker.pf.estimate())
+    assert placed and np.allclose(refined[2:], 0.8 * np.array([14.0, 42.0]) + 0.2 * region[2:4])
+    assert np.isclose(tracker.aspect.ratio, refined[3] / refined[2])
 
 
 def test_without_a_background_nothing_moves(scene_log):
