@@ -27,7 +27,8 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   accepted blob of a similar size is in view, nothing is confirmed (verdict ``ambiguous``): after
   a loss the tracker cannot tell its ball from a spare one;
 - **gone**: when the predicted mean is more than a ball diameter outside the picture nothing in
-  the picture is accepted directly (the ball left it); the track is ``predicted`` and then
+  the picture is accepted directly (the ball left it); when it is outside by less, only a blob the
+  edge cuts (:func:`cut_by_edge`: what is left of a ball leaving); the track is ``predicted`` and then
   ``lost`` (no position) after ``max_predicted_frames`` misses, like any other miss. When the
   camera does not follow the ball (``entry_only``), a tentative track must then start within
   ``entry_margin_px`` (+ 2 D) of the picture's edge: the ball comes back in through it.
@@ -66,6 +67,30 @@ class Validation:
     @classmethod
     def empty(cls) -> Validation:
         return cls("", 0.0, 0.0, 0.0, math.nan, -1, np.zeros((0, 3)), np.zeros(0, bool))
+
+
+def beyond_edges(point: np.ndarray, size: tuple[int, int]) -> np.ndarray:
+    """Which edges (left, top, right, bottom) ``point`` lies beyond: outside the picture, whose
+    pixels' centres span ``0 … width - 1`` and whose pixels reach half a pixel further."""
+    width, height = size
+    x, y = float(point[0]), float(point[1])
+    return np.array([x < -0.5, y < -0.5, x > width - 0.5, y > height - 0.5])
+
+
+def cut_by_edge(bbox: np.ndarray, predicted: np.ndarray, size: tuple[int, int], tolerance: float) -> np.ndarray:
+    """Which blobs (boxes ``x0, y0, w, h``) can be a ball predicted at ``predicted``: all of them while
+    the prediction is inside the picture; once its centre is beyond an edge, only those reaching
+    within ``tolerance`` px of that edge. A ball leaving the picture shows at most the part the edge
+    cuts; a blob wholly inside is something else (a review: after an iron shot climbed out through
+    the top, the corner of a broadcast's white logo box 11 px below the edge was measured for 44 frames)."""
+    edges = beyond_edges(predicted, size)
+    boxes = np.asarray(bbox, float).reshape(-1, 4)
+    if not edges.any():
+        return np.ones(len(boxes), bool)
+    width, height = size
+    reach = np.stack([boxes[:, 0] <= tolerance, boxes[:, 1] <= tolerance,
+                      boxes[:, 0] + boxes[:, 2] >= width - tolerance, boxes[:, 1] + boxes[:, 3] >= height - tolerance], axis=1)
+    return (reach & edges).any(axis=1)
 
 
 def blob_fit(gated: GatedBlobs, k: int, cfg: BlobConfig, scale: float) -> float:
@@ -190,6 +215,9 @@ class Validator:
         outside = bool(predicted[0] < -diameter or predicted[1] < -diameter or predicted[0] > width - 1 + diameter
                        or predicted[1] > height - 1 + diameter)
         in_gate = ok & (d <= radius) & (not outside) & (not lost)
+        if in_gate.any() and not outside:
+            in_gate &= cut_by_edge(gated.blobs.bbox, predicted, size, 0.5 * diameter)
+            outside = not in_gate.any() and bool(beyond_edges(predicted, size).any())
         if not in_gate.any():
             return None, in_gate, outside
         k = int(np.flatnonzero(in_gate)[np.argmin(d[in_gate])])

@@ -122,3 +122,27 @@ def test_a_repeated_picture_is_no_new_sighting_for_a_confirmation():
     slow.add(1, (10.0, 10.0), shape)  # the same place, but a new picture (noise, other things moved)
     slow.add(2, (10.0, 10.0), shape)
     assert validator._fit(slow, 1.0) > 0.0
+
+
+def test_a_ball_predicted_beyond_the_edge_is_only_what_the_edge_cuts():
+    """A review: an iron shot climbed slowly out through the top (its samples' mean 1.4 px above the
+    picture, less than a diameter), and the corner of a broadcast's white logo box 11 px below the edge,
+    14 px from the prediction and inside the gate, was measured for the 44 frames after it left."""
+    from trackreplay.trackers.golf.validate import cut_by_edge
+
+    validator = Validator(ValidateConfig(), BlobConfig())
+    predicted = np.array([622.5, -1.4])
+    ask = dict(predicted=predicted, spread=np.full(2, 8.0), diameter=4.0, size=SIZE, scale=1.0, lost=False)
+    corner = disc_at(631.0, 12.0, radius=2)
+    found, in_gate, outside = validator.seen_in_gate(gated=corner, **ask)
+    assert found is None and not in_gate.any() and outside  # the ball left: nothing inside is it
+    assert validator.validate(index=0, gated=corner, **ask).verdict == "outside_image"
+    leaving = disc_at(622.0, 1.0, radius=2)  # what is left of the ball at the edge
+    found, _, outside = validator.seen_in_gate(gated=leaving, **ask)
+    assert found is not None and found.verdict == "measured" and not outside
+    inside = dict(ask, predicted=np.array([622.5, 3.0]))  # the prediction still in the picture: unchanged
+    found, _, _ = validator.seen_in_gate(gated=corner, **inside)
+    assert found is not None and found.candidate == 0
+    boxes = np.array([[0, 100, 5, 5], [100, 0, 5, 5], [1275, 100, 5, 5], [100, 715, 5, 5], [100, 100, 5, 5]], float)
+    for k, point in enumerate(([-3.0, 100.0], [100.0, -3.0], [1282.0, 100.0], [100.0, 722.0])):
+        assert cut_by_edge(boxes, np.array(point), SIZE, 1.0).tolist() == [j == k for j in range(5)]
