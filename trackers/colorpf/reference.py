@@ -118,13 +118,21 @@ class BackgroundFrames:
         self._early = ExcludingMedianBackground(cfg.frames, cfg.min_frames) if cfg.exclude > 0 else MedianBackground(cfg.frames)
         self._marked: np.ndarray | None = None  # reference.exclude: the marked box's corners (ready once it is free)
         self.early_count = 0
+        self.frames = cfg.frames  # the median's window in this log's frames (set_frames)
+
+    def set_frames(self, frames: int) -> None:
+        """The median's window as ``frames`` of this log's frames (``reference.frames`` at the log's rate:
+        colorpf.timing): the frames kept before the mark, and the early median's capacity while it collects."""
+        self.frames = frames
+        if not self._early.full:
+            self._early.capacity = max(frames, len(self._early), 1)
 
     def offer(self, index: int, image: np.ndarray, transform: np.ndarray | None = None) -> None:
         """Every frame before the mark and, while "early" is collecting, after it; ``transform``
         (``camera.compensate``): the camera's motion since the marked frame (3x3), taken back so the
         median is of the marked frame's view."""
         if index < self.start:
-            if self.source in ("before", "auto") and index >= self.start - self.cfg.frames:
+            if self.source in ("before", "auto") and index >= self.start - self.frames:
                 self._before.append(image)
         elif self.source == "early":
             back = None if transform is None or np.array_equal(transform, IDENTITY) else np.linalg.inv(transform)
@@ -138,7 +146,7 @@ class BackgroundFrames:
         if self.source == "auto":
             self.source = "before" if len(self._before) >= cfg.min_frames else "early"
         if self.source == "before":
-            frames, self._before = self._before, []
+            frames, self._before = self._before[-self.frames:], []  # (the window known once the rate is)
             if len(frames) < cfg.min_frames:
                 return None, "none"
             median = MedianBackground(len(frames))

@@ -34,7 +34,9 @@ beside the estimate (the neighbour check's condition) and no region places it, t
 on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`); the camera's
 motion since the marked frame (a similarity from corners, :mod:`.camera`) carries the early median's frames back to
 the marked view, the background to each frame's view and the particle cloud with the scene (``camera.compensate``;
-a still camera measures the identity and is unchanged). Off by default,
+a still camera measures the identity and is unchanged); the constants that describe time (the position noise, the
+hold's memory and horizon, the early median's window) are kept in seconds at the log's frame interval
+(``frame_rate``, :mod:`.timing`; a 30 fps log is unchanged). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -66,6 +68,7 @@ from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference,
 from trackreplay.trackers.colorpf.size import (WeakPerspectiveSize, foot_points, ground_distance, horizon_side,
                                               region_area)
 from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
+from trackreplay.trackers.colorpf.timing import FrameClock, frames_for, noise_for, smoothing_for
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 
@@ -132,6 +135,8 @@ class ColorPfTracker(TrackerBase):
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
         self._pending: list[str] = []
+        # frame_rate: each step's interval over the stated one (colorpf.timing; 1 at the stated rate)
+        self.clock = FrameClock(config.frame_rate)
         self.intermediates = ColorPfIntermediates.idle()
 
     # --- notices ---------------------------------------------------------------------------------
@@ -146,6 +151,7 @@ class ColorPfTracker(TrackerBase):
 
     # --- the step ---------------------------------------------------------------------------------
     def step(self, frame: Frame) -> list[TrackState]:
+        r = self.clock.step(frame.t_ns)  # frame_rate: the constants that describe time, at this step's interval
         if self.mark is None:
             self.mark, several = start_mark(frame.all_hints or frame.hints)
             if self.mark is None:
@@ -155,6 +161,7 @@ class ColorPfTracker(TrackerBase):
             self._say(several)
             self.background = BackgroundFrames(self.config.reference, self.mark.frame)
         assert self.background is not None
+        self.background.set_frames(frames_for(self.config.reference.frames, r))  # the median's window, in time
         if not self.started:
             if frame.index < self.mark.frame:
                 self.background.offer(frame.index, frame.image)
@@ -334,7 +341,8 @@ class ColorPfTracker(TrackerBase):
         frames ago), or ``prev + v``."""
         cfg, ref = self.config, self.reference
         assert ref is not None
-        if self.hold_run >= cfg.hold.max_frames or self._velocity_steps == 0:
+        horizon = frames_for(cfg.hold.max_frames, self.clock.ratio)  # frame_rate: the same duration
+        if self.hold_run >= horizon or self._velocity_steps == 0:
             # (no velocity measured yet, e.g. right after the mark: holding would freeze the box where it
             # was marked while the target walks off; a review saw otb_crossing marked on frame 60 held there)
             return estimate, False
@@ -343,7 +351,7 @@ class ColorPfTracker(TrackerBase):
             self.hold_run = 0
             return estimate, False
         vouched = cfg.hold.anchor == "vouched"
-        if vouched and (self._vouched is None or index - self._vouched[0] > cfg.hold.max_frames):
+        if vouched and (self._vouched is None or index - self._vouched[0] > horizon):
             return estimate, False  # no vouched position recent enough to predict from
         self.hold_run += 1
         if vouched:  # in the marked frame's view (as _vouch keeps it), then into this one (camera.compensate)
@@ -378,7 +386,7 @@ class ColorPfTracker(TrackerBase):
         if self._vouched is not None:
             last, xy = self._vouched
             self._velocity_steps += 1
-            s = self.config.hold.smoothing
+            s = smoothing_for(self.config.hold.smoothing, self.clock.ratio)  # frame_rate: the same memory in time
             self.track_velocity = s * self.track_velocity + (1.0 - s) * (estimate[:2] - xy) / max(index - last, 1)
         self._vouched = (index, estimate[:2].copy())
 
@@ -391,8 +399,10 @@ class ColorPfTracker(TrackerBase):
         if not weigh_only:
             self.pf.resample()  # select by the previous weights
             drift = self.velocity if cfg.motion.model == "constant_velocity" else None
+            # frame_rate: eq. (2)'s random walk spreads with the square root of the step's interval
+            sigma = noise_for(position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), self.clock.ratio)
             self.pf.predict(transition(
-                sigma=position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), size=cfg.size, ratio=self.aspect.ratio,
+                sigma=sigma, size=cfg.size, ratio=self.aspect.ratio,
                 box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh,
                 drift=drift))  # eq. (2)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
@@ -437,7 +447,7 @@ class ColorPfTracker(TrackerBase):
                 and self.reference.p_square > 0 and self.misses < cfg.lost_after):
             estimate, held = self._hold(image, background, gain, prev, estimate, frame.index)
         if not weigh_only:
-            s = cfg.motion.smoothing
+            s = smoothing_for(cfg.motion.smoothing, self.clock.ratio)
             self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
         area_a, distance_a = standing_box(estimate[None, :2], estimate[3], self.size, plane, self.side, self.aspect.ratio)
         area, distance = float(area_a[0]), float(distance_a[0])
