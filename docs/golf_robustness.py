@@ -282,10 +282,14 @@ diameter of it: what is left of a ball leaving) can be taken directly (`validate
 wholly inside is a jump that needs confirming. Every other row of this table is unchanged (digests
 equal), as are docs/golf_real.md and docs/golf_synthetic.md. Tried before that: a higher confidence
 (0.5) for the contrast fallback (44 -> 40 of 44, and 3 correct frames lost on the 1080p synthetic shot),
-dropped. **Left failing** (these rows): the approach turned 180° — after the drop a tentative track of
-11x4 px liner pieces (area ~24 px, the ball's 291) is confirmed on frame 226 and `measured` on 7 of 19
-frames (after a loss the confirmation does not ask the ball's last size, since a ball lost at launch is
-found again 20x smaller on the synthetic tee shots); the approach at 3/4 resolution — specks beside the
+dropped. The approach turned 180° (fixed 2026-11-29, 7 -> 0 of 19): after the drop a tentative track of
+11x4 px liner pieces (area ~24 px, the ball's ~290) was confirmed on frame 226, 20 px from where the ball
+was last measured, and so passed as "the ball found again where it was" (`seen_before` exempts that
+place). That exemption now needs a blob about as large as the ball was (within the area tolerance): a
+much smaller one there is checked like any other, and a blob (ball and liner) covered that point on the
+ball's last frame. (A limit on the confirmed size alone would not do: a ball lost at launch is found
+again 20x smaller on the synthetic tee shots; there the encoders carry the point into the sky of the last
+picture, where nothing covered it.) Every other row unchanged. **Left failing**: the approach at 3/4 resolution — specks beside the
 cup on 15 of 19, and from frame ~148 rows 5-10 px off on 1-2 px blobs near a ball of 10-26 px (80.2 %
 within 5 px; the expected size followed the specks down from ~14 px to 1.5 px while the broadcast
 zoomed in).

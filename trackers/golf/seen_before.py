@@ -14,9 +14,11 @@ same LUT is applied around it, and if a blob covered that point then, more than 
 from where the ball was measured, the confirmed blob is that thing, not the ball
 (verdict ``seen_before``). "That thing": a blob there at least as big as the confirmed one (within
 the area tolerance) — the liner whole before, a piece of it now. A ball found again where it was last seen (at rest after an occlusion) is
-not refused: it is its own blob there. When the view's change cannot be measured, a camera that
-moved moves the scenery in the picture: nothing is found there and nothing is refused (the check
-only ever refuses).
+not refused: it is its own blob there, as large as the ball was (within the area tolerance; a review:
+on the broadcast approach turned 180°, after the ball dropped in, an 11 x 4 px piece of the liner just
+beside where the ball of ~290 px was last seen was confirmed and measured on 7 of 19 frames). When the
+view's change cannot be measured, a camera that moved moves the scenery in the picture: nothing is
+found there and nothing is refused (the check only ever refuses).
 """
 
 from __future__ import annotations
@@ -45,6 +47,11 @@ class LastSighting:
     diameter: float
 
 
+def ball_area(diameter: float) -> float:
+    """The area (px) of a disc ``diameter`` px across."""
+    return math.pi / 4.0 * diameter * diameter
+
+
 def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float, luts: GolfLuts,
                      lut_name: str, near_px: float, area_tolerance: float, image: np.ndarray | None = None) -> bool:
     """Whether a blob at least ``area / area_tolerance`` px large covered ``point`` (this frame's
@@ -65,8 +72,8 @@ def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.nda
     x, y = (float(v) for v in p[0])
     if not (math.isfinite(x) and math.isfinite(y)):
         return False
-    if math.hypot(x - last.ball[0], y - last.ball[1]) <= last.diameter + near_px:
-        return False  # the ball itself, found again where it was
+    if math.hypot(x - last.ball[0], y - last.ball[1]) <= last.diameter + near_px and area >= ball_area(last.diameter) / area_tolerance:
+        return False  # the ball itself, found again where it was (as large as it was, within the tolerance)
     height, width = last.image.shape[:2]
     half = 2.0 * math.sqrt(max(area, 1.0)) + near_px
     x0, y0 = max(int(math.floor(x - half)), 0), max(int(math.floor(y - half)), 0)
