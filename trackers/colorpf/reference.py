@@ -183,6 +183,11 @@ class BackgroundFrames:
             return self._early.ready(self._marked)
         return self._early.full
 
+    def early_frames(self) -> list[np.ndarray]:
+        """The frames the early median is taken over (the marked frame's view), in order from the marked one;
+        empty once the median is taken (:meth:`early_model` lets them go)."""
+        return list(self._early._frames) if self.source == "early" else []
+
     def early_model(self) -> np.ndarray | None:
         self.early_count = len(self._early)  # the frames the median was taken over
         model = self._early.model()

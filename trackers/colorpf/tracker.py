@@ -31,7 +31,9 @@ without a ground plane the size follows it, and such a frame does not count towa
 "early" background each frame's tracked box is left out of the median, so it is ready once the target
 has left its marked box (``reference.exclude``, :class:`.reference.BackgroundFrames`); and while a larger moving region is
 beside the estimate (the neighbour check's condition) and no region places it, the estimate is held
-on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`); the camera's
+on the motion prediction, the last estimate plus the track's velocity (``hold``, :meth:`_hold`; the rows made before
+the background are vouched for by the foreground region on the median's frames once it exists, ``hold.early``,
+:meth:`_revouch`); the camera's
 motion since the marked frame (a similarity from corners, :mod:`.camera`) carries the early median's frames back to
 the marked view, the background to each frame's view and the particle cloud with the scene (``camera.compensate``;
 a still camera measures the identity and is unchanged); the constants that describe time (the position noise, the
@@ -131,6 +133,8 @@ class ColorPfTracker(TrackerBase):
         self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
         self.hold_run = 0  # hold.enabled: held frames in a row
         self._velocity_steps = 0  # hold.enabled: displacements between vouched estimates measured so far
+        # hold.early = "region": the estimates before eq. (7)'s background (frame, box in the marked frame's view)
+        self._early_rows: list[tuple[int, np.ndarray]] = []
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
@@ -174,7 +178,10 @@ class ColorPfTracker(TrackerBase):
         mask = None
         if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
             marked = self._marked_image
+            early = self.background.early_frames()  # (let go by early_model)
             mask = self._rebuild_reference(self.background.early_model(), "early")
+            if self.config.hold.enabled and self.config.hold.early == "region":
+                self._revouch(early)
             if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
                 self._s_mark = self._mark_score(marked)
         out = self._track(frame, mask)
@@ -379,6 +386,32 @@ class ColorPfTracker(TrackerBase):
         self._rematch = None
         return False
 
+    def _revouch(self, frames: list[np.ndarray]) -> None:
+        """``hold.early = "region"``: once eq. (7)'s background exists, the estimates made before it (colour
+        alone, against the marked box's own histogram) are vouched for by the foreground region on the
+        frames the median was taken over, as later ones are: the hold's velocity and anchor are refitted
+        from the placed ones only (none placed: no velocity, no anchor)."""
+        rows, self._early_rows = self._early_rows, []
+        ref, cfg, background = self.reference, self.config, self.background_image
+        if (cfg.refine.mode != "foreground" or ref is None or ref.kind == "box" or background is None
+                or ref.p_square <= 0 or self.layout is None or self.mark is None):
+            return  # no region to vouch with: the colour's rows stand, as they would have
+        self._vouched, self.track_velocity, self._velocity_steps = None, np.zeros(2), 0
+        layout = self.layout if cfg.refine.layout else IDENTITY
+        for index, box in rows:
+            k = index - self.mark.frame
+            if not 0 <= k < len(frames) or frames[k].shape != background.shape:
+                continue
+            image = frames[k]
+            gain = brightness_gain(image, background)
+            if scene_changed(image, background, cfg.reference.threshold, gain):
+                continue
+            region, _ = foreground_region(image, background, box, cfg.reference.threshold, cfg.reference.open_px,
+                                          gain, ref.p_detect / ref.p_square, layout, window=cfg.refine.window,
+                                          factor=cfg.refine.factor, min_part=cfg.refine.min_part)
+            if region is not None:
+                self._vouch(index, region, True)
+
     def _vouch(self, index: int, estimate: np.ndarray, vouched: bool) -> None:
         """``hold.enabled``: the track's velocity from consecutive vouched estimates (exponentially smoothed)."""
         if not vouched:
@@ -510,6 +543,10 @@ class ColorPfTracker(TrackerBase):
             scene = np.concatenate([apply(np.linalg.inv(self.camera_transform), estimate[:2])[0], estimate[2:4]]) \
                 if self.camera is not None and not np.array_equal(self.camera_transform, NO_MOTION) else estimate
             self._vouch(frame.index, scene, status == "measured" or placed)
+            if cfg.hold.early == "region" and self.reference.kind == "box" and self.background.source == "early":
+                box = scene.copy()  # the box too in the marked frame's view (the early median's frames)
+                box[2:4] /= scale_of(self.camera_transform)
+                self._early_rows.append((frame.index, box))
         ref = self.reference
         self.intermediates = ColorPfIntermediates(
             "track", self.pf.particles.copy(), self.pf.weights.copy(), m.similarity, m.likelihood, estimate,

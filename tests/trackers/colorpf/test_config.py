@@ -30,7 +30,7 @@ def test_paper_overrides_change_only_the_default_departures():
     ("reference", {"update_rate": 1.5}), ("reference", {"update_above": -0.1}),
     ("motion", {"model": "ballistic"}), ("motion", {"smoothing": 1.0}),
     ("refine", {"mode": "camshift"}), ("refine", {"iterations": 0}), ("refine", {"factor": 1.0}),
-    ("refine", {"size_rate": 1.5}), ("refine", {"size_follows": "height"}), ("hold", {"anchor": "mark"}),
+    ("refine", {"size_rate": 1.5}), ("refine", {"size_follows": "height"}), ("hold", {"anchor": "mark"}), ("hold", {"early": "mark"}),
     ("size", {"no_plane": "plane"}),
     ("reference", {"exclude": 0.5}), ("hold", {"smoothing": 1.0}), ("hold", {"max_frames": -1}),
     ("camera", {"min_corners": 2}),

@@ -6,6 +6,7 @@ import numpy as np
 
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.colorpf.config import ColorPfConfig, HoldConfig
+from trackreplay.trackers.colorpf.foreground import IDENTITY
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker
 from trackreplay.trackers.frame import Frame
 
@@ -132,3 +133,51 @@ def test_the_velocity_comes_from_vouched_estimates_only():
     tracker._vouch(12, np.array([96.0, 52.0, 12.0, 36.0]), True)  # 2 frames later: (-2, 1) per frame
     s = tracker.config.hold.smoothing
     assert np.allclose(tracker.track_velocity, (1.0 - s) * np.array([-2.0, 1.0]))
+
+
+def _early_walk(k: int) -> tuple[float, float]:
+    """The walker's centre on frame k: 1 px left and 1 px up per frame."""
+    return 150.0 - 1.0 * k, 100.0 - 1.0 * k
+
+
+def _revouched(early: str) -> ColorPfTracker:
+    """Ten frames before eq. (7)'s background exists, colour alone placed a 12 x 36 walker 4 px off either
+    way on alternate frames (otb_crossing under the zoom: y jumping between 162 and 187 while he rose);
+    then the background arrives and the tracker re-vouches those rows (hold.early)."""
+    background = np.full((200, 240, 3), 100, np.uint8)
+    frames, rows = [], []
+    for k in range(10):
+        image = background.copy()
+        x, y = _early_walk(k)
+        image[int(y) - 18:int(y) + 18, int(x) - 6:int(x) + 6] = 20
+        frames.append(image)
+        off = 4.0 if k % 2 else -4.0
+        rows.append((k, np.array([x + off, y - off, 12.0, 36.0])))
+    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(early=early)), np.random.default_rng(0))
+    tracker.mark = InitRegion(0, 0, 150.0, 100.0, 12.0, 36.0, "target")
+    tracker.reference = SimpleNamespace(kind="mixed", p_detect=432, p_square=432)  # the mark wholly foreground
+    tracker.background_image = background
+    tracker.layout = IDENTITY  # the marked box is its foreground's extent
+    for k, box in rows:  # as the tracker vouches colour's "measured" rows before the background
+        tracker._vouch(k, box, True)
+        tracker._early_rows.append((k, box))
+    if early == "region":
+        tracker._revouch(frames)
+    return tracker
+
+
+def test_rows_before_the_background_are_vouched_for_by_the_region_once_it_exists():
+    """hold.early = "region": the hold's velocity and anchor from the foreground region on the early
+    median's frames, not from colour's jumps (otb_crossing, robustness rows: the hold on frames 26-46
+    carried the box 13-25 px off on zoom, scale0.8, scale1.25 and shift+3 with the colour-fitted ones)."""
+    s = HoldConfig().smoothing
+    truth = np.zeros(2)
+    for _ in range(9):  # nine displacements of (-1, -1), smoothed from zero
+        truth = s * truth + (1.0 - s) * np.array([-1.0, -1.0])
+    region = _revouched("region")
+    assert region._velocity_steps == 9
+    assert np.allclose(region.track_velocity, truth, atol=0.05), region.track_velocity
+    assert region._vouched[0] == 9 and np.allclose(region._vouched[1], _early_walk(9), atol=0.6)
+    colour = _revouched("colour")  # the previous behaviour: colour's rows stand
+    assert np.abs(colour.track_velocity - truth).max() > 0.2
+    assert np.allclose(colour._vouched[1], np.array(_early_walk(9)) + [4.0, -4.0])
