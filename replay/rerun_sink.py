@@ -6,6 +6,7 @@ Built only when ``--rrd`` is given; without it no Rerun object is ever construct
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Callable
 from datetime import timedelta
 from pathlib import Path
 
@@ -33,6 +34,10 @@ FLUSH_BYTES = 32 * 1024 * 1024  # buffered rows are sent when they exceed this (
 # allocators' caches, where 32 MB chunks of camera frames were fresh memory (page faults) at every
 # step, here and in Rerun's encoder (a 720x720 JPEG log: ~1 ms a frame of process CPU less).
 IMAGE_FLUSH_BYTES = 4 * 1024 * 1024
+# A batch's frames are built into rows this many at a time, as they come: it holds a few frames'
+# intermediates, not a whole flush's (about 3x the rows built from them), and their arrays are
+# still in cache.
+BATCH_FRAMES = 32
 
 
 class FrameLogger:
@@ -43,6 +48,10 @@ class FrameLogger:
     calls a frame) and makes the chunk order a function of the data alone: nothing passes through
     Rerun's time-driven batcher, so two replays write the same chunks in the same order without
     rewriting the file. ``scalar`` points are sent as columns at the end.
+
+    A view can also keep a whole frame as one record (``batch``) and turn records into rows many
+    frames at a time (``columns``, ``entity_rows``, ``image_rows``, ``scalar_rows``): the same rows
+    and chunks, without a dozen calls a frame.
     """
 
     def __init__(self, rec: rr.RecordingStream, flush_bytes: int = FLUSH_BYTES,
@@ -56,6 +65,8 @@ class FrameLogger:
         self._rows: dict[str, list[tuple[int, int, list]]] = {}
         self._deferred: dict[str, dict[tuple, list[tuple[int, int, dict]]]] = {}
         self._templates: dict[tuple, list[tuple]] = {}
+        self._batches: dict[Callable, list[tuple[int, int, object]]] = {}
+        self._columns: dict[str, list[tuple]] = {}  # rows of many frames from batches (``columns``)
         self._buffered = 0
         self._image_bytes: dict[str, int] = {}
         self.flush_bytes = flush_bytes
@@ -87,21 +98,10 @@ class FrameLogger:
             entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
             self.log(path, entity)
             return
-        key = (path, archetype, None if raw else (data.shape, data.flags.c_contiguous),
-               tuple([(k, repr(v)) for k, v in params.items()]) if params else ())
         # The pixels are kept as they are and become Arrow at the send, all frames' at once (_Pixels)
         pixels = bytes(data) if raw and not isinstance(data, bytes) else data if raw else np.ascontiguousarray(data).reshape(-1)
-        template = self._templates.get(key)
-        if template is None:
-            entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
-            built = _components([entity])
-            size = sum(a.get_total_buffer_size() for _, a in built)
-            pixel = [str(d).endswith((":buffer", ":blob")) for d, _ in built]
-            # later frames count what their own Arrow arrays held: the template's other components,
-            # and per pixel buffer its bytes and two int32 offsets
-            fixed = sum(a.get_total_buffer_size() for (_, a), p in zip(built, pixel) if not p) + 8 * sum(pixel)
-            template = self._templates[key] = ([(d, a.type if p else a) for (d, a), p in zip(built, pixel)], fixed)
-        else:
+        template, size = self._template(path, archetype, data, raw, params)
+        if size is None:
             size = template[1] + len(pixels) * sum(isinstance(a, pa.DataType) for _, a in template[0])
         components = [(d, _Pixels(pixels, a) if isinstance(a, pa.DataType) else a) for d, a in template[0]]
         self._rows.setdefault(path, []).append((self._frame, self._t_ns, components))
@@ -111,6 +111,24 @@ class FrameLogger:
             self.flush()
         elif held > self.image_flush_bytes:
             self._flush_rows(path)
+
+    def _template(self, path: str, archetype: type, data: np.ndarray | bytes, raw: bool,
+                  params: dict) -> tuple[tuple, int | None]:
+        """The row template of ``archetype(data, **params)`` at ``path`` (built on first use: then also
+        the size of that first row, else None)."""
+        key = (path, archetype, None if raw else (data.shape, data.flags.c_contiguous),
+               tuple([(k, repr(v)) for k, v in params.items()]) if params else ())
+        template = self._templates.get(key)
+        if template is not None:
+            return template, None
+        entity = archetype(contents=data, **params) if archetype is rr.EncodedImage else archetype(data, **params)
+        built = _components([entity])
+        pixel = [str(d).endswith((":buffer", ":blob")) for d, _ in built]
+        # later frames count what their own Arrow arrays held: the template's other components,
+        # and per pixel buffer its bytes and two int32 offsets
+        fixed = sum(a.get_total_buffer_size() for (_, a), p in zip(built, pixel) if not p) + 8 * sum(pixel)
+        template = self._templates[key] = ([(d, a.type if p else a) for (d, a), p in zip(built, pixel)], fixed)
+        return template, sum(a.get_total_buffer_size() for _, a in built)
 
     def defer(self, path: str, archetype: type, **fields) -> None:
         """Log ``archetype(**fields)`` at ``path`` at the current frame without building it now: each
@@ -123,6 +141,54 @@ class FrameLogger:
         self._buffered += sum(getattr(v, "nbytes", 64) for v in fields.values())
         if self._buffered > self.flush_bytes:
             self.flush()
+
+    def batch(self, build: Callable[[FrameLogger, list[tuple[int, int, object]]], None], record: object,
+              nbytes: int) -> None:
+        """Keep ``record`` (``nbytes`` held) for the current frame. Every ``BATCH_FRAMES`` frames, and at
+        the flush, ``build(self, records)`` gets those frames' ``(frame, t_ns, record)`` in order and
+        adds their rows through ``columns``, ``entity_rows``, ``image_rows`` and ``scalar_rows``; they
+        are sent at the flush, one chunk per path and component set as ever."""
+        records = self._batches.setdefault(build, [])
+        records.append((self._frame, self._t_ns, record))
+        if len(records) >= BATCH_FRAMES:
+            build(self, records)
+            records.clear()
+        self._buffered += nbytes
+        if self._buffered > self.flush_bytes:
+            self.flush()
+
+    def columns(self, path: str, archetype: type, frames: list[int], times: list[int], lengths: list[int],
+                **fields) -> None:
+        """Rows of ``archetype`` at ``frames``: each field concatenated over them (``lengths``
+        instances each). They join the rows ``defer`` keeps for the same path and fields, in one chunk."""
+        if frames:
+            block = (frames, times, {name: (value, lengths) for name, value in fields.items()})
+            self._columns.setdefault(path, []).append(((archetype, tuple(fields)), block))
+
+    def entity_rows(self, path: str, entity: rr.AsComponents, frames: list[int], times: list[int]) -> None:
+        """``entity`` (e.g. a ``Clear``) at each of ``frames``, as ``log`` there would have put it."""
+        if frames:
+            components = _components([entity])
+            self._rows.setdefault(path, []).extend((f, t, components) for f, t in zip(frames, times))
+
+    def image_rows(self, path: str, archetype: type, frames: list[int], times: list[int], images: np.ndarray,
+                   **params) -> None:
+        """``archetype(images[k], **params)`` at ``frames[k]`` (uint8, stacked on a first axis), as
+        ``image`` would have kept them."""
+        if not len(frames):
+            return
+        template, _ = self._template(path, archetype, images[0], False, params)
+        flat = np.ascontiguousarray(images).reshape(len(frames), -1)
+        rows = self._rows.setdefault(path, [])
+        for f, t, pixels in zip(frames, times, flat):
+            rows.append((f, t, [(d, _Pixels(pixels, a) if isinstance(a, pa.DataType) else a) for d, a in template[0]]))
+
+    def scalar_rows(self, paths: tuple[str, ...], frames: list[int], times: list[int], table: np.ndarray) -> None:
+        """``scalars(paths, table[k])`` at each of ``frames``."""
+        rows = self._series_rows.setdefault(paths, ([], [], []))
+        rows[0].extend(frames)
+        rows[1].extend(times)
+        rows[2].extend(np.asarray(table, dtype=np.float64))
 
     def has_static(self, path: str) -> bool:
         """Whether ``static_once`` has logged ``path`` (so a caller can skip building the entity)."""
@@ -181,20 +247,25 @@ class FrameLogger:
 
     def flush(self) -> None:
         """Send the buffered rows: paths in sorted order, one chunk per (path, component set)."""
-        for path in sorted(set(self._rows) | set(self._deferred)):
-            self._send_rows(path, self._rows.get(path, ()))
-            for (archetype, names), rows in self._deferred.get(path, {}).items():
-                columns = {}
-                for name in names:
-                    values = [r[2][name] for r in rows]
-                    lengths = [len(v) for v in values]
-                    for column in archetype.columns(**{name: _concat(values)}):
-                        columns[column.component_descriptor()] = column.partition(lengths).as_arrow_array()
-                import rerun_bindings as bindings
+        import rerun_bindings as bindings
 
-                bindings.send_arrow_chunk(path, timelines=_timelines(rows), components=columns, recording=self.rec.to_native())
+        batches, self._batches = self._batches, {}
+        for build, records in batches.items():
+            if records:
+                build(self, records)
+        for path in sorted(set(self._rows) | set(self._deferred) | set(self._columns)):
+            self._send_rows(path, self._rows.get(path, ()))
+            groups = {key: [([r[0] for r in rows], [r[1] for r in rows], {name: _field(rows, name) for name in key[1]})]
+                      for key, rows in self._deferred.get(path, {}).items()}
+            for key, block in self._columns.get(path, ()):
+                groups.setdefault(key, []).append(block)
+            for (archetype, _), blocks in groups.items():
+                frames, times, fields = _join(blocks)
+                bindings.send_arrow_chunk(path, timelines=_timeline_arrays(frames, times),
+                                          components=_archetype_columns(archetype, fields), recording=self.rec.to_native())
         self._rows.clear()
         self._deferred.clear()
+        self._columns.clear()
         self._buffered = 0
         self._image_bytes.clear()
 
@@ -215,10 +286,43 @@ class FrameLogger:
 
 
 def _timelines(rows: list[tuple]) -> dict[str, pa.Array]:
+    return _timeline_arrays([r[0] for r in rows], [r[1] for r in rows])
+
+
+def _timeline_arrays(frames: list[int], times: list[int]) -> dict[str, pa.Array]:
     return {
-        "frame": pa.array([r[0] for r in rows], pa.int64()),
-        "log_time": pa.array(np.asarray([r[1] for r in rows], dtype="datetime64[ns]"), pa.timestamp("ns")),
+        "frame": pa.array(frames, pa.int64()),
+        "log_time": pa.array(np.asarray(times, dtype="datetime64[ns]"), pa.timestamp("ns")),
     }
+
+
+def _field(rows: list[tuple], name: str) -> tuple[object, list[int]]:
+    """A deferred field over ``rows``: the batches concatenated, and each row's number of instances."""
+    values = [r[2][name] for r in rows]
+    return _concat(values), [len(v) for v in values]
+
+
+def _join(blocks: list[tuple]) -> tuple:
+    """Blocks of rows (frames, times, fields) of one path and component set as one block."""
+    if len(blocks) == 1:
+        return blocks[0]
+    fields = {}
+    for name in blocks[0][2]:
+        values = [b[2][name][0] for b in blocks]
+        same = all(isinstance(v, np.ndarray) for v in values) and len({v.shape[1:] for v in values}) == 1
+        fields[name] = (np.concatenate(values) if same else [x for v in values for x in v],
+                        [n for b in blocks for n in b[2][name][1]])
+    return [f for b in blocks for f in b[0]], [t for b in blocks for t in b[1]], fields
+
+
+def _archetype_columns(archetype: type, fields: dict[str, tuple[object, list[int]]]) -> dict:
+    """One chunk's components: each field (a batch over all its rows, and the rows' numbers of
+    instances) converted once and split into rows."""
+    columns = {}
+    for name, (value, lengths) in fields.items():
+        for column in archetype.columns(**{name: value}):
+            columns[column.component_descriptor()] = column.partition(lengths).as_arrow_array()
+    return columns
 
 
 def _concat(values: list) -> object:

@@ -364,7 +364,7 @@ def kalman_series(logger: Logger, path: str, x: np.ndarray, P: np.ndarray, names
         raise ValueError(f"kalman_series: {len(names)} names for a state of {len(x)} and P of shape {P.shape}")
     sigma = np.sqrt(np.maximum(np.diag(P), 0.0))
     if isinstance(logger, FrameLogger):  # one row a frame (the series are split at the end)
-        logger.scalars(_series_columns(path, tuple(names)), np.concatenate([x, sigma]))
+        logger.scalars(series_columns(path, tuple(names)), np.concatenate([x, sigma]))
         return
     paths = _series_paths(path, tuple(names))
     for (state_path, sigma_path), value, s in zip(paths, x.tolist(), sigma.tolist()):
@@ -378,7 +378,7 @@ def _series_paths(path: str, names: tuple[str, ...]) -> tuple[tuple[str, str], .
 
 
 @functools.lru_cache(maxsize=256)
-def _series_columns(path: str, names: tuple[str, ...]) -> tuple[str, ...]:
+def series_columns(path: str, names: tuple[str, ...]) -> tuple[str, ...]:
     """The state paths then the sigma paths (the order of ``concatenate([x, sigma])``)."""
     pairs = _series_paths(path, names)
     return tuple(p for p, _ in pairs) + tuple(q for _, q in pairs)

@@ -3,6 +3,7 @@ row-by-row ``rr.log`` would; ``trackreplay diff`` on .rrd files."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -11,8 +12,8 @@ import rerun as rr
 
 from trackreplay.replay.cli import main
 from trackreplay.replay.diff_rrd import diff_rrd
-from trackreplay.replay.engine import ReplayRequest, iter_steps, replay
-from trackreplay.replay.rerun_sink import CAMERA, FrameLogger, _components, _Pixels
+from trackreplay.replay.engine import ReplayRequest, ReplayStep, iter_steps, replay
+from trackreplay.replay.rerun_sink import CAMERA, FrameLogger, RerunSink, _components, _Pixels, rrd_digest
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 
@@ -22,20 +23,64 @@ def test_columns_hold_what_row_by_row_logging_holds(tracker: str, log: str, tmp_
     columns, rows = tmp_path / "columns.rrd", tmp_path / "rows.rrd"
     replay(ReplayRequest(log=GOLDEN / log, tracker=tracker, rrd=columns))
     steps = iter_steps(ReplayRequest(log=GOLDEN / log, tracker=tracker))
+    _log_rows(rows, tracker, steps, steps.entry.view)
+    result = diff_rrd(columns, rows)
+    assert result.identical, result.report()
+
+
+def _log_rows(path: Path, tracker: str, steps, view) -> None:
+    """The old way: one rr.log per archetype, on a bare stream."""
     rec = rr.RecordingStream("trackreplay", recording_id="rows", send_properties=False)
     rec.set_log_time_enabled(False)
-    rec.save(str(rows))
-    for step in steps:  # the old way: one rr.log per archetype, on a bare stream
+    rec.save(str(path))
+    for step in steps:
         frame = step.frame
         rec.set_time("frame", sequence=frame.index)
         rec.set_time("log_time", timestamp=np.datetime64(frame.t_ns, "ns"))
         media = "image/jpeg" if frame.encoding == "jpeg" else "image/png"
         rec.log(CAMERA, rr.EncodedImage(contents=frame.encoded, media_type=media))
-        steps.entry.view.log(rec, tracker, frame, step.intermediates, list(step.states))
+        view.log(rec, tracker, frame, step.intermediates, list(step.states))
     rec.flush()
     rec.disconnect()
+
+
+def test_flow_frames_built_in_blocks_hold_what_row_by_row_logging_holds(tmp_path: Path,
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The flow view keeps whole frames and builds their rows ``BATCH_FRAMES`` at a time, frames with
+    nothing to show among them (no centroid, no accepted flow, a non-finite filter)."""
+    from trackreplay.replay import rerun_sink
+
+    monkeypatch.setattr(rerun_sink, "BATCH_FRAMES", 5)
+    steps = iter_steps(ReplayRequest(log=GOLDEN / "flow-sim1-24f.mcap", tracker="flow"))
+    view, edited = steps.entry.view, []
+    for k, step in enumerate(steps):
+        inter = step.intermediates
+        if k in (6, 7, 11):
+            inter = dataclasses.replace(inter, centroid=np.full(2, np.nan), flow_u=np.full_like(inter.flow_u, np.nan))
+        if k in (12, 13):
+            inter = dataclasses.replace(inter, kalman_P=np.full_like(inter.kalman_P, np.nan))
+        edited.append(ReplayStep(step.frame, step.states, inter))
+    columns, rows = tmp_path / "columns.rrd", tmp_path / "rows.rrd"
+    sink = RerunSink(columns, "flow-edited", view.blueprint("flow"))
+    for step in edited:
+        sink.begin_frame(step.frame)
+        view.log(sink.logger, "flow", step.frame, step.intermediates, list(step.states))
+    sink.close()
+    _log_rows(rows, "flow", edited, view)
     result = diff_rrd(columns, rows)
     assert result.identical, result.report()
+
+
+def test_a_batch_built_in_blocks_is_sent_in_the_same_chunks(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Building a batch's rows during the replay, a few frames at a time, leaves the chunks as they were."""
+    from trackreplay.replay import rerun_sink
+
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    whole, blocks = tmp_path / "whole.rrd", tmp_path / "blocks.rrd"
+    replay(ReplayRequest(log=log, tracker="flow", rrd=whole))
+    monkeypatch.setattr(rerun_sink, "BATCH_FRAMES", 3)
+    replay(ReplayRequest(log=log, tracker="flow", rrd=blocks))
+    assert rrd_digest(whole) == rrd_digest(blocks)
 
 
 def test_images_from_a_template_equal_images_built_each_time() -> None:
