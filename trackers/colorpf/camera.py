@@ -15,7 +15,10 @@ least-squares similarity refitted on the corners within 3x the median residual (
 minority of the corners; :func:`fit_similarity`). Always against the key frame, not chained frame
 to frame, so a still camera has no drift (chained, otb_crossing's still camera wandered 0.6 px in
 120 frames); LK starts each corner where it was last found (the motion since the last frame is
-small). The key frame is renewed when fewer than half of its corners are still tracked. A probe of a
+small). The key frame is renewed when fewer than half of its corners are still tracked, and (``renew =
+"deformation"``) once the scale and rotation since it deform an LK window by half a pixel
+(:func:`window_deformation`: LK matches a translated window, and a zooming camera's corners stay
+"tracked" long after their windows stopped matching). A probe of a
 few corners comes first: when they have not moved since last found, the last transform stands (a
 still camera costs the probe alone; docs/colorpf_robustness.md's table is unchanged by it).
 
@@ -41,6 +44,9 @@ IDENTITY = np.eye(3)
 PROBE = 24  # corners followed first: when they have not moved, the full measurement is skipped
 STILL_PX = 0.2  # ... "not moved": their median displacement since last found, well under snap's half pixel
 HALVE_FROM = 640  # frames at least this wide are measured at half size
+# renew="deformation": the key frame is renewed once the scale and rotation since it move a corner of the
+# LK window by this much relative to its centre (snap's half pixel, on the window; 15 px: a ~6.7 % scale)
+MAX_DEFORMATION_PX = 0.5
 
 
 def grey(image: np.ndarray) -> np.ndarray:
@@ -139,6 +145,13 @@ def snap(transform: np.ndarray, size: tuple[int, int]) -> np.ndarray:
     return transform
 
 
+def window_deformation(transform: np.ndarray, window: tuple[int, int] = LK["winSize"]) -> float:
+    """How far (px) ``transform``'s scale and rotation move a corner of an LK window relative to its
+    centre: LK matches the window as a translated copy, which holds while this is well under a pixel."""
+    half = np.array(window, np.float64) / 2.0
+    return float((np.abs(transform[:2, :2] - np.eye(2)) @ half).max())
+
+
 def warp(image: np.ndarray, transform: np.ndarray) -> np.ndarray:
     """``image`` carried by ``transform`` (content at p goes to T p), the uncovered border repeating the
     edge; a whole-pixel translation copies pixels exactly, the identity returns ``image`` itself."""
@@ -160,8 +173,9 @@ class CameraMotion:
     the first frame is at ``T p`` in the frame. Frames :data:`HALVE_FROM` px wide or wider are measured
     at half size (the cost of a 720x480 frame is then a 360x240 one's; T is scaled back)."""
 
-    def __init__(self, min_corners: int = 20, min_distance: int = 8) -> None:
+    def __init__(self, min_corners: int = 20, min_distance: int = 8, renew: str = "deformation") -> None:
         self.min_corners = min_corners
+        self.renew = renew
         self.min_distance = min_distance
         self._key: np.ndarray | None = None
         self._key_mean = 1.0
@@ -259,6 +273,7 @@ class CameraMotion:
         if step is not None:
             guess = apply(step, corners).reshape(-1, 1, 2).astype(np.float32)
             self._last = np.where(ok[:, None, None], moved, guess)
-        if 2 * ok.sum() < len(corners):
+        if 2 * ok.sum() < len(corners) or (self.renew == "deformation" and step is not None
+                                            and window_deformation(step) >= MAX_DEFORMATION_PX):
             self._rekey(g, box)
         return self.transform

@@ -54,6 +54,7 @@ REFINES = ("none", "meanshift", "foreground")
 REGION_SIZES = ("area", "box")
 HOLD_ANCHORS = ("vouched", "estimate")
 HOLD_EARLY = ("region", "colour")
+CAMERA_RENEW = ("deformation", "tracked")
 TEMPLATE_MASKS = ("foreground", "kernel", "none")
 
 
@@ -381,10 +382,26 @@ class CameraConfig:
     # paper (and the defaults before this switch). Frames before the mark ("before") are not moved.
     compensate: bool = True
     min_corners: int = 20  # fewer tracked corners: no measurement (the last motion stays)
+    # When the key frame the corners are followed from is renewed (colorpf.camera.CameraMotion). LK
+    # matches each corner's 15x15 window as a translated copy of the key frame's, which holds only
+    # while the scale and rotation since the key frame move the window's corners well under a pixel.
+    # "deformation" (default, ours): also once they move them by half a pixel or more
+    # (camera.MAX_DEFORMATION_PX, snap's half pixel applied to the LK window: a scale change of ~6.7 %);
+    # the new key frame's corners start from the transform measured so far. Why: under a zoom the
+    # corners stayed "tracked" against the first frame while their windows no longer matched, and
+    # the fit slid off (docs/colorpf_robustness.py zoom, 1.43x over 120 frames: measured scale 1.33 at
+    # frame 100, 1.23 at frame 119 against 1.36 / 1.43, corners 10-40 px off from frame ~95; the
+    # background warped with it made the walker's surroundings foreground and the track was lost near
+    # the left edge). With it the corners stay within 1.6 px (5 renewals). Tracker seeds 0-2 (CSRT):
+    # zoom 0.615 -> 0.684 (0.769); rows without a scale or rotation never renew (unchanged).
+    # "tracked": the previous behaviour, renewed only when fewer than half the corners are tracked.
+    renew: str = "deformation"
 
     def __post_init__(self) -> None:
         if self.min_corners < 3:
             raise ValueError("camera.min_corners must be >= 3")
+        if self.renew not in CAMERA_RENEW:
+            raise ValueError(f"camera.renew must be one of {', '.join(CAMERA_RENEW)}, not {self.renew!r}")
 
 
 @dataclass(frozen=True)

@@ -260,7 +260,7 @@ class ColorPfTracker(TrackerBase):
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
         self.started = True
         if cfg.camera.compensate and self.background.source != "none":
-            self.camera = CameraMotion(cfg.camera.min_corners)
+            self.camera = CameraMotion(cfg.camera.min_corners, renew=cfg.camera.renew)
             self.camera.update(frame.image, self._context_box(self.pf.estimate(), frame.image))  # the key frame
         out = self._track(frame, mask, weigh_only=True)
         self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64),

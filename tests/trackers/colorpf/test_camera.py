@@ -1,7 +1,10 @@
 """The camera's motion since the marked frame, a similarity (camera.compensate, colorpf.camera)."""
 
+from pathlib import Path
+
 import cv2
 import numpy as np
+import pytest
 
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.colorpf.camera import (IDENTITY, LK, CameraMotion, apply, fit_similarity, median, scale_of,
@@ -217,3 +220,65 @@ def test_the_probes_corners_are_not_followed_twice_and_the_transforms_are_the_sa
         assert np.array_equal(fast.update(view), plain.update(view))
         probed += fast._probed is not None
     assert probed > 20  # the reuse was exercised
+
+
+def _zoomed(image: np.ndarray, s: float) -> np.ndarray:
+    """``image`` zoomed ``s`` times about its centre (output u = c + s (p - c)), bilinear."""
+    h, w = image.shape[:2]
+    c = np.array([w / 2.0, h / 2.0])
+    m = np.array([[1.0 / s, 0.0, c[0] - c[0] / s], [0.0, 1.0 / s, c[1] - c[1] / s]])
+    return cv2.warpAffine(image, m, (w, h), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REFLECT)
+
+
+def test_a_zoom_renews_the_key_frame_once_the_lk_window_would_deform_and_a_pan_never_does():
+    from trackreplay.trackers.colorpf import camera as camera_module
+
+    assert camera_module.window_deformation(IDENTITY) == 0.0
+    half = np.array(LK["winSize"]) / 2.0
+    zoom = np.diag([1.1, 1.1, 1.0])
+    assert np.isclose(camera_module.window_deformation(zoom), 0.1 * half.max())
+    world = _world(1)[:H, :W]
+    counts = {}
+    for renew in ("deformation", "tracked"):
+        cam = CameraMotion(renew=renew)
+        keys = []
+        original = cam._rekey
+        cam._rekey = lambda g, box, original=original, keys=keys: (keys.append(1), original(g, box))[1]
+        for i in range(40):
+            t = cam.update(_zoomed(world, 1.0 + 0.3 * i / 39))
+        counts[renew] = len(keys) - 1  # the first key frame
+        assert abs(scale_of(t) - 1.3) < 0.005, (renew, scale_of(t))
+    # 1.3x in steps that each deform a 15 px window by at most half a pixel (~6.7 %): about 4 renewals
+    assert counts["tracked"] == 0 and 3 <= counts["deformation"] <= 5, counts
+    pan = CameraMotion()
+    keys = []
+    original = pan._rekey
+    pan._rekey = lambda g, box: (keys.append(1), original(g, box))[1]
+    for i in range(30):
+        m = np.array([[1.0, 0.0, 0.7 * i], [0.0, 1.0, 5.0]])
+        pan.update(cv2.warpAffine(_world(1), m, (W, H), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP))
+    assert len(keys) == 1  # a pan keeps its key frame (as before the switch)
+
+
+OTB = Path(__file__).resolve().parents[4] / "shared" / "data" / "real" / "otb_crossing"
+
+
+@pytest.mark.skipif(not OTB.is_dir(), reason="../shared/data/real/otb_crossing is absent")
+def test_a_real_zoom_is_followed_to_the_end():
+    """otb_crossing zoomed in 1.43x over its 120 frames (docs/colorpf_robustness.py's zoom): followed
+    from the first frame's corners alone, LK's windows stop matching and the fit slides off (scale 1.23
+    at the last frame); renewed when the window deforms by half a pixel, it stays within 1 %."""
+    files = sorted((OTB / "img").glob("*.jpg"))
+    truth = np.loadtxt(OTB / "groundtruth_rect.txt", delimiter=",")
+    out = {}
+    for renew in ("deformation", "tracked"):
+        cam = CameraMotion(renew=renew)
+        for k, f in enumerate(files):
+            s = 1.0 + (1.0 / 0.7 - 1.0) * k / (len(files) - 1)
+            x, y, w, h = truth[k]
+            c = np.array([180.0, 120.0]) + s * (np.array([x - 1 + w / 2, y - 1 + h / 2]) - [180.0, 120.0])
+            box = np.array([c[0] - s * w, c[1] - s * h, c[0] + s * w, c[1] + s * h])  # the walker's box x 2
+            t = cam.update(_zoomed(cv2.imread(str(f)), s), box)
+        out[renew] = scale_of(t) / s
+    assert abs(out["deformation"] - 1.0) < 0.01, out
+    assert abs(out["tracked"] - 1.0) > 0.05, out  # the previous behaviour
