@@ -292,7 +292,14 @@ again 20x smaller on the synthetic tee shots; there the encoders carry the point
 picture, where nothing covered it.) Every other row unchanged. **Left failing**: the approach at 3/4 resolution — specks beside the
 cup on 15 of 19, and from frame ~148 rows 5-10 px off on 1-2 px blobs near a ball of 10-26 px (80.2 %
 within 5 px; the expected size followed the specks down from ~14 px to 1.5 px while the broadcast
-zoomed in).
+zoomed in). Why, found 2026-11-29: from frame ~140 the ground LUT marks only the rim of the larger, sharper
+ball (its blended edge colours), not its white interior; the LUT had spent its `learn_max` = 6 boxes
+learned from the track on frames 24-109, on a blob swinging between part of the ball and all of it
+(2 <-> 5 <-> 14 px: each swing a "zoom change" of 2x), so nothing was left for the zoom that follows. At
+full resolution the same clip relearns at frames 105, 106 and 170, each time where the LUT had lost the
+ball's core (29-50 % of it still marked). Tried and dropped: learning only at sizes outside the range
+already learned (3/4 resolution unchanged, the clip as recorded lost the ball from frame 136); an area
+slack of 4 px on the trigger (still 6 boxes spent by frame 127).
 
 Measured and changed on the way (this table): a first form of the mark placement also shrank a
 box whose sample ellipse was only a pixel wider than the ball's blob. The approach's 8x8 px mark
