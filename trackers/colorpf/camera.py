@@ -152,14 +152,21 @@ def window_deformation(transform: np.ndarray, window: tuple[int, int] = LK["winS
     return float((np.abs(transform[:2, :2] - np.eye(2)) @ half).max())
 
 
+def resamples(transform: np.ndarray) -> bool:
+    """:func:`warp` interpolates between pixels: ``transform`` is not a whole-pixel translation (a
+    scale, a rotation or a sub-pixel shift). The identity and whole-pixel shifts copy pixels exactly."""
+    exact = np.array_equal(transform[:2, :2], np.eye(2)) and np.array_equal(transform[:2, 2], np.round(transform[:2, 2]))
+    return not exact
+
+
 def warp(image: np.ndarray, transform: np.ndarray) -> np.ndarray:
     """``image`` carried by ``transform`` (content at p goes to T p), the uncovered border repeating the
     edge; a whole-pixel translation copies pixels exactly, the identity returns ``image`` itself."""
     if np.array_equal(transform, IDENTITY):
         return image
-    exact = np.array_equal(transform[:2, :2], np.eye(2)) and np.array_equal(transform[:2, 2], np.round(transform[:2, 2]))
     return cv2.warpAffine(image, transform[:2], (image.shape[1], image.shape[0]),
-                          flags=cv2.INTER_NEAREST if exact else cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+                          flags=cv2.INTER_LINEAR if resamples(transform) else cv2.INTER_NEAREST,
+                          borderMode=cv2.BORDER_REPLICATE)
 
 
 def shift_image(image: np.ndarray, offset: np.ndarray) -> np.ndarray:

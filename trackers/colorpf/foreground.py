@@ -26,6 +26,12 @@ needs a static camera, as eq. (7) does: a frame that differs from the background
 its area (:func:`scene_changed`: the camera moved) gets no cue, and without a background (no usable
 one, or before the "early" median exists) there is none.
 
+Where the background was resampled into the frame's view (``camera.compensate`` with a zoom, rotation
+or sub-pixel shift; ``reference.registration_tolerance = "resampled"``), a pixel is foreground only
+beyond the minimum / maximum of the background over its 3x3 neighbourhood (:func:`tolerance_band`,
+:func:`tolerant_mask`): a background edge the measured transform misplaces by under a pixel is not
+foreground. :func:`scene_changed` keeps the plain test.
+
 The same mask also refines the estimate (``refine.mode = "foreground"``, :func:`foreground_region`):
 the connected foreground components around the estimate, placed as the marked box was on its own
 foreground (:func:`region_layout`), move the estimate when they are consistent with one target.
@@ -36,7 +42,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from trackreplay.trackers.colorpf.camera import median
+from trackreplay.trackers.colorpf.camera import median, resamples
 from trackreplay.trackers.colorpf.likelihood import box_corners
 from trackreplay.trackers.foreground.background import foreground_mask
 
@@ -66,8 +72,64 @@ def brightness_gain(image: np.ndarray, background: np.ndarray) -> float:
     return median((gi[ok] / gb[ok]).reshape(-1)) if ok.any() else 1.0
 
 
-def _mask(image: np.ndarray, background: np.ndarray, threshold: float, open_px: int, gain: float) -> np.ndarray:
-    """:func:`foreground_mask` against the background scaled by ``gain`` (:func:`brightness_gain`)."""
+Band = tuple[np.ndarray, np.ndarray]  # the background's 3x3 minimum and maximum (:func:`tolerance_band`)
+
+_NEIGHBOURHOOD = np.ones((3, 3), np.uint8)
+
+
+def tolerance_band(background: np.ndarray) -> Band:
+    """The minimum and maximum of ``background`` over each pixel's 3x3 neighbourhood, per channel
+    (``cv2.erode`` / ``cv2.dilate``; at the image's edge over the pixels inside it), for the
+    registration-tolerant foreground test (``reference.registration_tolerance``, :func:`_mask`)."""
+    return cv2.erode(background, _NEIGHBOURHOOD), cv2.dilate(background, _NEIGHBOURHOOD)
+
+
+def registration_band(background: np.ndarray, transform: np.ndarray, mode: str) -> Band | None:
+    """The :func:`tolerance_band` of ``background`` (already warped by ``transform`` into the frame's view)
+    when ``mode`` is "resampled" and the warp resampled it (:func:`~.camera.resamples`: not a whole-pixel
+    translation), else None: the plain test (``reference.registration_tolerance``)."""
+    if mode == "resampled" and resamples(transform):
+        return tolerance_band(background)
+    return None
+
+
+def _channel_max(diff: np.ndarray) -> np.ndarray:
+    if diff.ndim == 2:
+        return diff
+    channels = cv2.split(diff)
+    out = channels[0]
+    for c in channels[1:]:
+        out = cv2.max(out, c)
+    return out
+
+
+def tolerant_mask(image: np.ndarray, band: Band, threshold: float, open_px: int) -> np.ndarray:
+    """:func:`foreground_mask` with the background's 3x3 neighbourhood as tolerance: a pixel is
+    foreground where some channel lies more than ``threshold`` below the band's minimum or above its
+    maximum (registration-tolerant differencing: an edge of the background misplaced by under a pixel
+    is inside the band). With ``low == high == background`` it is :func:`foreground_mask` exactly."""
+    low, high = band
+    outside = _channel_max(cv2.max(cv2.subtract(image, high), cv2.subtract(low, image)))  # uint8, saturated at 0
+    mask = (outside > threshold).astype(np.uint8)
+    if open_px > 1:
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((open_px, open_px), np.uint8))
+    return mask.astype(bool)
+
+
+def _crop(band: Band | None, y0: int, y1: int, x0: int, x1: int) -> Band | None:
+    return None if band is None else (band[0][y0:y1, x0:x1], band[1][y0:y1, x0:x1])
+
+
+def _mask(image: np.ndarray, background: np.ndarray, threshold: float, open_px: int, gain: float,
+          band: Band | None = None) -> np.ndarray:
+    """:func:`foreground_mask` against the background scaled by ``gain`` (:func:`brightness_gain`); with
+    ``band`` (:func:`tolerance_band` of the same background, cropped alike) :func:`tolerant_mask`
+    against the band scaled by ``gain`` (a monotone scaling: the scaled band is the band of the scaled
+    background, rounding included)."""
+    if band is not None:
+        if gain != 1.0:
+            band = (cv2.convertScaleAbs(band[0], alpha=gain), cv2.convertScaleAbs(band[1], alpha=gain))
+        return tolerant_mask(image, band, threshold, open_px)
     if gain != 1.0:
         background = cv2.convertScaleAbs(background, alpha=gain)
     return foreground_mask(image, background, threshold, open_px=open_px)
@@ -87,9 +149,11 @@ def _sums(integral: np.ndarray, corners: np.ndarray) -> np.ndarray:
 
 
 def foreground_contrast(image: np.ndarray, background: np.ndarray, xy: np.ndarray, size: np.ndarray,
-                        threshold: float, open_px: int, gain: float = 1.0) -> np.ndarray:
+                        threshold: float, open_px: int, gain: float = 1.0, *,
+                        band: Band | None = None) -> np.ndarray:
     """``f_in - f_ring`` (in [-1, 1]) for boxes of ``size`` ``(w, h)`` centred at each row of ``xy``
-    (parts outside the image do not count; a box or ring wholly outside scores 0)."""
+    (parts outside the image do not count; a box or ring wholly outside scores 0). ``band``: the
+    registration-tolerant test (:func:`_mask`)."""
     xy = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
     height, width = image.shape[:2]
     inner = np.column_stack([xy, np.broadcast_to(np.asarray(size, dtype=np.float64), xy.shape)])
@@ -100,7 +164,7 @@ def foreground_contrast(image: np.ndarray, background: np.ndarray, xy: np.ndarra
     x1, y1 = c_out[:, 2:].max(axis=0)
     if x1 <= x0 or y1 <= y0:
         return np.zeros(len(xy))
-    fg = _mask(image[y0:y1, x0:x1], background[y0:y1, x0:x1], threshold, open_px, gain)
+    fg = _mask(image[y0:y1, x0:x1], background[y0:y1, x0:x1], threshold, open_px, gain, _crop(band, y0, y1, x0, x1))
     integral = cv2.integral(fg.astype(np.uint8))
     shift = np.array([x0, y0, x0, y0])
     s_in, s_out = _sums(integral, c_in - shift), _sums(integral, c_out - shift)
@@ -112,14 +176,14 @@ def foreground_contrast(image: np.ndarray, background: np.ndarray, xy: np.ndarra
 
 
 def neighbour_shares(image: np.ndarray, background: np.ndarray, estimate: np.ndarray, threshold: float,
-                     open_px: int, gain: float = 1.0) -> np.ndarray:
+                     open_px: int, gain: float = 1.0, *, band: Band | None = None) -> np.ndarray:
     """Foreground share of the boxes of the estimate's size one width to its left and right and one
     height above and below it (4,), in that order (a box wholly outside the image: 0).
 
     The status uses it (``ColorPfConfig.neighbour_check``): when a neighbour holds more foreground
     than the marked box did (``P_detect / P_square`` of eq. 7), the estimate sits on or against a
     moving region larger than the target (another walker, a passing car), where colour cannot say
-    which part is the target."""
+    which part is the target. ``band``: the registration-tolerant test (:func:`_mask`)."""
     x, y, w, h = (float(v) for v in estimate[:4])
     xy = np.array([[x - w, y], [x + w, y], [x, y - h], [x, y + h]])
     height, width = image.shape[:2]
@@ -128,7 +192,7 @@ def neighbour_shares(image: np.ndarray, background: np.ndarray, estimate: np.nda
     x1, y1 = corners[:, 2:].max(axis=0)
     if x1 <= x0 or y1 <= y0:
         return np.zeros(4)
-    fg = _mask(image[y0:y1, x0:x1], background[y0:y1, x0:x1], threshold, open_px, gain)
+    fg = _mask(image[y0:y1, x0:x1], background[y0:y1, x0:x1], threshold, open_px, gain, _crop(band, y0, y1, x0, x1))
     integral = cv2.integral(fg.astype(np.uint8))
     c = corners - np.array([x0, y0, x0, y0])
     area = np.prod(c[:, 2:] - c[:, :2], axis=1).astype(np.float64)
@@ -171,7 +235,7 @@ IDENTITY = np.array([0.0, 0.0, np.sqrt(12.0), np.sqrt(12.0)])
 def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.ndarray, threshold: float,
                       open_px: int, gain: float, mark_share: float, layout: np.ndarray = IDENTITY, *,
                       window: float = 1.5, factor: float = 2.0,
-                      min_part: float = 0.01) -> tuple[np.ndarray | None, str]:
+                      min_part: float = 0.01, band: Band | None = None) -> tuple[np.ndarray | None, str]:
     """The target's box ``(x, y, w, h)`` from the foreground region the estimate sits on, or None and
     why not (``refine.mode = "foreground"``, ours).
 
@@ -191,6 +255,8 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
       (P_detect / P_square of eq. 7, either way);
     - the neighbour check's condition: none of the four boxes of the estimate's size beside it holds
       more foreground than ``mark_share``.
+
+    ``band``: the registration-tolerant test (:func:`_mask`).
     """
     x, y, w, h = (float(v) for v in np.asarray(estimate, dtype=np.float64)[:4])
     height, width = image.shape[:2]
@@ -198,7 +264,8 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
                                                         width, height)[0])
     if cx1 <= cx0 or cy1 <= cy0 or w <= 0 or h <= 0:
         return None, "outside the image"
-    fg = _mask(image[cy0:cy1, cx0:cx1], background[cy0:cy1, cx0:cx1], threshold, open_px, gain)
+    fg = _mask(image[cy0:cy1, cx0:cx1], background[cy0:cy1, cx0:cx1], threshold, open_px, gain,
+               _crop(band, cy0, cy1, cx0, cx1))
     n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), connectivity=8)
     if n <= 1:
         return None, "no foreground"

@@ -36,9 +36,10 @@ the background are vouched for by the foreground region on the median's frames o
 :meth:`_revouch`); the camera's
 motion since the marked frame (a similarity from corners, :mod:`.camera`) carries the early median's frames back to
 the marked view, the background to each frame's view and the particle cloud with the scene (``camera.compensate``;
-a still camera measures the identity and is unchanged); the constants that describe time (the position noise, the
-hold's memory and horizon, the early median's window) are kept in seconds at the log's frame interval
-(``frame_rate``, :mod:`.timing`; a 30 fps log is unchanged). Off by default,
+a still camera measures the identity and is unchanged; where the background was resampled, the foreground test
+tolerates its 3x3 neighbourhood, ``reference.registration_tolerance``); the constants that describe time (the
+position noise, the hold's memory and horizon, the early median's window) are kept in seconds at the log's frame
+interval (``frame_rate``, :mod:`.timing`; a 30 fps log is unchanged). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -59,9 +60,9 @@ from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, scale_of, snap, warp
 from trackreplay.trackers.colorpf.config import ColorPfConfig
-from trackreplay.trackers.colorpf.foreground import (IDENTITY, brightness_gain, foreground_contrast,
+from trackreplay.trackers.colorpf.foreground import (IDENTITY, Band, brightness_gain, foreground_contrast,
                                                      foreground_region, neighbour_shares, region_layout,
-                                                     scene_changed)
+                                                     registration_band, scene_changed)
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
 from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
 from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition, vouched_prediction
@@ -309,7 +310,7 @@ class ColorPfTracker(TrackerBase):
         return ref.mask
 
     def _refine_foreground(self, image: np.ndarray, background: np.ndarray, gain: float,
-                           estimate: np.ndarray) -> tuple[np.ndarray, bool]:
+                           estimate: np.ndarray, band: Band | None = None) -> tuple[np.ndarray, bool]:
         """``refine.mode = "foreground"``: the estimate's centre on the foreground region it sits on
         (:func:`.foreground.foreground_region`), the cloud moved with it; without a ground plane the
         size follows the region's box, smoothed (``refine.size_follows``: the area S', the aspect kept;
@@ -321,7 +322,7 @@ class ColorPfTracker(TrackerBase):
             return estimate, False
         region, _ = foreground_region(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px,
                                       gain, ref.p_detect / ref.p_square, layout, window=cfg.refine.window,
-                                      factor=cfg.refine.factor, min_part=cfg.refine.min_part)
+                                      factor=cfg.refine.factor, min_part=cfg.refine.min_part, band=band)
         if region is None:
             return estimate, False
         self.pf.particles[:, :2] += region[:2] - estimate[:2]  # the cloud moves with the estimate
@@ -338,7 +339,7 @@ class ColorPfTracker(TrackerBase):
         return self.pf.estimate(), True
 
     def _hold(self, image: np.ndarray, background: np.ndarray, gain: float, prev: np.ndarray,
-              estimate: np.ndarray, index: int) -> tuple[np.ndarray, bool]:
+              estimate: np.ndarray, index: int, band: Band | None = None) -> tuple[np.ndarray, bool]:
         """``hold.enabled``: when a box of the estimate's size beside it holds more foreground than the
         marked box did (the neighbour check's condition: a larger moving region, whose colour and
         foreground match the target's as well), the estimate's centre on frame ``index`` is the
@@ -353,7 +354,8 @@ class ColorPfTracker(TrackerBase):
             # (no velocity measured yet, e.g. right after the mark: holding would freeze the box where it
             # was marked while the target walks off; a review saw otb_crossing marked on frame 60 held there)
             return estimate, False
-        shares = neighbour_shares(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px, gain)
+        shares = neighbour_shares(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px, gain,
+                                  band=band)
         if shares.max() <= ref.p_detect / ref.p_square:
             self.hold_run = 0
             return estimate, False
@@ -440,7 +442,7 @@ class ColorPfTracker(TrackerBase):
                 drift=drift))  # eq. (2)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
         likelihood = m.likelihood
-        background, gain = self.background_image, 1.0
+        background, gain, band = self.background_image, 1.0, None
         if background is not None:  # camera.compensate: the background (marked frame's place) where the scene is now
             background = warp(background, self.camera_transform)
         uses_foreground = cfg.likelihood.foreground > 0 or cfg.neighbour_check or cfg.refine.mode == "foreground"
@@ -449,9 +451,11 @@ class ColorPfTracker(TrackerBase):
             if scene_changed(image, background, cfg.reference.threshold, gain):
                 self._say(SCENE_NOTICE)
                 background = None  # no foreground cue and no neighbour check on this frame
+            else:  # resampled (not a whole-pixel shift): its edges may be off by a fraction of a pixel
+                band = registration_band(background, self.camera_transform, cfg.reference.registration_tolerance)
         if cfg.likelihood.foreground > 0 and background is not None:  # ours: the foreground cue
             contrast = foreground_contrast(image, background, self.pf.particles[:, :2], prev[2:4],
-                                           cfg.reference.threshold, cfg.reference.open_px, gain)
+                                           cfg.reference.threshold, cfg.reference.open_px, gain, band=band)
             likelihood = likelihood * np.exp(cfg.likelihood.foreground * contrast)
         if cfg.likelihood.template > 0:  # ours: the layout (template) cue
             if self.template is None:  # the marked box, on the marked frame (this one)
@@ -474,11 +478,11 @@ class ColorPfTracker(TrackerBase):
             estimate = self.pf.estimate()
         elif (cfg.refine.mode == "foreground" and not weigh_only and background is not None
               and self.reference.p_square > 0 and self.misses < cfg.lost_after):  # no re-acquisition by region
-            estimate, placed = self._refine_foreground(image, background, gain, estimate)
+            estimate, placed = self._refine_foreground(image, background, gain, estimate, band)
         held = False  # hold.enabled: the estimate is the motion prediction (a larger moving region beside it)
         if (cfg.hold.enabled and not weigh_only and not placed and background is not None
                 and self.reference.p_square > 0 and self.misses < cfg.lost_after):
-            estimate, held = self._hold(image, background, gain, prev, estimate, frame.index)
+            estimate, held = self._hold(image, background, gain, prev, estimate, frame.index, band)
         if not weigh_only:
             s = smoothing_for(cfg.motion.smoothing, self.clock.ratio)
             self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
