@@ -299,7 +299,13 @@ learned from the track on frames 24-109, on a blob swinging between part of the 
 full resolution the same clip relearns at frames 105, 106 and 170, each time where the LUT had lost the
 ball's core (29-50 % of it still marked). Tried and dropped: learning only at sizes outside the range
 already learned (3/4 resolution unchanged, the clip as recorded lost the ball from frame 136); an area
-slack of 4 px on the trigger (still 6 boxes spent by frame 127).
+slack of 4 px on the trigger (still 6 boxes spent by frame 127); no box with fewer than 9 core pixels
+(`learn_min_core_px`: 3/4 resolution 80.2 -> 100 %, 15 -> 0 of 19 after the drop, the approach at 15 fps 5 -> 0
+of 9, synthetic seed 2 82.2 -> 87.2 %, but the approach at half resolution 98.4 -> 71.7 % and 0 -> 17 of 19 rows
+`measured` after the drop: there the old code spent its 6 boxes on 1-4 px specks at frames 26-35 and never
+learned again, which served; the new one learned from an 8 px box at frame 93 whose core held turf, and the
+LUT marked less of the ball afterwards (36 -> 30 %). Learning from the track can make the LUT worse; a box
+should be kept only if the LUT then marks more of the ball it came from. Not done: reverted).
 
 Measured and changed on the way (this table): a first form of the mark placement also shrank a
 box whose sample ellipse was only a pixel wider than the ball's blob. The approach's 8x8 px mark
