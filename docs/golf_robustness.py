@@ -304,8 +304,11 @@ slack of 4 px on the trigger (still 6 boxes spent by frame 127); no box with few
 of 9, synthetic seed 2 82.2 -> 87.2 %, but the approach at half resolution 98.4 -> 71.7 % and 0 -> 17 of 19 rows
 `measured` after the drop: there the old code spent its 6 boxes on 1-4 px specks at frames 26-35 and never
 learned again, which served; the new one learned from an 8 px box at frame 93 whose core held turf, and the
-LUT marked less of the ball afterwards (36 -> 30 %). Learning from the track can make the LUT worse; a box
-should be kept only if the LUT then marks more of the ball it came from. Not done: reverted).
+LUT marked less of the ball afterwards (36 -> 30 %): learning from the track can make the LUT worse.
+Reverted); keeping a learned box only if the LUT then marks more of that box's ball (else the LUT restored:
+the approach at 15 fps 5 -> 0 of 9 after the drop, encoder-dropout shot 85.5 -> 88.3 %, but 3/4 resolution
+still 15 of 19 and the approach with one mark at frame 12 then measured the empty cup's liner, a real-data
+test: reverted; with both, half and 3/4 resolution fell to 73 and 57 %).
 
 Measured and changed on the way (this table): a first form of the mark placement also shrank a
 box whose sample ellipse was only a pixel wider than the ball's blob. The approach's 8x8 px mark
