@@ -203,8 +203,8 @@ class SizeConfig:
     r_s: float = 0.2  # eq. (9): std of omega_S relative to S
     noise: float = 0.05  # "noise" mode: std of the per-frame change of w and h, relative
     min_px: float = 4.0  # smallest width or height
-    # "geometry" without a ground plane (no distance): "constant", S' stays at the marked box's area
-    # (eq. 9 with Z = Z_0, plus omega); "random_walk" (ours): each particle's box scaled by 1 + N(0, noise)
+    # "geometry" without a ground plane (no distance): "constant", S' starts at the marked box's area
+    # (eq. 9 with Z = Z_0, plus omega; refine.size_follows lets the foreground region rescale it); "random_walk" (ours): each particle's box scaled by 1 + N(0, noise)
     # per frame, the aspect R kept (the scale moves as in "noise" mode, the shape as in "geometry").
     no_plane: str = "constant"
 

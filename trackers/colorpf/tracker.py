@@ -85,7 +85,8 @@ NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colo
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
 NO_PLANE_NOTICE = ("no ground plane (/camera/ground_plane) in the log: the size estimate takes the distance as constant "
-                   "(S' stays at the marked box's area, eq. (9) with Z = Z_0)")
+                   "(S' starts at the marked box's area, eq. (9) with Z = Z_0; with refine.mode \"foreground\" the "
+                   "foreground region rescales it once the log's background exists)")
 
 
 def start_mark(hints: tuple[InitRegion, ...]) -> tuple[InitRegion | None, str]:
