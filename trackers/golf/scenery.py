@@ -51,7 +51,9 @@ class Scenery:
 
     def add(self, point: np.ndarray) -> None:
         """A point known to be scenery (a blob refused as ``seen_before``: it was beside the ball before
-        the loss): refused like the others while a blob still sits on it."""
+        the loss): refused like the others while a blob still sits on it (``still_px`` 0: off, as the rest)."""
+        if self.still_px <= 0:
+            return
         self.points = np.concatenate([self.points, np.asarray(point, float).reshape(1, 2)])
 
     def on_scenery(self, blobs: Blobs, scale: float) -> np.ndarray:

@@ -45,11 +45,7 @@ class LastSighting:
     camera: PtzCamera | None
     ball: tuple[float, float]
     diameter: float
-
-
-def ball_area(diameter: float) -> float:
-    """The area (px) of a disc ``diameter`` px across."""
-    return math.pi / 4.0 * diameter * diameter
+    area: float  # the ball's area there (px): what a ball found again in its place should about have
 
 
 def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float, luts: GolfLuts,
@@ -72,7 +68,7 @@ def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.nda
     x, y = (float(v) for v in p[0])
     if not (math.isfinite(x) and math.isfinite(y)):
         return False
-    if math.hypot(x - last.ball[0], y - last.ball[1]) <= last.diameter + near_px and area >= ball_area(last.diameter) / area_tolerance:
+    if math.hypot(x - last.ball[0], y - last.ball[1]) <= last.diameter + near_px and area >= last.area / area_tolerance:
         return False  # the ball itself, found again where it was (as large as it was, within the tolerance)
     height, width = last.image.shape[:2]
     half = 2.0 * math.sqrt(max(area, 1.0)) + near_px

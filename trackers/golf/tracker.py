@@ -135,7 +135,7 @@ class GolfTracker(TrackerBase):
             self.targets = self.targets.zoomed(zoom_area_ratio(prev_camera, camera))
             self.validator.follow_camera(self._pose_change)
             self.scenery.follow_camera(self._pose_change)
-        diameter = self.targets.diameter
+        diameter, expected_area = self.targets.diameter, self.targets.area  # this frame's expected ball (before it learns)
         search = search_region(*self._moments(0), diameter, width, height, scale, cfg.search)  # §2.1 I_s, §2.2 size from the spread
         if (ahead := self.validator.next_point(diameter, scale)) is not None:  # ours: where a jump's evidence will be
             search = reaching(search, *ahead, width, height)
@@ -207,7 +207,7 @@ class GolfTracker(TrackerBase):
             confidence = check.confidence
         if status == "measured":
             self._last_measured = (frame.index, x, y)
-            self._last_sighting = LastSighting(frame.image, camera, (x, y), diameter)
+            self._last_sighting = LastSighting(frame.image, camera, (x, y), diameter, expected_area)
             self._sightings += 1
         self.scenery.update(frame.index, gated.blobs, gated.accepted | (gated.reason == STILL),
                             (x, y) if status == "measured" else None, diameter, scale)
