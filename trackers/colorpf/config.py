@@ -38,10 +38,12 @@ from trackreplay.trackers.appearance.histogram import KERNELS  # the pixel weigh
 
 # Overrides (a ``[colorpf]`` table as a dict) that give the paper's pipeline: uniform pixel weights,
 # no foreground cue, a reference fixed at initialisation, the plain early median, no neighbour check
-# of the status, no foreground-region refinement and no hold (the other switches of ours are off by default).
+# of the status, no foreground-region refinement and no hold, per-frame constants whatever the frame rate, a
+# lost track measured again on one frame's match and no smallest box (the other switches of ours are off by
+# default; "not separated from the background -> predicted" and the grey test have no switch).
 PAPER: dict = {"likelihood": {"kernel": "uniform", "foreground": 0.0}, "reference": {"update_rate": 0.0, "exclude": 0.0},
                 "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False},
-                "camera": {"compensate": False}}
+                "camera": {"compensate": False}, "frame_rate": None, "reacquire_frames": 1, "min_box_pixels": 0}
 
 HISTOGRAMS = ("hs", "hsv")
 REFERENCES = ("mixed", "target")

@@ -119,6 +119,7 @@ class BackgroundFrames:
         self._marked: np.ndarray | None = None  # reference.exclude: the marked box's corners (ready once it is free)
         self.early_count = 0
         self.frames = cfg.frames  # the median's window in this log's frames (set_frames)
+        self._early_indices: list[int] = []  # the frame index of each early frame kept
 
     def set_frames(self, frames: int) -> None:
         """The median's window as ``frames`` of this log's frames (``reference.frames`` at the log's rate:
@@ -136,7 +137,8 @@ class BackgroundFrames:
                 self._before.append(image)
         elif self.source == "early":
             back = None if transform is None or np.array_equal(transform, IDENTITY) else np.linalg.inv(transform)
-            self._early.add(image if back is None else warp(image, back))
+            if self._early.add(image if back is None else warp(image, back)):
+                self._early_indices.append(index)
 
     def at_start(self, image: np.ndarray) -> tuple[np.ndarray | None, str]:
         """At the marked frame: the background now (``"before"``), or None and the source to wait for."""
@@ -153,7 +155,8 @@ class BackgroundFrames:
             for f in frames:
                 median.add(f)
             return median.model(), "before"
-        self._early.add(image)
+        if self._early.add(image):
+            self._early_indices.append(self.start)
         return None, "early"
 
     def leave_out(self, box_xywh: np.ndarray, size: tuple[int, int], marked: np.ndarray | None = None,
@@ -183,10 +186,10 @@ class BackgroundFrames:
             return self._early.ready(self._marked)
         return self._early.full
 
-    def early_frames(self) -> list[np.ndarray]:
-        """The frames the early median is taken over (the marked frame's view), in order from the marked one;
-        empty once the median is taken (:meth:`early_model` lets them go)."""
-        return list(self._early._frames) if self.source == "early" else []
+    def early_frames(self) -> dict[int, np.ndarray]:
+        """The frames the early median is taken over (the marked frame's view) by frame index (a frame the
+        log skipped is not there); empty once the median is taken (:meth:`early_model` lets them go)."""
+        return dict(zip(self._early_indices, self._early.frames)) if self.source == "early" else {}
 
     def early_model(self) -> np.ndarray | None:
         self.early_count = len(self._early)  # the frames the median was taken over

@@ -21,6 +21,9 @@ replay bit for bit as before. Without timing (a first frame, equal or decreasing
 from __future__ import annotations
 
 import math
+from collections import deque
+
+import numpy as np
 
 TOLERANCE = 0.05  # |r - 1| up to this: the stated rate (timestamp rounding, 29.97 vs 30 fps)
 
@@ -48,16 +51,26 @@ def frames_for(n: int, r: float) -> int:
     return n if r == 1.0 else max(1, int(round(n / r)))
 
 
+RECENT_STEPS = 9  # the log's typical interval: the median of this many last steps
+
+
 class FrameClock:
-    """Each step's ``r`` from consecutive ``frame.t_ns``."""
+    """Each step's ``r`` from consecutive ``frame.t_ns`` (``ratio``: for what happens over that step, the
+    noise and the smoothing), and the log's typical ``r`` (``typical``: the median interval of the last
+    RECENT_STEPS steps, for durations: one dropped or late frame does not shorten a window)."""
 
     def __init__(self, frame_rate: float | None) -> None:
         self.frame_rate = frame_rate
         self._last: int | None = None
+        self._recent: deque[int] = deque(maxlen=RECENT_STEPS)
         self.ratio = 1.0  # the last step's
+        self.typical = 1.0
 
     def step(self, t_ns: int) -> float:
         dt = None if self._last is None else t_ns - self._last
         self._last = t_ns
         self.ratio = interval_ratio(dt, self.frame_rate)
+        if dt is not None and dt > 0:
+            self._recent.append(dt)
+            self.typical = interval_ratio(float(np.median(np.array(self._recent, dtype=np.float64))), self.frame_rate)
         return self.ratio

@@ -167,7 +167,7 @@ class ColorPfTracker(TrackerBase):
             self._say(several)
             self.background = BackgroundFrames(self.config.reference, self.mark.frame)
         assert self.background is not None
-        self.background.set_frames(frames_for(self.config.reference.frames, r))  # the median's window, in time
+        self.background.set_frames(frames_for(self.config.reference.frames, self.clock.typical))  # the median's window, in time
         if not self.started:
             if frame.index < self.mark.frame:
                 self.background.offer(frame.index, frame.image)
@@ -350,7 +350,7 @@ class ColorPfTracker(TrackerBase):
         frames ago), or ``prev + v``."""
         cfg, ref = self.config, self.reference
         assert ref is not None
-        horizon = frames_for(cfg.hold.max_frames, self.clock.ratio)  # frame_rate: the same duration
+        horizon = frames_for(cfg.hold.max_frames, self.clock.typical)  # frame_rate: the same duration
         if self.hold_run >= horizon or self._velocity_steps == 0:
             # (no velocity measured yet, e.g. right after the mark: holding would freeze the box where it
             # was marked while the target walks off; a review saw otb_crossing marked on frame 60 held there)
@@ -389,7 +389,7 @@ class ColorPfTracker(TrackerBase):
         self._rematch = None
         return False
 
-    def _revouch(self, frames: list[np.ndarray]) -> None:
+    def _revouch(self, frames: dict[int, np.ndarray]) -> None:
         """``hold.early = "region"``: once eq. (7)'s background exists, the estimates made before it (colour
         alone, against the marked box's own histogram) are vouched for by the foreground region on the
         frames the median was taken over, as later ones are: the hold's velocity and anchor are refitted
@@ -402,10 +402,9 @@ class ColorPfTracker(TrackerBase):
         self._vouched, self.track_velocity, self._velocity_steps = None, np.zeros(2), 0
         layout = self.layout if cfg.refine.layout else IDENTITY
         for index, box in rows:
-            k = index - self.mark.frame
-            if not 0 <= k < len(frames) or frames[k].shape != background.shape:
+            image = frames.get(index)
+            if image is None or image.shape != background.shape:
                 continue
-            image = frames[k]
             gain = brightness_gain(image, background)
             if scene_changed(image, background, cfg.reference.threshold, gain):
                 continue
@@ -520,6 +519,10 @@ class ColorPfTracker(TrackerBase):
             self.template.blend(image, estimate, t_rate)
         if confidence >= cfg.measured_fraction and self._reacquiring(frame.index, estimate, weigh_only):
             status = "lost"  # lost, and the colour matches again: not yet on reacquire_frames frames in a row
+        elif held:  # the estimate is the motion prediction: whatever the colour says there, nothing saw it (nor vouches)
+            status = "predicted"  # bounded by hold.max_frames; a colour match there is no miss towards "lost" either
+            if confidence >= cfg.measured_fraction:
+                self.misses = 0
         elif confidence >= cfg.measured_fraction and not weigh_only and (not separated or self._too_small):
             # the background scores about as well as the mark, or the box is too small for a histogram: the
             # colour match vouches for little; not a miss either
@@ -531,15 +534,13 @@ class ColorPfTracker(TrackerBase):
                 # a larger moving region; its colour matches, its position is not vouched for. Only the
                 # status changes (the misses towards "lost" are colour's)
                 shares = neighbour_shares(image, background, estimate, cfg.reference.threshold,
-                                          cfg.reference.open_px, gain)
+                                          cfg.reference.open_px, gain, band=band)
                 if shares.max() > self.reference.p_detect / self.reference.p_square:
                     status = "predicted"
         elif placed and cfg.refine.keeps_track and (cfg.refine.keep_frames is None
                                                     or self.placed_run < cfg.refine.keep_frames):
             self.placed_run += 1
             status = "predicted"  # the foreground region places the target: not a miss towards "lost"
-        elif held:
-            status = "predicted"  # the motion prediction, bounded by hold.max_frames: not a miss towards "lost"
         else:
             self.misses += 1
             status = "lost" if self.misses >= cfg.lost_after else "predicted"

@@ -74,6 +74,11 @@ class MedianBackground:
     def full(self) -> bool:
         return len(self._frames) >= self.capacity
 
+    @property
+    def frames(self) -> tuple[np.ndarray, ...]:
+        """The frames kept so far, in the order added."""
+        return tuple(self._frames)
+
     def add(self, image: np.ndarray) -> bool:
         """Keep ``image`` (a copy) while there is room; returns whether it was kept."""
         if self.full:

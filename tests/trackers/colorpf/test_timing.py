@@ -83,3 +83,19 @@ def test_position_noise_grows_with_the_interval():
         tracker.step(Frame(index=1, t_ns=int(round(1e9 / fps)), image=np.zeros((120, 160, 3), np.uint8)))
         spreads.append(captured["moved"].std(axis=0))
     assert np.allclose(spreads[1] / spreads[0], math.sqrt(2.0), rtol=1e-6)
+
+
+def test_one_dropped_frame_does_not_shorten_the_durations():
+    """A review: reference.frames and hold.max_frames were converted with the last step's interval alone,
+    so one 66 ms gap in a 30 fps log halved the early median's window there and then."""
+    clock, t = FrameClock(30.0), 0
+    for k in range(12):
+        t += 66_666_667 if k == 6 else 33_333_333
+        clock.step(t)
+        if k == 6:
+            assert abs(clock.ratio - 2.0) < 1e-6 and clock.typical == 1.0  # that step was two frames long; the log is still 30 fps
+    slow, t = FrameClock(30.0), 0
+    for _ in range(5):
+        t += 66_666_667
+        slow.step(t)
+    assert abs(slow.typical - 2.0) < 1e-6  # a 15 fps log
