@@ -44,20 +44,24 @@ def prefetch(items: Iterator[T], depth: int = 4) -> Iterator[T]:
     buffer: queue.Queue = queue.Queue(maxsize=depth)
     stop = threading.Event()
 
+    def put(item) -> bool:
+        """Hand ``item`` over unless the consumer has stopped (a full queue then waits no longer)."""
+        while not stop.is_set():
+            try:
+                buffer.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
     def produce() -> None:
         try:
             for item in items:
-                while not stop.is_set():
-                    try:
-                        buffer.put(item, timeout=0.1)
-                        break
-                    except queue.Full:
-                        continue
-                if stop.is_set():
+                if not put(item):
                     return
-            buffer.put(_END)
+            put(_END)
         except BaseException as err:  # handed to the consumer, raised there
-            buffer.put(_Failure(err))
+            put(_Failure(err))
 
     worker = threading.Thread(target=produce, name="trackreplay-prefetch", daemon=True)
     _RUNNING[worker] = stop

@@ -27,6 +27,19 @@ def test_consumer_stopping_early_ends_the_worker() -> None:
     gen.close()  # must not hang
 
 
+def test_a_consumer_stopping_near_the_end_ends_the_worker() -> None:
+    """A review: a short source whose items were all queued left the worker blocked on handing over the
+    end marker to a full queue (closing waited out the join's timeout, and the thread lived on)."""
+    import threading
+    import time
+
+    gen = prefetch(iter(range(3)), depth=2)
+    assert next(gen) == 0
+    time.sleep(0.3)  # the worker queues 1 and 2 and reaches the end marker
+    gen.close()
+    assert not [t for t in threading.enumerate() if t.name == "trackreplay-prefetch" and t.is_alive()]
+
+
 def test_a_replay_left_unfinished_has_its_reader_stopped_at_exit():
     """A review: breaking out of ``iter_steps`` and letting the script end killed the interpreter
     (exit 134, "terminate called without an active exception": the daemon reader thread was killed
