@@ -38,6 +38,7 @@ from typing import Any
 
 import polars as pl
 
+from trackreplay.recorder.interrupts import deferred_interrupts
 from trackreplay.replay import registry
 from trackreplay.replay.batch_config import apply_sets
 from trackreplay.replay.config import load_config
@@ -336,16 +337,21 @@ def run_ray(tasks: list[BatchTask], opts: BatchOptions, *, address: str | None =
                     bar.update()
         return [rows[t.index] for t in tasks]
     except KeyboardInterrupt as err:
-        for ref, task in refs.items():  # stop the tasks still running (their outputs are incomplete)
-            if task.index not in rows:
-                try:
-                    ray.cancel(ref, force=True)
-                except Exception:  # noqa: BLE001 - a task that ended meanwhile; the shutdown below ends the rest
-                    pass
+        if not started_here:  # a cluster of others: ask its tasks to stop (a local Ray is shut down below).
+            for ref, task in refs.items():  # Not forced: force-cancelling while the driver winds down crashed
+                if task.index not in rows:  # Ray's core worker (a review, 2 runs in 13).
+                    try:
+                        ray.cancel(ref)
+                    except Exception:  # noqa: BLE001 - a task that ended meanwhile
+                        pass
         raise BatchInterrupted(err, rows) from None
     finally:
         if started_here:
-            ray.shutdown()
+            try:
+                with deferred_interrupts():  # a Ctrl-C during the shutdown (1-2 s) keeps what finished
+                    ray.shutdown()
+            except KeyboardInterrupt as err:
+                raise BatchInterrupted(err, rows) from None
 
 
 def summary_table(rows: list[dict[str, Any]], tasks: list[BatchTask]) -> pl.DataFrame:

@@ -65,6 +65,9 @@ def parse_set(text: str) -> tuple[str, list[Any]]:
     return key.strip(), [parse_value(v) for v in parts]
 
 
+MAX_SEEDS = 100_000  # a typo like 0-2147483647 would build 2^31 tasks (and hang) before saying anything
+
+
 def parse_seeds(text: str) -> list[int]:
     """``0-9``, ``1,5,7`` or ``0-3,10`` -> the seeds in order, without repeats."""
     seeds: list[int] = []
@@ -78,6 +81,8 @@ def parse_seeds(text: str) -> list[int]:
             raise TrackreplayError(f"--seeds {text!r}: range {part} is empty")
         for bound in (lo_n, hi_n):
             check_seed(bound, f"--seeds {text!r}: seed")
+        if hi_n - lo_n + 1 > MAX_SEEDS - len(seeds):
+            raise TrackreplayError(f"--seeds {text!r}: more than {MAX_SEEDS} seeds; give a smaller range")
         seen = set(seeds)
         seeds += [s for s in range(lo_n, hi_n + 1) if s not in seen]
     if not seeds:

@@ -54,3 +54,10 @@ def test_the_batch_command_refuses_them_before_any_output(argv: list[str], messa
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err
     assert not out.exists()  # a review: --seeds 2**63 crashed the batch and left a task folder
+
+
+def test_a_huge_seed_range_is_refused_before_it_is_built() -> None:
+    """A review: --seeds 0-2147483647 passed the bound check and hung building 2^31 tasks."""
+    with pytest.raises(TrackreplayError, match="more than"):
+        parse_seeds("0-2147483647")
+    assert len(parse_seeds("0-999")) == 1000
