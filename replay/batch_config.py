@@ -101,14 +101,19 @@ def grid(sets: list[str], tracker: str | None = None) -> list[dict[str, Any]]:
     given twice, in any spelling (``golf.particles.n`` and ``particles.n`` for golf), is refused."""
     parsed = [parse_set(s) for s in sets]
     keys = [k for k, _ in parsed]
+    refuse_repeats(keys, tracker, "list its values once, comma-separated")
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in parsed))]
+
+
+def refuse_repeats(keys: list[str], tracker: str | None, advice: str, option: str = "--set") -> None:
+    """Refuse a key given twice, in any spelling (``golf.particles.n`` and ``particles.n`` for golf)."""
     seen: dict[str, str] = {}
     for key in keys:
         norm = ".".join(key_path(tracker, key))
         if norm in seen:
             same = f" (as {seen[norm]})" if seen[norm] != key else ""
-            raise TrackreplayError(f"--set {key} given twice{same}; list its values once, comma-separated")
+            raise TrackreplayError(f"{option} {key} given twice{same}; {advice}")
         seen[norm] = key
-    return [dict(zip(keys, combo)) for combo in itertools.product(*(v for _, v in parsed))]
 
 
 def apply_sets(tracker: str, base: str | Path | dict | None, sets: dict[str, Any]) -> dict[str, Any]:

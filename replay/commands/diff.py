@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from trackreplay.replay import registry
-from trackreplay.replay.batch_config import apply_sets, parse_assignment
+from trackreplay.replay.batch_config import apply_sets, parse_assignment, refuse_repeats
 from trackreplay.replay.commands.values import seed_int
 from trackreplay.replay.engine import check_seed
 from trackreplay.replay.diff import RunSpec, diff_recordings, diff_runs, load_side, load_summary, recording_of_run
@@ -38,6 +38,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 def _spec(log: Path, args: argparse.Namespace, overrides: list[str]) -> RunSpec:
     tracker = args.tracker or "flow"
     seed, config, sets = args.seed or 0, args.config, {}
+    for given, option in ((args.sets, "--set"), (overrides, "--a/--b")):  # (a side's may override a shared one)
+        refuse_repeats([parse_assignment(t)[0] for t in given], tracker, "give it once", option)
     for text in [*args.sets, *overrides]:
         key, value = parse_assignment(text)
         if key == "seed":

@@ -13,6 +13,7 @@ from trackreplay.replay.eval import check_frames, evaluate, format_summary
 from trackreplay.replay.export import read_trajectory
 from trackreplay.replay.frames import image_times
 from trackreplay.replay.groundtruth import groundtruth_with_frames
+from trackreplay.replay.mot import MAX_DISTANCE_M
 from trackreplay.replay.reader import LogReader
 
 
@@ -33,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "the groups scenes also write /groundtruth/groups)")
     p.add_argument("--image-topic", help="the image topic the trajectory was replayed on, whose frames it numbers "
                    "(default as replay's: /camera/image, else the stereo left, else the log's only image topic)")
-    p.add_argument("--max-distance-m", type=float, default=1.0, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default 1 m)")
+    p.add_argument("--max-distance-m", type=float, default=MAX_DISTANCE_M, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default 1 m)")
     p.set_defaults(func=run)
     return p
 

@@ -140,3 +140,9 @@ def test_a_seed_opencv_cannot_take_is_one_sentence(short_sim: Path, capsys) -> N
     assert main(["diff", str(short_sim), str(short_sim), "--b", f"seed={10**40}"]) == 2
     assert capsys.readouterr().err.strip() == (f"trackreplay: error: seed {10**40} is not a valid seed: give an integer "
                                                f"from 0 to 2147483647 (OpenCV's random generator takes a 32-bit int)")
+
+
+def test_a_key_given_twice_is_refused_as_batch_refuses_it(short_sim: Path, capsys) -> None:
+    """A review: ``--set flow.q=1 --set q=2`` ran with the last one; batch refuses the same input."""
+    assert main(["diff", str(short_sim), str(short_sim), "--tracker", "flow", "--set", "flow.q=1", "--set", "q=2"]) == 2
+    assert "--set q given twice (as flow.q)" in capsys.readouterr().err
