@@ -148,6 +148,8 @@ def test_a_cloud_puff_too_big_for_the_ball_the_3d_filter_predicts_is_not_confirm
     path = tmp_path / "shot240.mcap"
     scene.write_golf_teeshot(path, scene.GolfSceneConfig(fps=240.0, duration=1.0))
     as_found = {"blobs": {"complete_streak": 0.0}}
+    default, gt = replay_steps(path)
+    assert measured_off_the_ball(default, gt) == []  # the defaults are honest on this scene too
     out, gt = replay_steps(path, config=as_found)
     assert measured_off_the_ball(out, gt) == []
     assert "too_near" in [inter.validation.verdict for _, _, inter in out]
