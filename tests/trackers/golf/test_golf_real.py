@@ -84,7 +84,8 @@ def test_iron_shot_turned_on_its_side_is_still_followed(tmp_path):
     frames = tmp_path / "frames"
     frames.mkdir()
     capture = cv2.VideoCapture(str(IRON / "vid1.mp4"))
-    capture.set(cv2.CAP_PROP_POS_FRAMES, 440)
+    for _ in range(440):  # read, not seeked: a seek may land elsewhere with some FFmpeg builds and shift the reference
+        assert capture.grab()
     for i in range(200):
         ok, image = capture.read()
         assert ok
