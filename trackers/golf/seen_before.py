@@ -48,6 +48,11 @@ class LastSighting:
     area: float  # the ball's area there (px): what a ball found again in its place should about have
 
 
+def where_the_ball_was(last: LastSighting, point: tuple[float, float], near_px: float) -> bool:
+    """``point`` (the last sighting's pixels) lies within the ball's diameter (+ ``near_px``) of where it was measured."""
+    return math.hypot(point[0] - last.ball[0], point[1] - last.ball[1]) <= last.diameter + near_px
+
+
 def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float, luts: GolfLuts,
                      lut_name: str, near_px: float, area_tolerance: float, image: np.ndarray | None = None) -> bool:
     """Whether a blob at least ``area / area_tolerance`` px large covered ``point`` (this frame's
@@ -68,7 +73,7 @@ def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.nda
     x, y = (float(v) for v in p[0])
     if not (math.isfinite(x) and math.isfinite(y)):
         return False
-    if math.hypot(x - last.ball[0], y - last.ball[1]) <= last.diameter + near_px and area >= last.area / area_tolerance:
+    if where_the_ball_was(last, (x, y), near_px) and area >= last.area / area_tolerance:
         return False  # the ball itself, found again where it was (as large as it was, within the tolerance)
     height, width = last.image.shape[:2]
     half = 2.0 * math.sqrt(max(area, 1.0)) + near_px

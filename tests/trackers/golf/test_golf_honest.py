@@ -430,3 +430,15 @@ def test_a_small_piece_beside_where_a_large_ball_was_last_seen_is_no_ball_found_
     piece = np.array([658.0, 500.0])  # one diameter from the ball's centre
     assert was_there_before(last, None, piece, 24.0, luts, "ground", 2.0, 3.0)  # a piece of what was there
     assert not was_there_before(last, None, piece, area, luts, "ground", 2.0, 3.0)  # the ball again
+
+
+def test_where_the_ball_was_last_seen_is_never_made_scenery():
+    """A review: a confirmation refused as seen_before was added to scenery, refused for as long as a blob
+    sits there; a ball found again at its own last place, half hidden (less than a third of its area), would
+    have been refused for good. The place of the ball itself is not added (``where_the_ball_was``)."""
+    from trackreplay.trackers.golf.seen_before import LastSighting, where_the_ball_was
+
+    last = LastSighting(np.zeros((10, 10, 3), np.uint8), None, (100.0, 50.0), 19.0, 283.5)
+    assert where_the_ball_was(last, (110.0, 55.0), 2.0)  # on its own place: not scenery
+    assert where_the_ball_was(last, (120.4, 50.0), 2.0)  # a diameter and a bit: still its place
+    assert not where_the_ball_was(last, (130.0, 50.0), 2.0)  # beside it: the liner, scenery
