@@ -30,6 +30,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
+from trackreplay.replay import frames as frames_module  # noqa: E402
 from trackreplay.replay.bench import median_seconds  # noqa: E402
 from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
 from trackreplay.trackers.filters.particles import ParticleFilter  # noqa: E402
@@ -38,46 +39,58 @@ from trackreplay.trackers.golf.particles import DIM, likelihood, motion, spread_
 
 
 def per_frame_costs(log: Path, prefetch: int = 0) -> dict:
-    """The engine's replay loop (:func:`iter_steps`) with the tracker's ``step`` timed alone, and the
-    same frames' JPEGs decoded again to compare. ``prefetch`` 0: each frame is read and decoded on
-    this thread just before its step (the decode's 2.7-5.9 MB of output pass through this core's
-    caches between steps); 4 (the replay's default): a reader thread decodes ahead, on the other core
-    when there is one. Decodes: timed in the loop right after each step with ``prefetch`` 0, else in a
-    pass over the frames after the replay."""
+    """The engine's replay loop (:func:`iter_steps`) with the tracker's ``step`` timed alone, wall
+    clock and the thread's CPU time (a step that waits for the GIL or for the other process on its
+    core is slower by the wall clock only), and each frame's decode. ``prefetch`` 0: each frame is
+    read and decoded on this thread just before its step, and that decode (the engine's own,
+    ``replay.frames.decode_image``) is the one timed: its 2.7-5.9 MB of output pass through this
+    core's caches between steps, as in a replay. 4 (the replay's default): a reader thread decodes
+    ahead, on the other core when there is one; the decodes are then timed in a pass over the same
+    frames after the replay."""
     steps = iter_steps(ReplayRequest(log=log, tracker="golf", config=GolfConfig(), prefetch=prefetch))
     step_seconds: list[float] = []
+    step_cpu: list[float] = []
     inner = steps.tracker.step
 
     def timed_step(frame):
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.thread_time()
         out = inner(frame)
+        step_cpu.append(time.thread_time() - cpu)
         step_seconds.append(time.perf_counter() - start)
         return out
 
     steps.tracker.step = timed_step
     decodes, encoded = [], []
+    engine_decode = frames_module.decode_image
 
-    def decode(buf: np.ndarray) -> None:
+    def timed_decode(*args):
         start = time.perf_counter()
-        cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        out = engine_decode(*args)
         decodes.append(time.perf_counter() - start)
+        return out
 
-    for step in steps:
-        buf = np.frombuffer(step.frame.encoded, np.uint8)
-        if prefetch:
-            encoded.append(buf)
-        else:
-            decode(buf)
+    if not prefetch:
+        frames_module.decode_image = timed_decode
+    try:
+        for step in steps:
+            if prefetch:
+                encoded.append(np.frombuffer(step.frame.encoded, np.uint8))
+    finally:
+        frames_module.decode_image = engine_decode
     for buf in encoded:
-        decode(buf)
-    steps_ms, decodes_ms = np.array(step_seconds) * 1e3, np.array(decodes) * 1e3
+        start = time.perf_counter()
+        cv2.imdecode(buf, cv2.IMREAD_UNCHANGED)  # as decode_image does
+        decodes.append(time.perf_counter() - start)
+    steps_ms, cpu_ms, decodes_ms = (np.array(v) * 1e3 for v in (step_seconds, step_cpu, decodes))
     return {
         "prefetch": prefetch,
         "frames": len(step_seconds),
         "step_ms": {"median": float(np.median(steps_ms)), "mean": float(steps_ms.mean()),
                     "p90": float(np.percentile(steps_ms, 90)), "max": float(steps_ms.max())},
+        "step_cpu_ms": {"median": float(np.median(cpu_ms)), "mean": float(cpu_ms.mean())},
         "decode_ms": {"median": float(np.median(decodes_ms)), "mean": float(decodes_ms.mean())},
         "ratio_median": float(np.median(steps_ms) / np.median(decodes_ms)),
+        "ratio_cpu_median": float(np.median(cpu_ms) / np.median(decodes_ms)),
         "ratio_mean": float(steps_ms.mean() / decodes_ms.mean()),
     }
 
@@ -122,6 +135,7 @@ def main() -> int:
     for key, r in per_frame.items():  # against the 720p decode measured the same way
         reference = per_frame["720p" if r["prefetch"] == 0 else "720p, replay default (prefetch 4)"]
         r["ratio_to_720p_decode"] = r["step_ms"]["median"] / reference["decode_ms"]["median"]
+        r["cpu_ratio_to_720p_decode"] = r["step_cpu_ms"]["median"] / reference["decode_ms"]["median"]
     scaling = particle_scaling([100, 300, 1000, 3000, 10000, 30000, 100000], args.repeats)
     results = {"machine": describe(), "opencv_threads": 1, "shot_seconds": args.seconds,
                "per_frame": per_frame, "target": "step median <= 0.5 x one 720p JPEG decode",
@@ -129,10 +143,11 @@ def main() -> int:
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"machine: {results['machine']['cpu']}, {results['machine']['cores']} cores")
-    print("size                               frames  step median  p90     max      decode median  step/decode  step/720p-decode")
+    print("size                               frames  step median (CPU)     p90     max      decode median  step/decode  step/720p-decode (CPU)")
     for name, r in per_frame.items():
-        print(f"{name:34} {r['frames']:6}  {r['step_ms']['median']:8.2f} ms {r['step_ms']['p90']:6.2f}  {r['step_ms']['max']:7.2f}  "
-              f"{r['decode_ms']['median']:8.2f} ms   {r['ratio_median']:8.2f}     {r['ratio_to_720p_decode']:8.2f}")
+        print(f"{name:34} {r['frames']:6}  {r['step_ms']['median']:6.2f} ({r['step_cpu_ms']['median']:.2f}) ms {r['step_ms']['p90']:6.2f}  "
+              f"{r['step_ms']['max']:7.2f}  {r['decode_ms']['median']:8.2f} ms   {r['ratio_median']:8.2f}     "
+              f"{r['ratio_to_720p_decode']:8.2f} ({r['cpu_ratio_to_720p_decode']:.2f})")
     print("particles  step ms   us/particle")
     for row in scaling:
         print(f"{row['particles']:9}  {row['step_ms']:7.3f}   {row['us_per_particle']:.4f}")

@@ -19,6 +19,7 @@ project's one Kalman vocabulary: ``x, P, F, Q, H, R``), with a NIS gate in front
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -318,36 +319,63 @@ class BallisticEkf:
 
     def landing(self) -> tuple[float, np.ndarray] | None:
         """Predicted time (s from now) and point of the next ground contact."""
-        if not self.initialised or self.kf.x[2] <= self.contact_z + 1e-3:
-            return None
-        cfg = self.config
-        return predict_landing(self.kf.x, self.contact_z, cfg.gravity, cfg.drag_k, cfg.landing_horizon_s, cfg.landing_step_s)
+        return next_landing(self.kf.x, self.contact_z, self.config) if self.initialised else None
+
+
+def next_landing(x: np.ndarray, contact_z: float, cfg: EkfConfig) -> tuple[float, np.ndarray] | None:
+    """:func:`predict_landing` of state ``x`` with the filter's physics (None: on the ground already)."""
+    if x[2] <= contact_z + 1e-3:
+        return None
+    return predict_landing(x, contact_z, cfg.gravity, cfg.drag_k, cfg.landing_horizon_s, cfg.landing_step_s)
 
 
 @dataclass(frozen=True, eq=False)
 class EkfState:
-    """The EKF stage's intermediates (NaN before the filter starts)."""
+    """The EKF stage's intermediates (NaN before the filter starts).
+
+    The predicted landing is drawn, never used by the tracker: it is integrated on first read
+    (``landing_world``, ``landing_image``, ``landing_in_s``) from ``x``, which the digest hashes, so
+    a replay that draws nothing (no ``--rrd``) never spends the ~100 Heun steps on it."""
 
     x: np.ndarray  # (6,) world X, Y, Z, VX, VY, VZ
     P: np.ndarray  # (6, 6)
     nis: float  # of the last update (NaN: none yet)
-    landing_world: np.ndarray  # (3,) predicted next ground contact (NaN if none)
-    landing_image: np.ndarray  # (2,) ... projected into this frame
-    landing_in_s: float  # seconds until that contact
 
     @classmethod
     def empty(cls) -> EkfState:
-        return cls(np.full(6, np.nan), np.full((6, 6), np.nan), math.nan, np.full(3, np.nan), np.full(2, np.nan), math.nan)
+        return cls(np.full(6, np.nan), np.full((6, 6), np.nan), math.nan)
 
     @classmethod
     def of(cls, ekf: BallisticEkf, camera: PtzCamera | None) -> EkfState:
-        """The filter now, with its predicted landing (:meth:`BallisticEkf.landing`)."""
+        """The filter now; its predicted landing (:func:`next_landing`) seen through ``camera`` when read."""
+        if not ekf.initialised:
+            return cls(np.full(6, np.nan), np.full((6, 6), np.nan), float(ekf.last_nis))
+        state = cls(ekf.x.copy(), ekf.P.copy(), float(ekf.last_nis))
+        object.__setattr__(state, "_landing_from", (ekf.contact_z, ekf.config, camera))  # not a field: not hashed
+        return state
+
+    @functools.cached_property
+    def _landing(self) -> tuple[np.ndarray, np.ndarray, float]:
         world, image, seconds = np.full(3, np.nan), np.full(2, np.nan), math.nan
-        prediction = ekf.landing()
+        source = self.__dict__.get("_landing_from")
+        prediction = next_landing(self.x, source[0], source[1]) if source is not None else None
         if prediction is not None:
             seconds, world = prediction
-            if camera is not None:
-                image = camera.project_point(world)
-        x = ekf.x.copy() if ekf.initialised else np.full(6, np.nan)
-        P = ekf.P.copy() if ekf.initialised else np.full((6, 6), np.nan)
-        return cls(x, P, float(ekf.last_nis), np.asarray(world, float), np.asarray(image, float), float(seconds))
+            if source[2] is not None:
+                image = source[2].project_point(world)
+        return np.asarray(world, float), np.asarray(image, float), float(seconds)
+
+    @property
+    def landing_world(self) -> np.ndarray:
+        """(3,) predicted next ground contact (NaN if none)."""
+        return self._landing[0]
+
+    @property
+    def landing_image(self) -> np.ndarray:
+        """(2,) ... projected into this frame."""
+        return self._landing[1]
+
+    @property
+    def landing_in_s(self) -> float:
+        """Seconds until that contact."""
+        return self._landing[2]

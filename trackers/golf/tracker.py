@@ -52,7 +52,7 @@ from trackreplay.trackers.golf.seen_before import LastSighting, was_there_before
 from trackreplay.trackers.golf.streak import whole_streak
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, named_silhouette, previous_in_pose, top_hat)
-from trackreplay.trackers.golf.trail import Trail, TrailPoints
+from trackreplay.trackers.golf.trail import Trail
 from trackreplay.trackers.golf.validate import Validator
 
 NAN3 = np.full(3, np.nan)
@@ -226,7 +226,7 @@ class GolfTracker(TrackerBase):
         self.intermediates = GolfIntermediates(
             "ptz" if camera is not None else "image", reinit, search, sil, gated,
             ParticleSet(self.pf.particles, self.pf.weights, estimate), EkfState.of(self.ekf, camera),
-            TrailPoints(self.trail.in_image(camera), self.trail.world.ordered()), notice, check)
+            self.trail.points(camera), notice, check)
         if status == "lost":
             return [TrackState(1, status="lost")]
         X, Y, Z = (float(v) for v in self.ekf.x[:3]) if self.ekf.initialised else (None, None, None)

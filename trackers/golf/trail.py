@@ -6,6 +6,7 @@ only rotates needs no depth to draw the stored directions into the image of its 
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -51,29 +52,49 @@ class Trail:
             self.world.append(ekf_x[:3])
 
     def in_image(self, camera: PtzCamera | None) -> np.ndarray:
-        """(K, 2) past measurements drawn into this frame: stored lines of sight projected with
-        this pose (the stored pixel where there is no pose)."""
-        if not len(self.image):
-            return np.zeros((0, 2))
-        trail = self.image.ordered()
-        if camera is None:
-            return trail[:, :2].copy()
-        has = np.isfinite(trail[:, 2])
-        if has.all():  # every point has its line of sight (the usual case with encoders): all projected
-            return camera.project_directions(np.ascontiguousarray(trail[:, 2:5]))  # the rows trail[has, 2:5] copies
-        out = trail[:, :2].copy()
-        if has.any():
-            out[has] = camera.project_directions(trail[has, 2:5])
-        return out
+        """(K, 2) past measurements drawn into this frame (:func:`drawn_into`)."""
+        return drawn_into(self.image.ordered(), camera)
+
+    def points(self, camera: PtzCamera | None) -> TrailPoints:
+        """This frame's intermediates: the trail as stored, drawn into ``camera``'s image when read."""
+        return TrailPoints.of(self.image.ordered(), self.world.ordered(), camera)
+
+
+def drawn_into(measured: np.ndarray, camera: PtzCamera | None) -> np.ndarray:
+    """(K, 2) measured rows ``(x, y, dx, dy, dz)`` drawn into ``camera``'s image: stored lines of
+    sight projected with this pose (the stored pixel where there is no pose)."""
+    if not len(measured):
+        return np.zeros((0, 2))
+    if camera is None:
+        return measured[:, :2].copy()
+    has = np.isfinite(measured[:, 2])
+    if has.all():  # every point has its line of sight (the usual case with encoders): all projected
+        return camera.project_directions(np.ascontiguousarray(measured[:, 2:5]))  # the rows measured[has, 2:5] copies
+    out = measured[:, :2].copy()
+    if has.any():
+        out[has] = camera.project_directions(measured[has, 2:5])
+    return out
 
 
 @dataclass(frozen=True, eq=False)
 class TrailPoints:
-    """The trail's intermediates."""
+    """The trail's intermediates. ``image`` (the measured positions drawn into this frame's pose)
+    is only drawn: projected on first read from ``measured``, which the digest hashes."""
 
-    image: np.ndarray  # (K, 2) past measured positions drawn into this frame's pose
+    measured: np.ndarray  # (K, 5) past measured pixels x, y and their lines of sight dx, dy, dz (NaN: no pose)
     world: np.ndarray  # (K, 3) past EKF positions
 
     @classmethod
+    def of(cls, measured: np.ndarray, world: np.ndarray, camera: PtzCamera | None) -> TrailPoints:
+        points = cls(measured, world)
+        object.__setattr__(points, "_camera", camera)  # not a field: not hashed
+        return points
+
+    @classmethod
     def empty(cls) -> TrailPoints:
-        return cls(np.zeros((0, 2)), np.zeros((0, 3)))
+        return cls(np.zeros((0, 5)), np.zeros((0, 3)))
+
+    @functools.cached_property
+    def image(self) -> np.ndarray:
+        """(K, 2) past measured positions drawn into this frame's pose (:func:`drawn_into`)."""
+        return drawn_into(self.measured, self.__dict__.get("_camera"))

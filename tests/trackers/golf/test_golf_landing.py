@@ -166,6 +166,31 @@ def test_advance_reports_the_landing_once_and_bounces():
     assert np.isnan(empty.x).all() and np.isnan(empty.landing_world).all()
 
 
+def test_predicted_landing_is_integrated_when_read_and_not_hashed(monkeypatch):
+    """The landing is drawn, never used by the tracker: EkfState.of does not integrate it (a replay
+    without Rerun never pays for it), reading it gives the filter's own prediction, and it is not a
+    field (the digest hashes the state it comes from)."""
+    import dataclasses
+
+    import trackreplay.trackers.golf.landing as landing_module
+
+    ekf, cam = falling(3.0)
+    expected = ekf.landing()
+    calls = []
+    real = landing_module.predict_landing
+    monkeypatch.setattr(landing_module, "predict_landing", lambda *a: calls.append(a) or real(*a))
+    state = EkfState.of(ekf, cam)
+    assert calls == []
+    seconds, world = expected
+    assert state.landing_in_s == seconds and state.landing_world.tolist() == world.tolist()
+    assert state.landing_image.tolist() == cam.project_point(world).tolist()
+    state.landing_world, state.landing_image
+    assert len(calls) == 1  # once, then kept
+    assert {f.name for f in dataclasses.fields(EkfState)} == {"x", "P", "nis"}
+    no_pose = EkfState.of(ekf, None)
+    assert np.isnan(no_pose.landing_image).all() and no_pose.landing_world.tolist() == world.tolist()
+
+
 def test_range_calibration_on_a_ball_resting_on_the_ground():
     point = np.array([60.0, 5.0, D / 2])
     cam = follow(point, diameter_px=8.0)

@@ -11,7 +11,7 @@ from trackreplay.trackers.golf.marks import Marks
 from trackreplay.trackers.golf.notices import ENCODER_GAP_NOTICE, NO_ENCODER_NOTICE, NO_HINTS_NOTICE, Notices
 from trackreplay.trackers.golf.reinit import ReinitPolicy
 from trackreplay.trackers.golf.search_region import filling_sigma, search_region
-from trackreplay.trackers.golf.trail import Ring, Trail
+from trackreplay.trackers.golf.trail import Ring, Trail, TrailPoints
 
 LENS = LensTable(1280, 720, (LensEntry(0, 0, 2000, 2000, 640, 360), LensEntry(100, 0, 4000, 4000, 640, 360)), (0.0, 0.0, 3.0))
 
@@ -113,6 +113,10 @@ def test_trail_ring_keeps_the_last_rows_oldest_first():
     t.add(None, np.full(3, np.nan), np.arange(6.0))
     assert t.in_image(cam) == pytest.approx(np.array([[100.0, 200.0]]))
     assert t.in_image(None).tolist() == [[100.0, 200.0]] and t.world.ordered().tolist() == [[0.0, 1.0, 2.0]]
+    points = t.points(cam)  # the intermediates: the stored rows hashed, the drawing made when read
+    assert points.measured.shape == (1, 5) and points.world.tolist() == [[0.0, 1.0, 2.0]]
+    assert points.image.tolist() == t.in_image(cam).tolist() and t.points(None).image.tolist() == [[100.0, 200.0]]
+    assert TrailPoints.empty().image.shape == (0, 2)
 
 
 def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
