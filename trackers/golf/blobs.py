@@ -156,10 +156,12 @@ class BlobTargets:
         """Diameter (px) of a disc of the target area."""
         return 2.0 * math.sqrt(self.area / math.pi)
 
-    def follow(self, area: float, circularity: float, rate: float) -> BlobTargets:
+    def follow(self, area: float, circularity: float, rate: float, shrink_rate: float | None = None) -> BlobTargets:
         """EMA towards a newly selected ball blob (log domain for the area: zoom is multiplicative;
-        ``circularity`` is the blob's roundness, so the target stays near 1 for real discs)."""
-        log_area = (1 - rate) * np.log(self.area) + rate * np.log(max(area, 1e-6))
+        ``circularity`` is the blob's roundness, so the target stays near 1 for real discs); the
+        area at ``shrink_rate`` instead when the blob is smaller (``BlobConfig.target_shrink_rate``)."""
+        area_rate = shrink_rate if shrink_rate is not None and area < self.area else rate
+        log_area = (1 - area_rate) * np.log(self.area) + area_rate * np.log(max(area, 1e-6))
         return BlobTargets(float(np.exp(log_area)), float((1 - rate) * self.circularity + rate * circularity))
 
     def zoomed(self, ratio: float) -> BlobTargets:

@@ -175,6 +175,12 @@ class BlobConfig:
     circularity_tolerance: float = 0.35  # reject roundness < target - tol (rounder is never rejected)
     shape_area_px: float = 30.0  # below this many pixels (not scaled) the tolerance grows as sqrt(30 / area)
     target_rate: float = 0.3  # EMA rate of the targets from past selected blobs (follows zoom)
+    # ... but a smaller blob moves the target area at this rate: a silhouette loses part of the ball (its
+    # shaded side, its blurred rim, all but a highlight) far more often than the ball's image shrinks
+    # that fast, and a target that follows such pieces down lets smaller pieces through next (on the
+    # approach clip at 3/4 resolution the target fell from 11 to 2 px while the ball grew to 50 px,
+    # then specks by the hole were `measured` after the ball dropped). None: target_rate.
+    target_shrink_rate: float | None = 0.15
     initial_circularity: float = 0.9
     widen_per_miss: float = 0.25  # the area gate (log tolerance) grows by this per frame without a ball...
     widen_max: float = 3.0  # ...up to this factor (3: a ball 27x smaller or larger than the target)
@@ -200,8 +206,8 @@ class BlobConfig:
             raise ValueError("blobs.complete_streak must be in [0, 1) (0: off)")
         if self.area_tolerance <= 1:
             raise ValueError("blobs.area_tolerance must exceed 1")
-        if not 0 < self.target_rate <= 1:
-            raise ValueError("blobs.target_rate must be in (0, 1]")
+        if not 0 < self.target_rate <= 1 or not (self.target_shrink_rate is None or 0 < self.target_shrink_rate <= 1):
+            raise ValueError("blobs.target_rate and blobs.target_shrink_rate must be in (0, 1]")
         if min(self.min_area_px, self.area_slack_px, self.shape_area_px, self.circularity_tolerance) < 0 or self.max_blobs < 1:
             raise ValueError("blobs.min_area_px, area_slack_px, shape_area_px and circularity_tolerance must be >= 0, "
                              "blobs.max_blobs >= 1")

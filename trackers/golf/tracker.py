@@ -487,7 +487,9 @@ class GolfTracker(TrackerBase):
         # there is a ball leaving or entering the picture, often a smear (its colours)
         teaches = not self._at_border(blobs.bbox[k], frame.image.shape)
         if teaches:
-            self.targets = self.targets.follow(float(blobs.area[k]), float(roundness(blobs)[k]), self.config.blobs.target_rate)
+            blob_cfg = self.config.blobs
+            self.targets = self.targets.follow(float(blobs.area[k]), float(roundness(blobs)[k]), blob_cfg.target_rate,
+                                               blob_cfg.target_shrink_rate)
         if teaches and confidence >= self.config.lut.learn_confidence:
             side = max(w, h, 2.0)  # the core ellipse (lut.core) of this box: ball pixels, not its blurred rim
             region = InitRegion(frame.index, frame.t_ns, x, y, side, side, "track")

@@ -101,6 +101,16 @@ def test_targets_follow_a_zoom_geometrically():
     assert BlobTargets(np.pi, 0.9).diameter == pytest.approx(2.0)
 
 
+def test_targets_follow_a_smaller_blob_at_the_shrink_rate_only():
+    """blobs.target_shrink_rate: pieces of a ball (a highlight, a rim) pull the target area down
+    slowly; a larger blob, and the roundness, follow at the full rate."""
+    down = BlobTargets(100.0, 0.9).follow(25.0, 0.5, 0.5, 0.25)
+    assert down.area == pytest.approx(100.0 * 0.25 ** 0.25) and down.circularity == pytest.approx(0.7)
+    assert BlobTargets(100.0, 0.9).follow(400.0, 0.9, 0.5, 0.25).area == pytest.approx(200.0)
+    assert BlobTargets(100.0, 0.9).follow(25.0, 0.9, 0.5).area == pytest.approx(50.0)  # None: the one rate
+    assert BlobConfig().target_shrink_rate == pytest.approx(BlobConfig().target_rate / 2)
+
+
 def _one_blob(draw):
     m = np.zeros((120, 160), np.uint8)
     draw(m)
