@@ -429,7 +429,7 @@ class RerunSink:
         sinks: list = []
         if self.path is not None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self.partial = self.path.with_name(self.path.name + ".partial")
+            self.partial = partial_path(self.path)
             sinks.append(rr.FileSink(str(self.partial)))
         if spawn:
             try:
