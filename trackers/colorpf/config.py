@@ -54,6 +54,7 @@ ASPECTS = ("likelihood", "fixed")
 MOTIONS = ("random_walk", "constant_velocity")
 REFINES = ("none", "meanshift", "foreground")
 REGION_SIZES = ("area", "box")
+REGION_SPREADS = ("moments", "clipped")
 HOLD_ANCHORS = ("vouched", "estimate")
 HOLD_EARLY = ("region", "colour")
 CAMERA_RENEW = ("deformation", "tracked")
@@ -307,6 +308,22 @@ class RefineConfig:
     # and hold.anchor "estimate", 0.696 with "area" alone, 0.705 with both defaults (CSRT 0.700); the
     # synthetic scenes have a ground plane (unchanged).
     size_follows: str = "area"
+    # How the region's centroid and standard deviations are measured (colorpf.foreground.region_box and
+    # region_layout, the mark's layout measured alike). "clipped" (default, ours): sigma clipping, the
+    # pixels within `clip` deviations of the centroid on both axes, re-measured until no more go. A
+    # convex shape of uniform density keeps every pixel when clip > 2 sqrt(2) (its profile along an
+    # axis is a concave density; the triangle's reaches furthest, 2.83 deviations): 3 is the
+    # smallest round bound above it, not tuned. Why: the layout turns the spread into a size, and a
+    # few pixels detached far from the body stretch it (otb_crossing from frame ~50: feet over white
+    # road stripes, ~10 % of the region ~25 px below its centroid, took sigma_y from 6-6.5 to 8.4-9.4 px
+    # and the region's box to 62-69 px on a 40-43 px walker). otb_crossing AUC 0.708 -> 0.719 (tracker
+    # seeds 0-4), every robustness row level or better (docs/colorpf_robustness.md), the synthetic
+    # scenes level (docs/colorpf.md, 2026-11-29 eleventh session). clip 2.5 gained more on otb
+    # (0.727) but dropped the background scene's leg ends (legs over a mat of their colour: the
+    # region's middle is gone) and cost its y 0.3-0.5 px. "moments": the previous behaviour, all its
+    # pixels.
+    spread: str = "clipped"
+    clip: float = 3.0
     layout: bool = True
     keeps_track: bool = True
     # Ours: at most this many placed frames in a row since the last measured one keep the track
@@ -326,6 +343,10 @@ class RefineConfig:
             raise ValueError(f"refine.mode must be one of {', '.join(REFINES)}, not {self.mode!r}")
         if self.size_follows not in REGION_SIZES:
             raise ValueError(f"refine.size_follows must be one of {', '.join(REGION_SIZES)}, not {self.size_follows!r}")
+        if self.spread not in REGION_SPREADS:
+            raise ValueError(f"refine.spread must be one of {', '.join(REGION_SPREADS)}, not {self.spread!r}")
+        if not self.clip > 0:
+            raise ValueError("refine.clip must be > 0")
         if self.iterations < 1:
             raise ValueError("refine.iterations must be >= 1")
         if self.keep_frames is not None and self.keep_frames < 0:

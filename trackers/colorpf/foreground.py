@@ -213,17 +213,53 @@ def _spread(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return centre, sd
 
 
-def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+CLIP_ROUNDS = 8  # sigma clipping: at most this many rounds (each drops pixels; it stops when none goes)
+
+
+def clipped_spread(mask: np.ndarray, clip: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Centroid and standard deviation per axis (as :func:`_spread`) of the mask's pixels within ``clip``
+    standard deviations of their centroid on both axes, the centroid and deviations re-measured over the
+    pixels kept until no more go (sigma clipping, at most :data:`CLIP_ROUNDS` rounds). None when the
+    mask is empty.
+
+    A convex shape of uniform density keeps every pixel when ``clip`` > 2 sqrt(2) = 2.83: its profile
+    along an axis is a concave density, and none reaches further from its mean than the triangle's,
+    2 sqrt(2) deviations (a rectangle's 1.73, an ellipse's 2). A few pixels detached far from the body
+    (feet over road stripes) go, and no longer stretch the spread the layout turns into a size."""
+    ys, xs = np.nonzero(mask)
+    if xs.size == 0:
+        return None
+    xy = np.column_stack([xs, ys]).astype(np.float64)
+    keep = np.ones(len(xy), dtype=bool)
+    centre, sd = _spread_of(xy)
+    for _ in range(CLIP_ROUNDS):
+        inside = (np.abs(xy - centre) <= clip * sd).all(axis=1)
+        if np.array_equal(inside, keep) or not inside.any():
+            break
+        keep = inside
+        centre, sd = _spread_of(xy[keep])
+    return centre, sd
+
+
+def _spread_of(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centroid and standard deviation per axis of pixel coordinates ``(n, 2)`` (one pixel: 1/sqrt(12))."""
+    centre = xy.mean(axis=0)
+    return centre, np.sqrt(np.maximum(((xy - centre) ** 2).mean(axis=0), 1.0 / 12.0))
+
+
+def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray, spread: str = "moments",
+                  clip: float = 3.0) -> np.ndarray | None:
     """Where the marked box lies relative to its foreground, ``(u_x, u_y, s_x, s_y)``: box centre =
     foreground centroid + u * its standard deviation, box size = s * the standard deviation, per axis
     (a box wholly foreground: 0, 0, sqrt(12), sqrt(12)). ``mask`` is eq. (7)'s foreground of the marked
     box (its top-left pixel at ``offset``), ``box`` the marked box ``(x, y, w, h)``. None when the mask
     is empty. Moments, not the bounding box: a few pixels of the target that differ from the floor on
-    one frame and not on another (legs over a zebra crossing) move them little."""
-    spread = _spread(mask)
-    if spread is None:
+    one frame and not on another (legs over a zebra crossing) move them little. ``spread`` "clipped"
+    (``refine.spread``): measured as the later regions are, by :func:`clipped_spread`."""
+    measured = clipped_spread(mask, clip) if spread == "clipped" else _spread(mask)
+    if measured is None:
         return None
-    centre, sd = spread
+    centre, sd = measured
     centre = centre + np.asarray(offset, np.float64)
     box = np.asarray(box, np.float64)
     return np.concatenate([(box[:2] - centre) / sd, box[2:4] / sd])
@@ -232,10 +268,21 @@ def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray) -> np.n
 IDENTITY = np.array([0.0, 0.0, np.sqrt(12.0), np.sqrt(12.0)])
 
 
+def region_box(region: np.ndarray, offset: np.ndarray, layout: np.ndarray, spread: str = "moments",
+               clip: float = 3.0) -> np.ndarray:
+    """The target's box ``(x, y, w, h)`` placed on a non-empty region mask (its top-left pixel at
+    ``offset``) by ``layout`` (:func:`region_layout`) from the region's centroid and standard deviations
+    (``refine.spread``): "moments", over all its pixels; "clipped", :func:`clipped_spread`."""
+    centre, sd = clipped_spread(region, clip) if spread == "clipped" else _spread(region)
+    layout = np.asarray(layout, np.float64)
+    return np.concatenate([centre + np.asarray(offset, np.float64) + layout[:2] * sd, layout[2:4] * sd])
+
+
 def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.ndarray, threshold: float,
                       open_px: int, gain: float, mark_share: float, layout: np.ndarray = IDENTITY, *,
-                      window: float = 1.5, factor: float = 2.0,
-                      min_part: float = 0.01, band: Band | None = None) -> tuple[np.ndarray | None, str]:
+                      window: float = 1.5, factor: float = 2.0, min_part: float = 0.01,
+                      band: Band | None = None, spread: str = "moments",
+                      clip: float = 3.0) -> tuple[np.ndarray | None, str]:
     """The target's box ``(x, y, w, h)`` from the foreground region the estimate sits on, or None and
     why not (``refine.mode = "foreground"``, ours).
 
@@ -256,7 +303,8 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
     - the neighbour check's condition: none of the four boxes of the estimate's size beside it holds
       more foreground than ``mark_share``.
 
-    ``band``: the registration-tolerant test (:func:`_mask`).
+    ``band``: the registration-tolerant test (:func:`_mask`). ``spread``, ``clip``: how the region's
+    centroid and deviations are measured (:func:`region_box`; ``refine.spread``, ``refine.clip``).
     """
     x, y, w, h = (float(v) for v in np.asarray(estimate, dtype=np.float64)[:4])
     height, width = image.shape[:2]
@@ -282,10 +330,7 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
     if not part.any():
         return None, "no region of the target's size" if (counts[1:] > 0).any() else "no foreground"
     region = part[labels]
-    centre, sd = _spread(region)
-    layout = np.asarray(layout, np.float64)
-    centre = centre + np.array([cx0, cy0])
-    box = np.concatenate([centre + layout[:2] * sd, layout[2:4] * sd])
+    box = region_box(region, np.array([cx0, cy0]), layout, spread, clip)
     ratio = box[2:4] / np.array([w, h])
     if not ((ratio >= 1.0 / np.sqrt(factor)) & (ratio <= np.sqrt(factor))).all():
         return None, "size"

@@ -306,7 +306,8 @@ class ColorPfTracker(TrackerBase):
         if self.config.refine.mode == "foreground" and ref.mask.size and self.mark is not None:
             # the marked box on its own foreground, for foreground_region
             self.layout = region_layout(ref.mask, ref.mask_offset,
-                                        np.array([self.mark.x, self.mark.y, self.mark.w, self.mark.h]))
+                                        np.array([self.mark.x, self.mark.y, self.mark.w, self.mark.h]),
+                                        self.config.refine.spread, self.config.refine.clip)
         self.background_image = background  # likelihood.foreground: what differs from it is foreground
         return ref.mask
 
@@ -323,7 +324,8 @@ class ColorPfTracker(TrackerBase):
             return estimate, False
         region, _ = foreground_region(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px,
                                       gain, ref.p_detect / ref.p_square, layout, window=cfg.refine.window,
-                                      factor=cfg.refine.factor, min_part=cfg.refine.min_part, band=band)
+                                      factor=cfg.refine.factor, min_part=cfg.refine.min_part, band=band,
+                                      spread=cfg.refine.spread, clip=cfg.refine.clip)
         if region is None:
             return estimate, False
         self.pf.particles[:, :2] += region[:2] - estimate[:2]  # the cloud moves with the estimate
@@ -410,7 +412,8 @@ class ColorPfTracker(TrackerBase):
                 continue
             region, _ = foreground_region(image, background, box, cfg.reference.threshold, cfg.reference.open_px,
                                           gain, ref.p_detect / ref.p_square, layout, window=cfg.refine.window,
-                                          factor=cfg.refine.factor, min_part=cfg.refine.min_part)
+                                          factor=cfg.refine.factor, min_part=cfg.refine.min_part,
+                                          spread=cfg.refine.spread, clip=cfg.refine.clip)
             if region is not None:
                 self._vouch(index, region, True)
 
