@@ -16,6 +16,7 @@ import rerun as rr
 import rerun.blueprint as rrb
 import rerun.chunk as rc
 
+from trackreplay.recorder.atomic import partial_path
 from trackreplay.schemas.errors import OutputError
 from trackreplay.trackers.frame import Frame
 
