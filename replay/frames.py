@@ -386,7 +386,9 @@ def iter_frames(
 
     if topics.right is None:
         previous: LogMessage | None = None
-        for item in reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns):
+        messages = iter(reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns))
+        item = next(messages, None)
+        while item is not None:
             if previous is not None and item.lost is None and 0 <= item.sequence < previous.sequence:
                 report.out_of_order.append(item.index)  # written before the frame that precedes it in time
             if previous is not None and item.lost is None and previous.log_time == item.log_time:
@@ -394,6 +396,16 @@ def iter_frames(
                                f"the same log_time {item.log_time}: two frames cannot share a time")
             previous = item if item.lost is None else previous
             frame = usable(item, None)
+            # The next message is read (the log's records parsed: Python, holding the GIL) before this frame is
+            # handed over: in a prefetch thread that work is then done while the tracker waits for this frame,
+            # not while it steps on it (the decode that follows releases the GIL). Every frame read is still
+            # handed over before an error in what follows it.
+            try:
+                item = next(messages, None)
+            except BaseException:
+                if frame is not None:
+                    yield frame
+                raise
             if frame is not None:
                 yield frame
         return

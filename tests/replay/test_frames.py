@@ -242,3 +242,31 @@ def test_a_mark_for_another_moment_is_refused(tmp_path: Path) -> None:
     reader = _log_with(tmp_path, "shifted.mcap", write)
     with pytest.raises(LogError, match="marks frame 1 at t=20 ns, but frame 1 of /camera/image is at t=10 ns"):
         list(iter_frames(reader, FrameTopics.detect(reader)))
+
+
+def test_the_next_record_is_read_before_a_frame_is_handed_over_and_an_error_there_loses_no_frame(tmp_path: Path,
+                                                                                                  monkeypatch) -> None:
+    """iter_frames reads message k+1 (the log's records parsed in Python, holding the GIL) before it yields
+    frame k, so a prefetch thread does that work while the tracker waits rather than while it steps; a
+    failure reading message k+1 still hands frame k over first."""
+    path = tmp_path / "three.mcap"
+    with LogWriter(path) as log:
+        for k in range(3):
+            log.write(T.CAMERA_IMAGE, image_message(_img(k), "png", k * MS), k * MS)
+    reader = LogReader(path)
+    real = LogReader.messages
+    read: list[int] = []
+
+    def failing(self, *args, **kwargs):
+        for item in real(self, *args, **kwargs):
+            if item.index == 2:
+                raise LogError("message 2 is unreadable")
+            read.append(item.index)
+            yield item
+
+    monkeypatch.setattr(LogReader, "messages", failing)
+    frames = iter_frames(reader, FrameTopics.detect(reader))
+    assert next(frames).index == 0 and read == [0, 1]  # message 1 was read before frame 0 came out
+    assert next(frames).index == 1  # frame 1 handed over although reading what follows it failed ...
+    with pytest.raises(LogError, match="message 2 is unreadable"):
+        next(frames)  # ... and the error after it
