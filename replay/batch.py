@@ -170,11 +170,21 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
         if shipped:  # name the log as the user knows it, not the task's temporary copy
             message = message.replace(str(out / task.log.name), str(task.log))
         row.update(status="error", error=message)
+        if not shipped:
+            _drop_if_empty(out)  # a log that failed at once leaves no empty task folder behind
     finally:
         row["task_seconds"] = round(time.perf_counter() - started, 4)  # replay + outputs + eval, in the task
         if tmp is not None:
             tmp.cleanup()
     return row
+
+
+def _drop_if_empty(folder: Path) -> None:
+    """Remove ``folder`` if it holds nothing (what a failed task had written stays)."""
+    try:
+        folder.rmdir()
+    except OSError:
+        pass  # not empty, or never made
 
 
 def _metrics(table: pl.DataFrame, log: Path, multi_object: bool = False) -> dict[str, Any]:
