@@ -123,6 +123,23 @@ def reacquire(frames: pl.DataFrame, landing: int | None) -> int | None:
     return None if hit.is_empty() else int(hit["frame"].min()) - landing
 
 
+def reacquire_in_view(frames: pl.DataFrame, landing: int | None) -> int | None:
+    """:func:`reacquire` counted from the ball's return into view when it went out of view (hopped out
+    of the picture, behind something) after the landing and before it was found again: from the first
+    visible frame after that (None: never)."""
+    plain = reacquire(frames, landing)
+    if plain is None:
+        return None
+    hit = landing + plain
+    window = frames.filter((pl.col("frame") >= landing) & (pl.col("frame") <= hit)).sort("frame")
+    seen = (window["visible"].fill_null(False) & window["x"].is_not_null()).to_list()
+    if False not in seen:
+        return plain
+    gone = seen.index(False)
+    back = int(window["frame"][gone + seen[gone:].index(True)])
+    return hit - back
+
+
 def run_metrics(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray, landing: int | None) -> tuple[dict, pl.DataFrame]:
     _, frames = evaluate(traj, gt)
     vis = frames.filter(pl.col("visible") & pl.col("x").is_not_null())
@@ -142,6 +159,7 @@ def run_metrics(traj: pl.DataFrame, gt: pl.DataFrame, camera: np.ndarray, landin
         "los_p95": float(np.percentile(los, 95)) if los.size else None,
         "los_frames": int(los.size),
         "reacquire": reacquire(frames, landing),
+        "reacquire_in_view": reacquire_in_view(frames, landing),
         "completeness": float((fvis["centre_error"] <= FILLED_PX).sum() / n),
         "start": int(traj["frame"].min()) if traj.height else None,
         "hidden": int(frames.filter(~pl.col("visible").fill_null(False)).height),
@@ -536,6 +554,8 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
         "  computed from the *noisy, quantised* encoder readings, so they include the encoder error);",
         f"- *re-acquire*: first frame at or after the landing frame (first ground contact) with a measured",
         f"  estimate within {DETECT_PX:g} px, minus the landing frame (0 = never lost it; `never` = not within the log);",
+        "  in brackets, counted from the ball's return into view when it hops out of the picture after the landing",
+        "  (the first visible frame after the first run of frames without it; the landing frame when it stays in view);",
         f"- *filled*: after `fill_gaps(traj, \"linear\", max_gap={MAX_GAP})`, share of visible frames with a",
         f"  position within {FILLED_PX:g} px.",
         "",
@@ -554,7 +574,7 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
             f"| {r['desc']} | {info['frames']} | {m['visible']} | {fmt(m['start'], 'd')} | {fmt(info['landing_frame'], 'd')} | {fmt(dia, '.1f')} | "
             f"{r['out_after']} | {pct(m['detected'])} | {pct(m['measured_share'])} | {pct(m['precision'])} | {fmt(m['rmse'], '.1f')} | "
             f"{fmt(m['median'], '.2f')} | {fmt(m['los_median'], '.4f')} / {fmt(m['los_p95'], '.4f')} | "
-            f"{reac(m['reacquire'])} | {pct(m['completeness'])} | {m['false_measured']} of {m['hidden']} | `{m['digest'][:16]}` |"
+            f"{reac(m['reacquire'])} ({reac(m.get('reacquire_in_view'))} in view) | {pct(m['completeness'])} | {m['false_measured']} of {m['hidden']} | `{m['digest'][:16]}` |"
         )
     L += [
         "",
