@@ -300,8 +300,18 @@ class Validator:
     def confirmed_velocity(self) -> tuple[np.ndarray, float]:
         """The confirmed track's velocity for the next frame (px/frame): its last step plus the
         change between its last two steps (a ball slowing at the top of a hop changes speed by
-        ~10 px/frame each frame), and that change's size (how unsure the velocity is)."""
+        ~10 px/frame each frame), and that change's size (how unsure the velocity is). Steps between
+        distinct pictures only: a frame that showed the picture before it again (a clip retimed by
+        repeating frames) adds a zero step, and the last step's change then doubled the velocity: such a
+        track's velocity is its mean over the frames it spans (the pictures come unevenly, so their steps
+        per frame say nothing of the ball's acceleration), unsure by how far its steps between distinct
+        pictures stray from that mean."""
         t = self._rows()
+        if self.best is not None and any(self.best.repeats[1:]):
+            distinct = t[[j for j in range(len(t)) if j == 0 or not self.best.repeats[j]]]
+            mean = (distinct[-1, 1:] - distinct[0, 1:]) / max(distinct[-1, 0] - distinct[0, 0], 1.0)
+            per_frame = np.diff(distinct[:, 1:], axis=0) / np.maximum(np.diff(distinct[:, 0]), 1.0)[:, None]
+            return mean, float(np.max(np.hypot(*(per_frame - mean).T))) if len(per_frame) else 0.0
         steps = np.diff(t[:, 1:], axis=0) / np.maximum(np.diff(t[:, 0]), 1.0)[:, None]
         if len(steps) < 2:
             return (steps[-1] if len(steps) else np.zeros(2)), 0.0

@@ -146,3 +146,22 @@ def test_a_ball_predicted_beyond_the_edge_is_only_what_the_edge_cuts():
     boxes = np.array([[0, 100, 5, 5], [100, 0, 5, 5], [1275, 100, 5, 5], [100, 715, 5, 5], [100, 100, 5, 5]], float)
     for k, point in enumerate(([-3.0, 100.0], [100.0, -3.0], [1282.0, 100.0], [100.0, 722.0])):
         assert cut_by_edge(boxes, np.array(point), SIZE, 1.0).tolist() == [j == k for j in range(5)]
+
+
+def test_a_confirmed_velocity_counts_steps_between_distinct_pictures():
+    """A review: a track confirmed on a clip retimed by repeating frames had a zero step on the repeated
+    picture, and the last step plus its change doubled the velocity. A ball moving 4 px a picture,
+    pictures shown 1, 2, 1, ... frames: about 4 px a frame over the distinct pictures, never 8."""
+    from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
+    from trackreplay.trackers.golf.validate import Tentative, Validator
+
+    validator = Validator(ValidateConfig(), BlobConfig())
+    shape = (20.0, 0.9)
+    track = Tentative([(0, 10.0, 10.0)], [shape])
+    track.add(1, (14.0, 10.0), shape)
+    track.add(2, (14.0, 10.0), shape, repeat=True)  # the same picture again
+    track.add(3, (18.0, 10.0), shape)
+    validator.best = track
+    velocity, unsure = validator.confirmed_velocity()
+    assert velocity.tolist() == [8.0 / 3.0, 0.0]  # 8 px over 3 frames (was 8: 4 + (4 - 0))
+    assert abs(unsure - 4.0 / 3.0) < 1e-12  # steps of 4 and 2 px a frame between the distinct pictures
