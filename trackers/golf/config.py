@@ -180,7 +180,7 @@ class BlobConfig:
     # that fast, and a target that follows such pieces down lets smaller pieces through next (on the
     # approach clip at 3/4 resolution the target fell from 11 to 2 px while the ball grew to 50 px,
     # then specks by the hole were `measured` after the ball dropped). None: target_rate.
-    target_shrink_rate: float | None = 0.15
+    target_shrink_rate: float | None = 0.15  # ... the area, towards a smaller blob, at this rate (pieces of the ball)
     initial_circularity: float = 0.9
     widen_per_miss: float = 0.25  # the area gate (log tolerance) grows by this per frame without a ball...
     widen_max: float = 3.0  # ...up to this factor (3: a ball 27x smaller or larger than the target)
