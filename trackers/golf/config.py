@@ -178,7 +178,7 @@ class BlobConfig:
     # ... but a smaller blob moves the target area at this rate: a silhouette loses part of the ball (its
     # shaded side, its blurred rim, all but a highlight) far more often than the ball's image shrinks
     # that fast, and a target that follows such pieces down lets smaller pieces through next (on the
-    # approach clip at 3/4 resolution the target fell from 11 to 2 px while the ball grew to 50 px,
+    # approach clip at 3/4 resolution the target area fell from 11 to 2 px² while the ball's grew past 200,
     # then specks by the hole were `measured` after the ball dropped). None: target_rate.
     target_shrink_rate: float | None = 0.15  # ... the area, towards a smaller blob, at this rate (pieces of the ball)
     initial_circularity: float = 0.9

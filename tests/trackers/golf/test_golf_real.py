@@ -103,7 +103,7 @@ def test_iron_shot_turned_on_its_side_is_still_followed(tmp_path):
 @pytest.mark.skipif(not APPROACH.is_file(), reason="../shared/data/real/golf_broadcast_approach is absent")
 def test_broadcast_approach_at_three_quarter_resolution_does_not_follow_pieces_of_the_ball(tmp_path):
     """docs/golf_robustness.md: the clip resized to 0.75 marked pieces of the ball (a highlight, a
-    rim: 1-5 px of a 40-px ball), the targets followed them down and specks by the hole were
+    rim: blobs of 1-5 px of a ball of 40-250 px), the targets followed them down and specks by the hole were
     `measured` after the drop (15 of 19 rows; 80 % within 5 px). A smaller blob now moves the target
     area at half the rate (blobs.target_shrink_rate)."""
     import cv2
