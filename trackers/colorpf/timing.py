@@ -47,8 +47,8 @@ def smoothing_for(s: float, r: float) -> float:
 
 
 def frames_for(n: int, r: float) -> int:
-    """``n`` stated frames as this log's frames (the same duration; at least 1)."""
-    return n if r == 1.0 else max(1, int(round(n / r)))
+    """``n`` stated frames as this log's frames (the same duration; at least 1; 0, "none", stays 0)."""
+    return n if r == 1.0 or n <= 0 else max(1, int(round(n / r)))
 
 
 RECENT_STEPS = 9  # the log's typical interval: the median of this many last steps

@@ -53,13 +53,11 @@ def where_the_ball_was(last: LastSighting, point: tuple[float, float], near_px: 
     return math.hypot(point[0] - last.ball[0], point[1] - last.ball[1]) <= last.diameter + near_px
 
 
-def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float, luts: GolfLuts,
-                     lut_name: str, near_px: float, area_tolerance: float, image: np.ndarray | None = None) -> bool:
-    """Whether a blob at least ``area / area_tolerance`` px large covered ``point`` (this frame's
-    pixels; its box grown by ``near_px``) in the last sighting's picture, under the LUT ``lut_name``,
-    more than a ball diameter (+ ``near_px``) from the ball measured there."""
-    if not lut_name or lut_name not in luts.names:
-        return False
+def in_last_view(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float,
+                 image: np.ndarray | None = None) -> tuple[float, float, float]:
+    """``point`` (this frame's pixels) and a blob ``area`` there as the last sighting's picture saw them:
+    through the pose change with encoders, else through the view's change measured from the two
+    pictures (``image`` is this frame's), else as they are."""
     p = np.asarray(point, dtype=np.float64).reshape(1, 2)
     if camera is not None and last.camera is not None:
         p = apply_homography(pose_homography(camera, last.camera), p)
@@ -70,7 +68,17 @@ def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.nda
             back = np.linalg.inv(moved)
             p = apply_homography(back, p)
             area *= abs(float(np.linalg.det(back[:2, :2])))
-    x, y = (float(v) for v in p[0])
+    return float(p[0, 0]), float(p[0, 1]), area
+
+
+def was_there_before(last: LastSighting, camera: PtzCamera | None, point: np.ndarray, area: float, luts: GolfLuts,
+                     lut_name: str, near_px: float, area_tolerance: float, image: np.ndarray | None = None) -> bool:
+    """Whether a blob at least ``area / area_tolerance`` px large covered ``point`` (this frame's
+    pixels; its box grown by ``near_px``) in the last sighting's picture, under the LUT ``lut_name``,
+    more than a ball diameter (+ ``near_px``) from the ball measured there."""
+    if not lut_name or lut_name not in luts.names:
+        return False
+    x, y, area = in_last_view(last, camera, point, area, image)
     if not (math.isfinite(x) and math.isfinite(y)):
         return False
     if where_the_ball_was(last, (x, y), near_px) and area >= last.area / area_tolerance:

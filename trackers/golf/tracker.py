@@ -48,7 +48,7 @@ from trackreplay.trackers.golf.range import RangeFromArea, nearer_than_predicted
 from trackreplay.trackers.golf.reinit import Reinit, ReinitPolicy
 from trackreplay.trackers.golf.scenery import Scenery
 from trackreplay.trackers.golf.search_region import reaching, search_region
-from trackreplay.trackers.golf.seen_before import LastSighting, was_there_before, where_the_ball_was
+from trackreplay.trackers.golf.seen_before import LastSighting, in_last_view, was_there_before, where_the_ball_was
 from trackreplay.trackers.golf.streak import whole_streak
 from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_silhouette, contrast_silhouette, lut_silhouette,
                                                   moving_silhouette, named_silhouette, previous_in_pose, top_hat)
@@ -178,7 +178,8 @@ class GolfTracker(TrackerBase):
             # but not where the ball itself was last seen (a ball found again there, half hidden, would
             # be refused for good)
             point = gated.blobs.centroid[check.candidate]
-            if not where_the_ball_was(self._last_sighting, tuple(point), cfg.validate.still_px * scale):
+            then = in_last_view(self._last_sighting, camera, point, 0.0, frame.image)[:2]  # the place in the last sighting's pixels
+            if not where_the_ball_was(self._last_sighting, then, cfg.validate.still_px * scale):
                 self.scenery.add(point)
         seen = check.verdict in ("measured", "confirmed")
         if check.verdict == "confirmed":  # a jump seen over confirm_frames frames: the samples start again there

@@ -307,7 +307,9 @@ class Validator:
         per frame say nothing of the ball's acceleration), unsure by how far its steps between distinct
         pictures stray from that mean."""
         t = self._rows()
-        if self.best is not None and any(self.best.repeats[1:]):
+        # (only when a repeated picture is among the rows the last step and its change are read from: one
+        # long ago leaves them as they are)
+        if self.best is not None and any(self.best.repeats[max(1, len(t) - 3):]):
             distinct = t[[j for j in range(len(t)) if j == 0 or not self.best.repeats[j]]]
             mean = (distinct[-1, 1:] - distinct[0, 1:]) / max(distinct[-1, 0] - distinct[0, 0], 1.0)
             per_frame = np.diff(distinct[:, 1:], axis=0) / np.maximum(np.diff(distinct[:, 0]), 1.0)[:, None]

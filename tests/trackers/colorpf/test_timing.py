@@ -30,6 +30,7 @@ def test_conversions():
     assert np.allclose(noise_for(np.array([3.4, 10.0]), 2.0), [3.4 * math.sqrt(2), 10.0 * math.sqrt(2)])
     assert smoothing_for(0.9, 2.0) == pytest.approx(0.81)
     assert frames_for(30, 2.0) == 15 and frames_for(30, 0.5) == 60 and frames_for(1, 4.0) == 1
+    assert frames_for(0, 2.0) == 0 and frames_for(0, 0.5) == 0  # 0 ("none", e.g. hold.max_frames) stays none
     assert noise_for(3.4, 1.0) == 3.4 and smoothing_for(0.9, 1.0) == 0.9 and frames_for(30, 1.0) == 30
 
 

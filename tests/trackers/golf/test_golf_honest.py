@@ -442,3 +442,21 @@ def test_where_the_ball_was_last_seen_is_never_made_scenery():
     assert where_the_ball_was(last, (110.0, 55.0), 2.0)  # on its own place: not scenery
     assert where_the_ball_was(last, (120.4, 50.0), 2.0)  # a diameter and a bit: still its place
     assert not where_the_ball_was(last, (130.0, 50.0), 2.0)  # beside it: the liner, scenery
+
+
+def test_the_ball_s_old_place_is_told_in_the_last_sighting_s_pixels():
+    """A review: the tracker asked ``where_the_ball_was`` with this frame's pixels; after a pan the
+    ball's own place was added to scenery (refused for good). ``in_last_view`` carries it back first."""
+    from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
+    from trackreplay.trackers.geometry.homography import apply_homography
+    from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography
+    from trackreplay.trackers.golf.seen_before import LastSighting, in_last_view, where_the_ball_was
+
+    lens = LensTable(1280, 720, (LensEntry(0, 0, 2000, 2000, 640, 360), LensEntry(100, 0, 4000, 4000, 640, 360)), (0.0, 0.0, 3.0))
+    then = PtzCamera.from_reading(PtzReading(0, 0.0, -5.0, 0.0, 0.0), lens)
+    now = PtzCamera.from_reading(PtzReading(0, 3.0, -5.0, 0.0, 0.0), lens)  # panned 3 degrees since
+    last = LastSighting(np.zeros((720, 1280, 3), np.uint8), then, (640.0, 360.0), 19.0, 283.5)
+    here = apply_homography(pose_homography(then, now), np.array([[640.0, 360.0]]))[0]  # its place, seen now
+    assert not where_the_ball_was(last, tuple(here), 2.0)  # (this frame's pixels: ~100 px off)
+    x, y, _ = in_last_view(last, now, here, 0.0)
+    assert where_the_ball_was(last, (x, y), 2.0) and abs(x - 640.0) < 1e-6

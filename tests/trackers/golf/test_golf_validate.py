@@ -165,3 +165,22 @@ def test_a_confirmed_velocity_counts_steps_between_distinct_pictures():
     velocity, unsure = validator.confirmed_velocity()
     assert velocity.tolist() == [8.0 / 3.0, 0.0]  # 8 px over 3 frames (was 8: 4 + (4 - 0))
     assert abs(unsure - 4.0 / 3.0) < 1e-12  # steps of 4 and 2 px a frame between the distinct pictures
+
+
+def test_a_repeated_picture_long_ago_leaves_the_last_steps_alone():
+    """A review: one repeated picture at a track's start switched a slowing ball's velocity to the mean
+    over the whole track (11.2 px a frame against a next step of 4)."""
+    from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
+    from trackreplay.trackers.golf.validate import Tentative, Validator
+
+    validator = Validator(ValidateConfig(), BlobConfig())
+    shape = (20.0, 0.9)
+    track = Tentative([(0, 0.0, 0.0)], [shape])
+    track.add(1, (0.0, 0.0), shape, repeat=True)
+    x = 0.0
+    for k, step in enumerate((20.0, 16.0, 12.0, 8.0), start=2):
+        x += step
+        track.add(k, (x, 0.0), shape)
+    validator.best = track
+    velocity, unsure = validator.confirmed_velocity()
+    assert velocity.tolist() == [4.0, 0.0] and unsure == 4.0
