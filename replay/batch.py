@@ -42,7 +42,7 @@ from trackreplay.recorder.interrupts import deferred_interrupts
 from trackreplay.replay import registry
 from trackreplay.replay.batch_config import apply_sets
 from trackreplay.replay.config import load_config
-from trackreplay.replay.outputs import write_bytes, write_json, write_parquet
+from trackreplay.replay.outputs import remove_empty, write_bytes, write_json, write_parquet
 from trackreplay.schemas.errors import TrackreplayError
 
 SINGLE_METRICS = ("coverage", "centre_error_mean", "centre_error_rmse", "precision_at_20px", "success_auc",
@@ -171,20 +171,12 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
             message = message.replace(str(out / task.log.name), str(task.log))
         row.update(status="error", error=message)
         if not shipped:
-            _drop_if_empty(out)  # a log that failed at once leaves no empty task folder behind
+            remove_empty([out])  # a log that failed at once leaves no empty task folder behind
     finally:
         row["task_seconds"] = round(time.perf_counter() - started, 4)  # replay + outputs + eval, in the task
         if tmp is not None:
             tmp.cleanup()
     return row
-
-
-def _drop_if_empty(folder: Path) -> None:
-    """Remove ``folder`` if it holds nothing (what a failed task had written stays)."""
-    try:
-        folder.rmdir()
-    except OSError:
-        pass  # not empty, or never made
 
 
 def _metrics(table: pl.DataFrame, log: Path, multi_object: bool = False) -> dict[str, Any]:

@@ -81,10 +81,12 @@ def parse_seeds(text: str) -> list[int]:
             raise TrackreplayError(f"--seeds {text!r}: range {part} is empty")
         for bound in (lo_n, hi_n):
             check_seed(bound, f"--seeds {text!r}: seed")
-        if hi_n - lo_n + 1 > MAX_SEEDS - len(seeds):
+        if hi_n - lo_n + 1 > MAX_SEEDS:  # (before the range is built)
             raise TrackreplayError(f"--seeds {text!r}: more than {MAX_SEEDS} seeds; give a smaller range")
         seen = set(seeds)
         seeds += [s for s in range(lo_n, hi_n + 1) if s not in seen]
+        if len(seeds) > MAX_SEEDS:  # repeats of seeds already given are no new seeds
+            raise TrackreplayError(f"--seeds {text!r}: more than {MAX_SEEDS} seeds; give a smaller range")
     if not seeds:
         raise TrackreplayError(f"--seeds {text!r}: no seeds")
     return seeds

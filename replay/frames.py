@@ -402,7 +402,7 @@ def iter_frames(
             # handed over before an error in what follows it.
             try:
                 item = next(messages, None)
-            except BaseException:
+            except Exception:  # (an interrupt is not held back for the frame)
                 if frame is not None:
                     yield frame
                 raise

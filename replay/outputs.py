@@ -39,3 +39,12 @@ def write_parquet(table: pl.DataFrame, path: Path) -> Path:
 def _first_line(err: Exception) -> str:
     lines = [line.strip() for line in str(err).splitlines() if line.strip()]
     return lines[0] if lines else type(err).__name__
+
+
+def remove_empty(folders: list[Path]) -> None:
+    """Remove each folder that is empty, in the order given (deepest first: folders created and left unused)."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:  # not empty, or gone: leave it
+            pass

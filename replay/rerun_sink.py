@@ -152,8 +152,8 @@ class FrameLogger:
         records = self._batches.setdefault(build, [])
         records.append((self._frame, self._t_ns, record))
         if len(records) >= BATCH_FRAMES:
+            self._batches[build] = []  # off the queue before building: a build cut short (Ctrl-C) is not built again at the flush
             build(self, records)
-            records.clear()
         self._buffered += nbytes
         if self._buffered > self.flush_bytes:
             self.flush()

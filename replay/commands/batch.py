@@ -14,7 +14,7 @@ from trackreplay.replay.batch import (BatchInterrupted, BatchOptions, BatchTask,
 from trackreplay.replay.batch_config import grid, parse_seeds
 from trackreplay.replay.commands.values import non_negative_int, positive_int
 from trackreplay.replay.export import METHODS
-from trackreplay.replay.outputs import write_parquet
+from trackreplay.replay.outputs import remove_empty, write_parquet
 from trackreplay.schemas.errors import TrackreplayError
 
 FAILED = 1  # some task failed (its row says why); the others' outputs are written
@@ -73,7 +73,7 @@ def run(args: argparse.Namespace) -> int:
     except BatchInterrupted as err:
         raise keep_finished(err, tasks, out, created) from None
     except BaseException:  # e.g. a Ray that cannot start or join: no empty --out left behind
-        _remove_empty(created)
+        remove_empty(created)
         raise
     table = summary_table(rows, tasks)
     with deferred_interrupts():  # a Ctrl-C now waits for the summary of the finished batch
@@ -91,7 +91,7 @@ def keep_finished(err: BatchInterrupted, tasks: list[BatchTask], out: Path, crea
         if task.index not in err.rows:
             shutil.rmtree(out / "tasks" / task.name, ignore_errors=True)
     if not err.rows:
-        _remove_empty([out / "tasks", *created])
+        remove_empty([out / "tasks", *created])
         return type(err.cause)("no replay had finished; nothing was kept")
     table = summary_table([err.rows.get(t.index) or not_run_row(t) for t in tasks], tasks)
     with deferred_interrupts():
@@ -100,11 +100,3 @@ def keep_finished(err: BatchInterrupted, tasks: list[BatchTask], out: Path, crea
     return type(err.cause)(f"kept the outputs of the {len(err.rows)} of {len(tasks)} replays that had finished and "
                            f"a summary of all {len(tasks)} in {out / 'summary.parquet'} (the others' status is not_run)")
 
-
-def _remove_empty(folders: list[Path]) -> None:
-    """Remove each folder that is empty, deepest first (folders this batch created and left unused)."""
-    for folder in folders:
-        try:
-            folder.rmdir()
-        except OSError:  # not empty, or gone: leave it
-            pass

@@ -61,3 +61,12 @@ def test_a_huge_seed_range_is_refused_before_it_is_built() -> None:
     with pytest.raises(TrackreplayError, match="more than"):
         parse_seeds("0-2147483647")
     assert len(parse_seeds("0-999")) == 1000
+
+
+def test_repeated_seeds_do_not_count_towards_the_limit() -> None:
+    """A review: `0-99999,5` was refused as more than 100000 seeds."""
+    from trackreplay.replay.batch_config import MAX_SEEDS
+
+    assert len(parse_seeds(f"0-{MAX_SEEDS - 1},5")) == MAX_SEEDS
+    with pytest.raises(TrackreplayError, match="more than"):
+        parse_seeds(f"0-{MAX_SEEDS - 1},{MAX_SEEDS}")

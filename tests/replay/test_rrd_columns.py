@@ -142,3 +142,26 @@ def test_rows_of_scalars_split_into_series_in_frame_order() -> None:
     logger._split_series_rows()
     assert logger._series["p"] == ([0, 1, 2, 3], [0, 10, 20, 30], [100.0, 1.0, 102.0, 3.0])
     assert logger._series["q"] == ([1], [10], [-1.0])
+
+
+def test_a_block_build_cut_short_is_not_built_again_at_the_flush(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A review: a Ctrl-C inside a block's build left its records queued, and the flush in the replay's
+    `finally` built them again: those frames' rows twice in the kept .rrd."""
+    import trackreplay.replay.rerun_sink as sink
+
+    monkeypatch.setattr(sink, "BATCH_FRAMES", 2)
+    logger = FrameLogger(rr.RecordingStream("t"))
+    built: list[list[int]] = []
+
+    def build(rec, records):
+        built.append([r[0] for r in records])
+        if len(built) == 1:
+            raise KeyboardInterrupt
+
+    logger.set_frame(0, 0)
+    logger.batch(build, "a", 1)
+    logger.set_frame(1, 1)
+    with pytest.raises(KeyboardInterrupt):
+        logger.batch(build, "b", 1)
+    logger.flush()
+    assert built == [[0, 1]]  # not [[0, 1], [0, 1]]
