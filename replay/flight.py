@@ -519,6 +519,14 @@ class FlightFit:
 
     def positions(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fitted positions at log times (s), their 1-σ (per axis) and phase codes."""
+        pos, J, phase = self.sensitivity(times)
+        var = np.einsum("nap,pq,naq->na", J, self.cov, J)
+        return pos, np.sqrt(np.maximum(var, 0.0)), phase
+
+    def sensitivity(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fitted positions at log times (s), their derivatives by the parameters ``(n, 3, p)``
+        (finite differences: one flight per parameter) and phase codes; with :attr:`cov` they give
+        any function of the positions its uncertainty."""
         pos, phase = self.shot.at(times)
         J = []
         for i in range(len(self.theta)):
@@ -526,9 +534,7 @@ class FlightFit:
             th = self.theta.copy()
             th[i] += d
             J.append((simulate(th, self.config, max(self.t_end, float(times.max()))).at(times)[0] - pos) / d)
-        J = np.stack(J, axis=-1)  # (n, 3, p)
-        var = np.einsum("nap,pq,naq->na", J, self.cov, J)
-        return pos, np.sqrt(np.maximum(var, 0.0)), phase
+        return pos, np.stack(J, axis=-1), phase
 
 
 def _step(theta: np.ndarray, i: int) -> float:

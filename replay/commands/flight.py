@@ -18,6 +18,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--rrd", type=Path, help="Rerun 3-D view: camera, lines of sight, fitted path")
     p.add_argument("--track", type=int, help="track id (default: the track with most measured frames)")
     p.add_argument("--no-size", action="store_true", help="ignore the apparent ball size (lines of sight only)")
+    p.add_argument("--rescan", type=Path, metavar="TRAJ_OUT",
+                   help="look again, along the fitted flight, in every frame the tracker did not measure (offline); "
+                        "write the trajectory with the frames found there (status measured, fill 'rescan') to this "
+                        ".parquet or .csv, and fit the flight to them too")
     p.set_defaults(func=run)
     return p
 
@@ -31,8 +35,9 @@ def run(args: argparse.Namespace) -> int:
 
     from trackreplay.schemas.errors import TrackreplayError
 
-    if args.out is not None and args.out.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
-        raise TrackreplayError(f"--out {args.out}: a flight is written as .parquet or .csv")
+    for flag, path in (("--out", args.out), ("--rescan", args.rescan)):
+        if path is not None and path.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
+            raise TrackreplayError(f"{flag} {path}: a trajectory is written as .parquet or .csv")
     traj = read_trajectory(args.trajectory)
     track = args.track
     if track is not None and track not in set(traj["track_id"].to_list()):
@@ -44,7 +49,20 @@ def run(args: argparse.Namespace) -> int:
     times, cameras = log_context(args.log)
     obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
     fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
-    fit = fit_flight(obs, FlightConfig(use_size=not args.no_size), fps)
+    config = FlightConfig(use_size=not args.no_size)
+    if args.rescan is not None:
+        from trackreplay.replay.flight_rescan import rescan
+
+        found = rescan(traj, args.log, times, cameras, track_id=track, flight=config, fps=fps,
+                       what=f"{args.trajectory} (log {args.log})")
+        fit = found.fit
+        write_trajectory(found.trajectory, args.rescan)
+        print(f"rescan: {len(found.sightings)} frames found along the fitted flight "
+              f"(per round: {', '.join(str(n) for n in found.rounds)}"
+              + (f"; {len(found.dropped)} dropped, off the final fit: {', '.join(str(f) for f in found.dropped)}" if found.dropped else "")
+              + f"); wrote {args.rescan}")
+    else:
+        fit = fit_flight(obs, config, fps)
     print(fit.report.describe())
     rows = flight_rows(fit, times, cameras, track_id=track or 1)
     if args.out:

@@ -136,14 +136,17 @@ def at_least(values: np.ndarray, threshold: float) -> np.ndarray:
 
 
 def previous_in_pose(previous: np.ndarray, homography: np.ndarray, offset: tuple[int, int], shape: tuple[int, int]) -> np.ndarray:
-    """The luminance of the previous frame (BGR) brought into this pose over a crop at ``offset``
-    of ``shape`` (h, w): ``homography`` maps previous pixels to this frame's. Where the previous
-    frame did not see, 255 (nothing can be brighter than that: no motion is claimed there)."""
+    """The luminance of the previous frame (BGR, or its luminance already) brought into this pose
+    over a crop at ``offset`` of ``shape`` (h, w): ``homography`` maps previous pixels to this
+    frame's. Where the previous frame did not see, 255 (nothing can be brighter than that: no
+    motion is claimed there)."""
     h, w = shape
     to_crop = np.array([[1.0, 0.0, -offset[0]], [0.0, 1.0, -offset[1]], [0.0, 0.0, 1.0]]) @ homography
-    bgr = cv2.warpPerspective(previous, to_crop, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                              borderValue=(255, 255, 255))
-    return cv2.extractChannel(to_ycrcb(bgr), 0)  # Y, as to_ycbcr gives it, without reordering Cb and Cr
+    warped = cv2.warpPerspective(previous, to_crop, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                                 borderValue=(255, 255, 255))
+    if warped.ndim == 2:
+        return warped
+    return cv2.extractChannel(to_ycrcb(warped), 0)  # Y, as to_ycbcr gives it, without reordering Cb and Cr
 
 
 def moving_silhouette(ycc: np.ndarray, previous_y: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float,
