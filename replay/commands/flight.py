@@ -35,9 +35,9 @@ def run(args: argparse.Namespace) -> int:
 
     from trackreplay.schemas.errors import TrackreplayError
 
-    for flag, path in (("--out", args.out), ("--rescan", args.rescan)):
+    for flag, path, what in (("--out", args.out, "a flight"), ("--rescan", args.rescan, "a trajectory")):
         if path is not None and path.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
-            raise TrackreplayError(f"{flag} {path}: a trajectory is written as .parquet or .csv")
+            raise TrackreplayError(f"{flag} {path}: {what} is written as .parquet or .csv")
     traj = read_trajectory(args.trajectory)
     track = args.track
     if track is not None and track not in set(traj["track_id"].to_list()):
