@@ -644,6 +644,10 @@ def write_report(results: dict[str, dict], overlays: list[tuple[str, int, str]])
                  + f" | {m.get('standing_out', '–')} | {pct((after - missed + causes['before the first mark']) / after) if after else '–'} |")
     L += [
         "",
+        "After the event, with the whole shot's fitted flight as the prior, `trackreplay flight TRAJ LOG --rescan` looks again",
+        "in these frames (a matched filter of the ball's fitted streak, the world behind it from the neighbouring frames):",
+        "docs/golf_rescan.md.",
+        "",
         "Earlier versions on the same logs (numbers as their commits measured them):",
         "",
         "| run | version | detected ≤5 px | measured | precision ≤5 px | `measured` while not visible | re-acquire |",

@@ -50,12 +50,13 @@ def run(args: argparse.Namespace) -> int:
     obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
     fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
     config = FlightConfig(use_size=not args.no_size)
+    rescanned: frozenset[int] = frozenset()
     if args.rescan is not None:
         from trackreplay.replay.flight_rescan import rescan
 
         found = rescan(traj, args.log, times, cameras, track_id=track, flight=config, fps=fps,
                        what=f"{args.trajectory} (log {args.log})")
-        fit = found.fit
+        fit, rescanned = found.fit, frozenset(s.frame for s in found.sightings)
         write_trajectory(found.trajectory, args.rescan)
         print(f"rescan: {len(found.sightings)} frames found along the fitted flight "
               f"(per round: {', '.join(str(n) for n in found.rounds)}"
@@ -74,6 +75,6 @@ def run(args: argparse.Namespace) -> int:
     if args.rrd:
         from trackreplay.replay.views.flight import write_flight_rrd
 
-        write_flight_rrd(args.rrd, fit, rows, name=Path(args.log).stem)
+        write_flight_rrd(args.rrd, fit, rows, name=Path(args.log).stem, rescanned=rescanned)
         print(f"wrote {args.rrd}")
     return 0

@@ -2,7 +2,7 @@
 
 Entity paths under ``flight/``: ``camera`` (point), ``path`` (the fitted 3-D trajectory, one strip
 per phase), ``lines_of_sight`` (a segment per measured frame, from the camera to just beyond the
-fitted ball), ``events`` (launch, apex, landing, rest), ``ball`` (per frame on the ``frame``
+fitted ball; ``lines_of_sight_rescan``: those of the frames ``flight --rescan`` found), ``events`` (launch, apex, landing, rest), ``ball`` (per frame on the ``frame``
 timeline), ``ground`` (the ground plane's outline under the shot). World metres, Z up.
 """
 
@@ -19,8 +19,10 @@ from trackreplay.schemas.errors import OutputError
 COLOURS = {"tee": (200, 200, 200), "air": (255, 200, 40), "bounce": (255, 120, 40), "roll": (80, 200, 255), "rest": (80, 200, 255)}
 
 
-def write_flight_rrd(path: str | Path, fit, rows: pl.DataFrame, name: str = "flight") -> Path:
-    """Write the 3-D view of ``fit`` (a :class:`~trackreplay.replay.flight.FlightFit`) and its ``rows``."""
+def write_flight_rrd(path: str | Path, fit, rows: pl.DataFrame, name: str = "flight", rescanned: frozenset[int] = frozenset()) -> Path:
+    """Write the 3-D view of ``fit`` (a :class:`~trackreplay.replay.flight.FlightFit`) and its ``rows``;
+    the lines of sight of the ``rescanned`` frames (found by ``flight --rescan``) apart, under
+    ``flight/lines_of_sight_rescan``, in their own colour."""
     path = Path(path)
     rec = rr.RecordingStream(f"trackreplay-{name}", recording_id=name, send_properties=False)
     rec.set_log_time_enabled(False) if hasattr(rec, "set_log_time_enabled") else None
@@ -35,7 +37,12 @@ def write_flight_rrd(path: str | Path, fit, rows: pl.DataFrame, name: str = "fli
     pos, phase = fit.shot.at(obs.t)
     rng = np.linalg.norm(pos - cam, axis=1) * 1.05
     rays = [np.stack([cam, cam + r * d]) for r, d in zip(rng, obs.los)]
-    rec.log("flight/lines_of_sight", rr.LineStrips3D(rays, colors=[(120, 160, 255, 60)], radii=0.02), static=True)
+    found = np.isin(obs.frame, sorted(rescanned))
+    rec.log("flight/lines_of_sight", rr.LineStrips3D([r for r, f in zip(rays, found) if not f], colors=[(120, 160, 255, 60)],
+                                                     radii=0.02), static=True)
+    if found.any():
+        rec.log("flight/lines_of_sight_rescan", rr.LineStrips3D([r for r, f in zip(rays, found) if f], colors=[(255, 80, 200, 120)],
+                                                                radii=0.02), static=True)
     t = np.linspace(fit.shot.t[0], fit.shot.t[-1], 600)
     path_pos, path_phase = fit.shot.at(t)
     from trackreplay.replay.flight import PHASES

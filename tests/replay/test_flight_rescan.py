@@ -143,3 +143,16 @@ def test_rescan_refuses_a_bad_suffix_before_fitting(rescanned, tmp_path, capsys)
     traj, _, log = rescanned
     assert main(["flight", str(traj), str(log), "--rescan", str(tmp_path / "r.txt")]) == 2
     assert "--rescan" in capsys.readouterr().err
+
+
+def test_rescan_frames_have_their_own_lines_of_sight_in_the_3d_view(rescanned, tmp_path) -> None:
+    import rerun.chunk as rc
+
+    traj, found, log = rescanned
+    rrd = tmp_path / "flight.rrd"
+    assert main(["flight", str(traj), str(log), "--rescan", str(tmp_path / "r.parquet"), "--rrd", str(rrd)]) == 0
+    paths = {str(chunk.entity_path) for chunk in rc.RrdReader(str(rrd)).stream()}
+    assert {"/flight/lines_of_sight", "/flight/lines_of_sight_rescan", "/flight/path", "/flight/ball"} <= paths
+    plain = tmp_path / "plain.rrd"
+    assert main(["flight", str(traj), str(log), "--rrd", str(plain)]) == 0
+    assert "/flight/lines_of_sight_rescan" not in {str(chunk.entity_path) for chunk in rc.RrdReader(str(plain)).stream()}
