@@ -161,9 +161,11 @@ def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
     return path
 
 
-def read_trajectory(path: str | Path) -> pl.DataFrame:
+def read_trajectory(path: str | Path, keep_fill: bool = False) -> pl.DataFrame:
     """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV), checked as the ★ table
-    (:func:`~trackreplay.replay.trajectory.conform`); an empty one is refused (nothing to work on)."""
+    (:func:`~trackreplay.replay.trajectory.conform`); an empty one is refused (nothing to work on).
+    ``keep_fill``: also the ``fill`` column ``smooth`` and ``flight --rescan`` write, where the table has one
+    (how a row was obtained: a frame ``rescan`` found is no measurement of the tracker's)."""
     path = Path(path)
     if not path.is_file():
         raise TrackreplayError(f"{path} does not exist")
@@ -178,9 +180,12 @@ def read_trajectory(path: str | Path) -> pl.DataFrame:
     if "confidence" not in df.columns:  # tables written before the column existed
         df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
     where = (lambda i: f"row {i + 1}") if suffix == ".parquet" else (lambda i: f"line {i + 2}")  # CSV line 1: header
-    df = conform(df, str(path), where)
+    fill = df.get_column("fill").cast(pl.String, strict=False) if keep_fill and "fill" in df.columns else None
+    df = conform(df, str(path), where)  # (the rows in the same order: the fill column goes back beside them)
     if df.is_empty():
         raise TrackreplayError(f"{path} holds no rows: an empty trajectory")
+    if fill is not None:
+        return df.with_columns(fill).select(*COLUMNS, "fill").sort(["tracker", "track_id", "frame"], maintain_order=True)
     return canonical_order(df)
 
 

@@ -22,8 +22,11 @@ longer "where is a ball?" but "is the ball here?", and a matched filter answers 
   world behind the ball — the median of the frames up to ``world_frames`` either side in which
   the ball is elsewhere, each brought into this pose — is ``min_new_snr`` sigmas up there too.
   Cloud puffs, turf, tee markers and spare balls stay where they were; the ball does not. With
-  the top-hat alone a place 15-40 px beside the ball "found a ball" on 7 % of the searches over
-  the synthetic shots (puffs of the ball's size); with both tests on 0.4 % (docs/golf_rescan.md);
+  the top-hat alone a place 15-40 px beside the ball "found a ball" on 15 % of the searches over
+  the synthetic shots (puffs of the ball's size); with both tests on 0.8 % (docs/golf_rescan.md).
+  Only a place that at least ``min_world`` such frames saw is searched, and the response must rise
+  ``min_contrast`` grey levels, its sigma no less than rounding to grey levels leaves (a flat,
+  clipped sky has no spread to measure against);
 - and only where the fit is sure enough of the place: within ``reach`` frames of frames already
   measured and with ``sigma_factor`` times its 1-σ in the picture inside the gate (the launch: a
   ball leaving the tee at 200 px a frame, with a launch time known to a few milliseconds, is not).
@@ -50,6 +53,7 @@ import numpy as np
 import polars as pl
 
 from trackreplay.replay.flight import FlightConfig, FlightFit, fit_flight, observations
+from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.appearance.color import to_ycrcb
 from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography
@@ -69,6 +73,8 @@ class RescanConfig:
     # show it (the ball elsewhere by its diameter and twice registration_px), each in this pose
     registration_px: float = 1.0  # the poses' error: each of those frames' brightest within this
     min_new_snr: float = 4.0  # robust sigmas of the response over what is new in the world (static clutter is not)
+    min_world: int = 2  # frames that must have seen the world behind the ball, over the gate and the template
+    min_contrast: float = 1.0  # grey levels: the least mean contrast over the ball's image that counts at all
     window_px: float = 40.0  # half-width of the window the noise is measured over, beyond the template
     reach: int = 3  # a frame is searched once a measured (or found) frame is at most this many frames away:
     # the fit is trusted next to its data, and grows into a gap a round at a time
@@ -82,6 +88,8 @@ class RescanConfig:
     def __post_init__(self) -> None:
         if self.gate_px <= 0 or self.min_snr <= 0 or not self.exposures or self.rounds < 1 or self.reach < 1:
             raise ValueError("rescan: need gate_px > 0, min_snr > 0, at least one exposure, one round and a reach of 1")
+        if self.world_frames < 1 or self.min_world < 1 or self.registration_px < 0 or self.min_contrast < 0 or self.sigma_factor < 0:
+            raise ValueError("rescan: need world_frames >= 1, min_world >= 1, and registration_px, min_contrast, sigma_factor >= 0")
         if any(not 0.0 <= e <= 1.0 for e in self.exposures):
             raise ValueError("rescan: exposures are fractions of the frame interval in [0, 1]")
 
@@ -117,6 +125,7 @@ class RescanResult:
     sightings: tuple[Sighting, ...]  # the frames kept, in frame order
     rounds: tuple[int, ...]  # frames found per round
     dropped: tuple[int, ...]  # frames found, then further than the gate from the final fit
+    warnings: tuple[str, ...] = ()  # frames that could not be read (damaged), not searched
 
 
 def expected_balls(fit: FlightFit, frames: list[int], times: dict[int, int], cameras: dict[int, PtzCamera],
@@ -203,9 +212,10 @@ def ball_template(diameter: float, path: np.ndarray) -> np.ndarray:
     fine = np.zeros((side * SUPERSAMPLE, side * SUPERSAMPLE), np.uint8)
     points = np.round(((path + half + 0.5) * SUPERSAMPLE - 0.5) * 16).astype(np.int32)  # 4 fractional bits
     thickness = max(1, int(round(diameter * SUPERSAMPLE)))
-    if len(points) > 1:
+    if len(points) > 1:  # (a thick polyline has round caps)
         cv2.polylines(fine, [points.reshape(-1, 1, 2)], False, 255, thickness, cv2.LINE_8, shift=4)
-    cv2.circle(fine, tuple(int(v) for v in points[0]), max(thickness // 2, 1) * 16, 255, -1, cv2.LINE_8, shift=4)  # (radius in the same fractional bits)
+    else:
+        cv2.circle(fine, tuple(int(v) for v in points[0]), max(thickness // 2, 1) * 16, 255, -1, cv2.LINE_8, shift=4)  # (radius in the same fractional bits)
     weights = cv2.resize(fine.astype(np.float32), (side, side), interpolation=cv2.INTER_AREA)
     return weights / float(weights.sum())
 
@@ -221,15 +231,15 @@ def look(luminance: np.ndarray, ball: ExpectedBall, cfg: RescanConfig, scale: fl
          neighbours: list[tuple[np.ndarray, np.ndarray]]) -> Sighting | None:
     """Is the ball where ``ball`` expects it in this frame's ``luminance`` (uint8)? The matched
     filter of the module docstring: the response over the top-hat must peak in the gate, and the
-    response over what also stands above the world behind the ball (``neighbours``: the frames
-    either side as ``(luminance, homography to this frame)``) must be there too. None when it is
-    not, or when the question cannot be asked (no neighbour, a ball that moves less than its own
-    size a frame against the world, a fit unsure of the place)."""
+    response over what also stands above the world behind the ball (``neighbours``: frames in which
+    the ball is elsewhere, as ``(luminance, homography to this frame)``) must be there too. None
+    when it is not, or when the question cannot be asked (the place not seen by ``min_world``
+    neighbours, a fit unsure of the place)."""
     height, width = luminance.shape
     d = max(ball.diameter, 1.0)
     gate = _gate(cfg, d, scale)
     registration = cfg.registration_px * scale
-    if not neighbours or cfg.sigma_factor * ball.sigma > gate:
+    if len(neighbours) < cfg.min_world or cfg.sigma_factor * ball.sigma > gate:
         return None
     extent = float(np.max(np.abs(ball.path))) + d
     side = max(5, int(round(cfg.kernel_diameters * d)) | 1)
@@ -241,14 +251,17 @@ def look(luminance: np.ndarray, ball: ExpectedBall, cfg: RescanConfig, scale: fl
         return None
     crop = np.ascontiguousarray(luminance[y0:y1, x0:x1])
     hat = disc_top_hat(crop, side)
-    rise = rise_over_world(crop, hat, neighbours, (x0, y0), registration)
-    hat = hat.astype(np.float32)
+    rise, seen_by = rise_over_world(crop, hat, neighbours, (x0, y0), registration)
     rows, cols = np.mgrid[y0:y1, x0:x1]
-    in_gate = (cols - cx) ** 2 + (rows - cy) ** 2 <= gate ** 2
+    r2 = (cols - cx) ** 2 + (rows - cy) ** 2
+    in_gate = r2 <= gate ** 2
+    if int(seen_by[r2 <= (gate + extent) ** 2].min()) < cfg.min_world:
+        return None  # the world behind the ball there is not seen by enough frames (the picture's edge)
+    hat = hat.astype(np.float32)
     best = None
     for exposure in cfg.exposures:
         template = ball_template(d, exposed(ball.path, exposure))
-        response, snr = _matched(hat, template)
+        response, snr = _matched(hat, template, cfg.min_contrast)
         # the highest local maximum in the gate (the rim of the gate on the flank of something brighter outside is none)
         peaks = in_gate & (response >= cv2.dilate(response, np.ones((3, 3), np.uint8)))
         if not peaks.any():
@@ -260,7 +273,8 @@ def look(luminance: np.ndarray, ball: ExpectedBall, cfg: RescanConfig, scale: fl
     if best is None or best[0] < cfg.min_snr:
         return None
     snr, exposure, px, py, response, template = best
-    _, new = _matched(rise, template)
+    valid = seen_by > 0
+    _, new = _matched(np.where(valid, rise, np.float32(np.median(rise[valid]))), template, cfg.min_contrast, valid)
     new_snr = float(np.max(new[max(py - 1, 0):py + 2, max(px - 1, 0):px + 2]))
     if new_snr < cfg.min_new_snr:
         return None
@@ -268,30 +282,48 @@ def look(luminance: np.ndarray, ball: ExpectedBall, cfg: RescanConfig, scale: fl
     return Sighting(ball.frame, point, snr, float(exposure), float(np.hypot(*(point - ball.centre))), new_snr)
 
 
-def _matched(signal: np.ndarray, template: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The template's response over ``signal`` and the same in robust sigmas above its median."""
+QUANTUM_SIGMA = 1.0 / math.sqrt(12.0)  # grey levels: the rounding of a picture to integers, the least noise it has
+
+
+def _matched(signal: np.ndarray, template: np.ndarray, min_contrast: float,
+             valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The template's response over ``signal`` and the same in robust sigmas above its median (over
+    the ``valid`` pixels). The sigma is at least what rounding to grey levels leaves in a weighted mean
+    over the template, and the response must rise ``min_contrast`` levels above the median to count at
+    all: on a flat or clipped sky most of the response is one value, its spread 0, and a single level
+    of difference would be any number of sigmas."""
     response = cv2.filter2D(signal, cv2.CV_32F, template, borderType=cv2.BORDER_REFLECT)
-    median = float(np.median(response))
-    sigma = 1.4826 * float(np.median(np.abs(response - median)))
-    if not sigma > 0:
-        sigma = float(np.std(response)) or 1.0
-    return response, (response - median) / sigma
+    values = response if valid is None else response[valid]
+    median = float(np.median(values))
+    sigma = max(1.4826 * float(np.median(np.abs(values - median))), QUANTUM_SIGMA * float(np.linalg.norm(template)))
+    above = response - median
+    return response, np.where(above >= min_contrast, above / sigma, np.minimum(above / sigma, 0.0))
 
 
 def rise_over_world(crop: np.ndarray, hat: np.ndarray, neighbours: list[tuple[np.ndarray, np.ndarray]],
-                    offset: tuple[int, int], registration: float) -> np.ndarray:
+                    offset: tuple[int, int], registration: float) -> tuple[np.ndarray, np.ndarray]:
     """How far each pixel of ``crop`` stands above both its local background (``hat``, the top-hat)
     and the same place of the world in the ``neighbours`` (each brought into this pose, the
-    brightest within ``registration`` px of it for the poses' error; their median, so a neighbour
-    that shows the ball there does not count): float32, negative where the world there is
-    brighter. Clouds, turf, tee markers and spare balls are where they were; the ball is not."""
+    brightest within ``registration`` px of it for the poses' error; the median of those that saw
+    the place, so a neighbour that shows the ball there does not count): float32, negative where
+    the world there is brighter, NaN where no neighbour saw it; and how many neighbours saw each
+    pixel. Clouds, turf, tee markers and spare balls are where they were; the ball is not."""
     k = 2 * max(int(round(registration)), 0) + 1
-    stack = []
-    for image, homography in neighbours:
-        there = previous_in_pose(image, homography, offset, crop.shape[:2])
-        stack.append(cv2.dilate(there, np.ones((k, k), np.uint8)) if k > 1 else there)
-    world = np.median(np.stack(stack), axis=0).astype(np.float32)
-    return np.minimum(hat.astype(np.float32), crop.astype(np.float32) - world)
+    square = np.ones((k, k), np.uint8)
+    shape = crop.shape[:2]
+    stack = np.full((len(neighbours),) + shape, np.nan, np.float32)
+    for n, (image, homography) in enumerate(neighbours):
+        there = previous_in_pose(image, homography, offset, shape)
+        unseen = previous_in_pose(np.zeros(image.shape[:2], np.uint8), homography, offset, shape) > 0  # (255 off its picture)
+        if k > 1:
+            there, unseen = cv2.dilate(there, square), cv2.dilate(unseen.astype(np.uint8), square) > 0
+        stack[n] = np.where(unseen, np.nan, there.astype(np.float32))
+    seen_by = np.sum(~np.isnan(stack), axis=0)
+    ordered = np.sort(stack, axis=0)  # NaN last
+    low = np.take_along_axis(ordered, np.maximum(seen_by - 1, 0)[None] // 2, axis=0)[0]
+    high = np.take_along_axis(ordered, (seen_by // 2)[None], axis=0)[0] if len(neighbours) > 1 else low
+    world = np.where(seen_by > 0, (low + np.where(seen_by > 1, high, low)) / 2.0, np.nan)
+    return np.minimum(hat.astype(np.float32), crop.astype(np.float32) - world.astype(np.float32)), seen_by
 
 
 def _vertex(response: np.ndarray, py: int, px: int, axis: int) -> float:
@@ -307,12 +339,14 @@ def _vertex(response: np.ndarray, py: int, px: int, axis: int) -> float:
     return float(np.clip(0.5 * (float(a) - float(c)) / denom, -0.5, 0.5)) if denom < 0 else 0.0
 
 
-def _luminances(log: Path, wanted: set[int]):
+def _luminances(log: Path, wanted: set[int], unreadable: dict[int, str]):
     """``(frame index, uint8 luminance)`` of the ``wanted`` frames, in log order; only those are decoded
-    (straight to their chunks when the log's message indexes allow)."""
+    (straight to their chunks when the log's message indexes allow). A frame lost with a damaged
+    chunk, or whose image does not decode, is left out and named in ``unreadable``."""
     from trackreplay.replay.decode import decode_image
     from trackreplay.replay.frames import FrameTopics
     from trackreplay.replay.reader import LogReader
+    from trackreplay.schemas.errors import LogError
 
     if not wanted:
         return
@@ -321,24 +355,33 @@ def _luminances(log: Path, wanted: set[int]):
     items = reader.messages_at(topic, wanted)
     last = max(wanted)
     for item in reader.messages([topic]) if items is None else items:
-        if item.index in wanted and item.lost is None:
-            image = decode_image(item.decode(), item.schema, f"{reader.path}: topic {item.topic} message {item.index}")[0]
-            yield item.index, (cv2.extractChannel(to_ycrcb(image), 0) if image.ndim == 3 else image)
+        if item.index in wanted:
+            where = f"{reader.path}: topic {item.topic} message {item.index}"
+            if item.lost is not None:
+                unreadable[item.index] = f"{where}: lost with a damaged chunk"
+            else:
+                try:
+                    image = decode_image(item.decode(), item.schema, where)[0]
+                except LogError as err:
+                    unreadable[item.index] = str(err)
+                else:
+                    yield item.index, (cv2.extractChannel(to_ycrcb(image), 0) if image.ndim == 3 else image)
         if item.index >= last:
             break
 
 
 def _with_sightings(traj: pl.DataFrame, sightings: list[Sighting], fit: FlightFit, times: dict[int, int],
-                    cameras: dict[int, PtzCamera], track_id: int) -> pl.DataFrame:
-    """The trajectory with a ``measured`` row (``fill`` ``rescan``) in place of each sighting's frame."""
+                    cameras: dict[int, PtzCamera], track: tuple[str, int]) -> pl.DataFrame:
+    """The trajectory with a ``measured`` row (``fill`` ``rescan``) in place of each sighting's frame
+    of ``track`` (tracker, track id); every other row as it was."""
     base = traj if "fill" in traj.columns else traj.with_columns(pl.lit(None, pl.String).alias("fill"))
     if not sightings:
         return base
+    tracker, track_id = track
     frames = [s.frame for s in sightings]
     t_ns = np.array([times[f] for f in frames], dtype=np.int64)
     pos, _ = fit.shot.at(t_ns * 1e-9)
     los = np.stack([cameras[f].line_of_sight(s.point.reshape(1, 2))[0] for f, s in zip(frames, sightings)])
-    tracker = traj["tracker"][0] if traj.height else "golf"
     n = len(frames)
     nan = [None] * n
     rows = pl.DataFrame({
@@ -350,55 +393,71 @@ def _with_sightings(traj: pl.DataFrame, sightings: list[Sighting], fit: FlightFi
     })
     rows = rows.select([pl.col(c).cast(base.schema[c]) if c in rows.columns else pl.lit(None, base.schema[c]).alias(c)
                         for c in base.columns])
-    keep = base.filter(~((pl.col("track_id") == track_id) & pl.col("frame").is_in(frames)))
-    return pl.concat([keep, rows]).sort(["frame", "track_id"], maintain_order=True)
+    mine = (pl.col("tracker") == tracker) & (pl.col("track_id") == track_id)
+    keep = base.filter(~(mine & pl.col("frame").is_in(frames)))
+    return pl.concat([keep, rows]).sort(["tracker", "track_id", "frame"], maintain_order=True)  # (canonical_order, fill kept)
 
 
 def rescan(traj: pl.DataFrame, log: Path, times: dict[int, int], cameras: dict[int, PtzCamera], *,
            track_id: int, config: RescanConfig = RescanConfig(), flight: FlightConfig = FlightConfig(),
-           fps: float = 30.0, what: str = "the trajectory") -> RescanResult:
-    """Look for the ball along the fitted flight in the frames of ``log`` the track did not measure
-    (module docstring), from those next to measured frames outwards, fitting again after each
-    round; deterministic."""
+           fps: float = 30.0, what: str = "the trajectory", tracker: str = "golf") -> RescanResult:
+    """Look for the ball along the fitted flight in the frames of ``log`` track ``track_id`` of
+    ``tracker`` did not measure (module docstring), from those next to measured frames outwards,
+    fitting again after each round; deterministic. Rows of other tracks are kept as they are."""
     quick = dataclasses.replace(flight, jackknife_blocks=0)  # the rounds need the flight, not its uncertainty
-    measured = set(traj.filter((pl.col("status") == "measured") & (pl.col("track_id") == track_id))["frame"].to_list())
+    track = (tracker, int(track_id))
+    own = traj.filter((pl.col("tracker") == tracker) & (pl.col("track_id") == track_id))
+    if own.is_empty():
+        raise TrackreplayError(f"{what} has no {tracker} track {track_id}")
+    measured = set(own.filter(pl.col("status") == "measured")["frame"].to_list())
     frames = sorted(times)
     found: dict[int, Sighting] = {}
+    unreadable: dict[int, str] = {}
     per_round: list[int] = []
-    fit = fit_flight(observations(traj, cameras, track_id=track_id, what=what), quick, fps)
+
+    def refit(sightings: dict[int, Sighting], cfg: FlightConfig) -> FlightFit:
+        rows = _with_sightings(own, sorted(sightings.values(), key=lambda s: s.frame), fit, times, cameras, track) if sightings else own
+        return fit_flight(observations(rows, cameras, track_id=track_id, what=what), cfg, fps)
+
+    fit = fit_flight(observations(own, cameras, track_id=track_id, what=what), quick, fps)
     for _ in range(config.rounds):
         seen = np.array(sorted(measured | set(found)))
-        todo = [i for i in frames if i not in measured and i not in found and _within(seen, i, config.reach)]
+        todo = [i for i in frames if i not in measured and i not in found and i not in unreadable and _within(seen, i, config.reach)]
         balls = {b.frame: b for b in expected_balls(fit, todo, times, cameras, world_frames=config.world_frames)}
-        new = _look_all(log, balls, cameras, config)
+        new = _look_all(log, balls, cameras, config, unreadable)
         per_round.append(len(new))
         if not new:
             break
         found.update({s.frame: s for s in new})
-        current = _with_sightings(traj, sorted(found.values(), key=lambda s: s.frame), fit, times, cameras, track_id)
-        fit = fit_flight(observations(current, cameras, track_id=track_id, what=what), quick, fps)
-    # every frame found, against the final fit: one the flight no longer passes through is dropped
-    balls = {b.frame: b for b in expected_balls(fit, sorted(found), times, cameras)}
-    dropped = []
-    for index, sighting in sorted(found.items()):
-        ball = balls.get(index)
-        scale = float(cameras[index].intrinsics.height) / config.reference_height
-        if ball is None or float(np.hypot(*(sighting.point - ball.centre))) > _gate(config, ball.diameter, scale):
-            dropped.append(index)
-    for index in dropped:
-        del found[index]
+        fit = refit(found, quick)
+    # every frame found, against the final fit: one the flight no longer passes through is dropped, and
+    # the flight fitted again without it, until all that are left agree with it
+    dropped: list[int] = []
+    while found:
+        balls = {b.frame: b for b in expected_balls(fit, sorted(found), times, cameras)}
+        off = [i for i, s in sorted(found.items())
+               if (b := balls.get(i)) is None or float(np.hypot(*(s.point - b.centre))) > _gate(
+                   config, b.diameter, float(cameras[i].intrinsics.height) / config.reference_height)]
+        if not off:
+            break
+        dropped += off
+        for index in off:
+            del found[index]
+        fit = refit(found, quick)
     sightings = tuple(sorted(found.values(), key=lambda s: s.frame))
-    current = _with_sightings(traj, list(sightings), fit, times, cameras, track_id)
-    fit = fit_flight(observations(current, cameras, track_id=track_id, what=what), flight, fps)
-    current = _with_sightings(traj, list(sightings), fit, times, cameras, track_id)  # X, Y, Z from the final fit
-    return RescanResult(current, fit, sightings, tuple(per_round), tuple(dropped))
+    fit = refit(found, flight)
+    out = _with_sightings(traj, list(sightings), fit, times, cameras, track)  # X, Y, Z from the final fit
+    warnings = tuple(f"frame {i} not searched: {unreadable[i]}" for i in sorted(unreadable))
+    return RescanResult(out, fit, sightings, tuple(per_round), tuple(sorted(dropped)), warnings)
 
 
-def _look_all(log: Path, balls: dict[int, ExpectedBall], cameras: dict[int, PtzCamera], config: RescanConfig) -> list[Sighting]:
-    """:func:`look` in each frame of ``balls``, with its neighbours either side that have a pose."""
+def _look_all(log: Path, balls: dict[int, ExpectedBall], cameras: dict[int, PtzCamera], config: RescanConfig,
+              unreadable: dict[int, str] | None = None) -> list[Sighting]:
+    """:func:`look` in each frame of ``balls``, with the frames either side that show the world
+    behind the ball there (:func:`_clear_px`). Frames that cannot be read go into ``unreadable``."""
     clear = {i: [i + o for o, px in ball.away if i + o in cameras and px >= _clear_px(config, ball, cameras[i])]
              for i, ball in balls.items()}
-    images = dict(_luminances(log, set(balls).union(*clear.values())))
+    images = dict(_luminances(log, set(balls).union(*clear.values()), {} if unreadable is None else unreadable))
     found = []
     for index in sorted(balls):
         if index not in images:

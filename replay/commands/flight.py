@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from trackreplay.replay.commands.values import finite_json
@@ -38,7 +39,9 @@ def run(args: argparse.Namespace) -> int:
     for flag, path, what in (("--out", args.out, "a flight"), ("--rescan", args.rescan, "a trajectory")):
         if path is not None and path.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
             raise TrackreplayError(f"{flag} {path}: {what} is written as .parquet or .csv")
-    traj = read_trajectory(args.trajectory)
+    table = read_trajectory(args.trajectory, keep_fill=True)
+    golf = table.filter(pl.col("tracker") == "golf")
+    traj = golf if golf.height else table  # a table of several trackers: the golf ball's rows
     track = args.track
     if track is not None and track not in set(traj["track_id"].to_list()):
         have = ", ".join(str(t) for t in sorted(set(traj["track_id"].to_list())))
@@ -54,8 +57,10 @@ def run(args: argparse.Namespace) -> int:
     if args.rescan is not None:
         from trackreplay.replay.flight_rescan import rescan
 
-        found = rescan(traj, args.log, times, cameras, track_id=track, flight=config, fps=fps,
-                       what=f"{args.trajectory} (log {args.log})")
+        found = rescan(table, args.log, times, cameras, track_id=track, flight=config, fps=fps,
+                       what=f"{args.trajectory} (log {args.log})", tracker=str(traj["tracker"][0]))
+        for warning in found.warnings:
+            print(f"trackreplay: rescan: {warning}", file=sys.stderr)
         fit, rescanned = found.fit, frozenset(s.frame for s in found.sightings)
         write_trajectory(found.trajectory, args.rescan)
         print(f"rescan: {len(found.sightings)} frames found along the fitted flight "

@@ -156,3 +156,82 @@ def test_rescan_frames_have_their_own_lines_of_sight_in_the_3d_view(rescanned, t
     plain = tmp_path / "plain.rrd"
     assert main(["flight", str(traj), str(log), "--rrd", str(plain)]) == 0
     assert "/flight/lines_of_sight_rescan" not in {str(chunk.entity_path) for chunk in rc.RrdReader(str(plain)).stream()}
+
+
+def test_a_place_the_neighbours_did_not_see_is_not_asked() -> None:
+    """Neighbours that saw nothing of the crop (their picture ends before it) would make 'the world
+    behind the ball' a constant 255, and a static puff would then stand out of it: not asked."""
+    puffs = [(80, 80)]
+    here, before, after = (_u8(_sky(s, puffs)) for s in (11, 12, 13))
+    ball = _ball((80.0, 80.0), np.zeros((33, 2)))
+    away = np.array([[1.0, 0.0, 1000.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])  # their pixels land far off this picture
+    cfg = RescanConfig(min_new_snr=-1e9)  # even with the world test off, the place must be seen by min_world frames
+    assert look(here, ball, cfg, 1.0, [(before, away), (after, away)]) is None
+    assert look(here, ball, cfg, 1.0, [(before, IDENTITY), (after, away)]) is None  # one of two: too few
+    assert look(here, ball, cfg, 1.0, [(before, IDENTITY), (after, IDENTITY)]) is not None  # (the puff itself is there)
+
+
+def test_one_grey_level_on_a_flat_sky_is_no_ball() -> None:
+    """On a perfectly flat (clipped, compressed) sky the response's spread is 0: a single level of
+    difference must not become any number of sigmas."""
+    flat = np.full((SIZE, SIZE), 200, np.uint8)
+    here = flat.copy()
+    here[80, 80] = 201
+    ball = _ball((80.0, 80.0), np.zeros((33, 2)))
+    assert look(here, ball, RescanConfig(), 1.0, [(flat, IDENTITY), (flat.copy(), IDENTITY)]) is None
+
+
+def _damaged_copy(src: Path, dst: Path, frame: int) -> None:
+    """``src`` with the picture of ``frame`` replaced by bytes that decode as nothing."""
+    from foxglove_schemas_protobuf.CompressedImage_pb2 import CompressedImage
+    from mcap.reader import make_reader
+    from mcap.writer import Writer
+
+    with open(src, "rb") as fin, open(dst, "wb") as fout:
+        writer, schemas, channels, k = Writer(fout), {}, {}, 0
+        writer.start()
+        for schema, channel, message in make_reader(fin).iter_messages(log_time_order=True):
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(channel.topic, channel.message_encoding, schemas[schema.id], channel.metadata)
+            data = message.data
+            if channel.topic == "/camera/image":
+                if k == frame:
+                    image = CompressedImage()
+                    image.ParseFromString(data)
+                    image.data = b"\xff\xd8 not a picture"
+                    data = image.SerializeToString()
+                k += 1
+            writer.add_message(channels[channel.id], message.log_time, data, message.publish_time, message.sequence)
+        writer.finish()
+
+
+def test_a_damaged_picture_is_skipped_and_named(rescanned, tmp_path, capsys) -> None:
+    traj, found, log = rescanned
+    first = int(pl.read_parquet(found).filter(pl.col("fill") == "rescan")["frame"].min())
+    damaged = tmp_path / "damaged.mcap"
+    _damaged_copy(log, damaged, first)
+    out = tmp_path / "r.parquet"
+    capsys.readouterr()
+    assert main(["flight", str(traj), str(damaged), "--rescan", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"frame {first} not searched" in err and "message" in err
+    again = pl.read_parquet(out)
+    assert first not in again.filter(pl.col("fill") == "rescan")["frame"].to_list()
+
+
+def test_a_second_rescan_keeps_what_the_first_found_and_other_tracks_alone(rescanned, tmp_path) -> None:
+    traj, found, log = rescanned
+    # another tracker's track 1 in the same table: untouched, and no row of it taken as the ball's
+    other = pl.read_parquet(traj).with_columns(tracker=pl.lit("colorpf"), x=pl.col("x") + 300.0)
+    mixed = tmp_path / "mixed.parquet"
+    pl.concat([pl.read_parquet(found), other.with_columns(fill=pl.lit(None, pl.String))]).write_parquet(mixed)
+    out = tmp_path / "again.parquet"
+    assert main(["flight", str(mixed), str(log), "--rescan", str(out), "--track", "1"]) == 0
+    again = pl.read_parquet(out)
+    first = pl.read_parquet(found).filter(pl.col("fill") == "rescan")["frame"].to_list()
+    rescan_rows = again.filter(pl.col("fill") == "rescan")
+    assert set(first) <= set(rescan_rows["frame"].to_list())  # still marked as found, not as the tracker's own
+    assert rescan_rows["tracker"].unique().to_list() == ["golf"]
+    assert again.filter(pl.col("tracker") == "colorpf").drop("fill").equals(other.sort("frame"))
