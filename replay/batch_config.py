@@ -71,6 +71,7 @@ MAX_SEEDS = 100_000  # a typo like 0-2147483647 would build 2^31 tasks (and hang
 def parse_seeds(text: str) -> list[int]:
     """``0-9``, ``1,5,7`` or ``0-3,10`` -> the seeds in order, without repeats."""
     seeds: list[int] = []
+    seen: set[int] = set()
     for part in _split_values(text):
         lo, dash, hi = part.strip().partition("-")
         try:
@@ -83,8 +84,9 @@ def parse_seeds(text: str) -> list[int]:
             check_seed(bound, f"--seeds {text!r}: seed")
         if hi_n - lo_n + 1 > MAX_SEEDS:  # (before the range is built)
             raise TrackreplayError(f"--seeds {text!r}: more than {MAX_SEEDS} seeds; give a smaller range")
-        seen = set(seeds)
-        seeds += [s for s in range(lo_n, hi_n + 1) if s not in seen]
+        fresh = [s for s in range(lo_n, hi_n + 1) if s not in seen]
+        seen.update(fresh)
+        seeds += fresh
         if len(seeds) > MAX_SEEDS:  # repeats of seeds already given are no new seeds
             raise TrackreplayError(f"--seeds {text!r}: more than {MAX_SEEDS} seeds; give a smaller range")
     if not seeds:

@@ -185,7 +185,7 @@ def read_trajectory(path: str | Path, keep_fill: bool = False) -> pl.DataFrame:
     if df.is_empty():
         raise TrackreplayError(f"{path} holds no rows: an empty trajectory")
     if fill is not None:
-        return df.with_columns(fill).select(*COLUMNS, "fill").sort(["tracker", "track_id", "frame"], maintain_order=True)
+        return canonical_order(df.with_columns(fill), extra=("fill",))
     return canonical_order(df)
 
 

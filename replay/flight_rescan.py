@@ -53,6 +53,7 @@ import numpy as np
 import polars as pl
 
 from trackreplay.replay.flight import FlightConfig, FlightFit, fit_flight, observations
+from trackreplay.replay.trajectory import COLUMNS, canonical_order
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.appearance.color import to_ycrcb
 from trackreplay.trackers.foreground.morphology import disc_top_hat
@@ -395,7 +396,7 @@ def _with_sightings(traj: pl.DataFrame, sightings: list[Sighting], fit: FlightFi
                         for c in base.columns])
     mine = (pl.col("tracker") == tracker) & (pl.col("track_id") == track_id)
     keep = base.filter(~(mine & pl.col("frame").is_in(frames)))
-    return pl.concat([keep, rows]).sort(["tracker", "track_id", "frame"], maintain_order=True)  # (canonical_order, fill kept)
+    return canonical_order(pl.concat([keep, rows]), extra=tuple(c for c in base.columns if c not in COLUMNS))
 
 
 def rescan(traj: pl.DataFrame, log: Path, times: dict[int, int], cameras: dict[int, PtzCamera], *,

@@ -255,10 +255,12 @@ class FrameLogger:
             if records:
                 build(self, records)
         for path in sorted(set(self._rows) | set(self._deferred) | set(self._columns)):
-            self._send_rows(path, self._rows.get(path, ()))
+            # each path off the buffers before it is sent: a flush cut short (Ctrl-C) does not send it again
+            rows, deferred, columns = self._rows.pop(path, []), self._deferred.pop(path, {}), self._columns.pop(path, [])
+            self._send_rows(path, rows)
             groups = {key: [([r[0] for r in rows], [r[1] for r in rows], {name: _field(rows, name) for name in key[1]})]
-                      for key, rows in self._deferred.get(path, {}).items()}
-            for key, block in self._columns.get(path, ()):
+                      for key, rows in deferred.items()}
+            for key, block in columns:
                 groups.setdefault(key, []).append(block)
             for (archetype, _), blocks in groups.items():
                 frames, times, fields = _join(blocks)

@@ -77,8 +77,9 @@ def trajectory_table(rows: Iterable[Sequence]) -> pl.DataFrame:
     return canonical_order(df)
 
 
-def canonical_order(df: pl.DataFrame) -> pl.DataFrame:
-    return df.select(COLUMNS).sort(["tracker", "track_id", "frame"], maintain_order=True)
+def canonical_order(df: pl.DataFrame, extra: tuple[str, ...] = ()) -> pl.DataFrame:
+    """The ★ columns (then ``extra`` ones, e.g. ``fill``) in order, rows by tracker, track and frame."""
+    return df.select(*COLUMNS, *extra).sort(["tracker", "track_id", "frame"], maintain_order=True)
 
 
 def canonical_bytes(df: pl.DataFrame, float_bytes: Callable[[np.ndarray], bytes] = lambda v: v.tobytes()) -> bytes:

@@ -35,11 +35,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _spec(log: Path, args: argparse.Namespace, overrides: list[str]) -> RunSpec:
+def _spec(log: Path, args: argparse.Namespace, side: str) -> RunSpec:
+    """How one .mcap operand is replayed: the shared options, then ``side``'s (``--a`` / ``--b``) overrides."""
+    overrides = args.a_sets if side == "--a" else args.b_sets
     tracker = args.tracker or "flow"
     seed, config, sets = args.seed or 0, args.config, {}
-    for given, option in ((args.sets, "--set"), (overrides, "--a/--b")):  # (a side's may override a shared one)
+    for given, option in ((args.sets, "--set"), (overrides, side)):  # (a side's may override a shared one)
         refuse_repeats([parse_assignment(t)[0] for t in given], tracker, "give it once", option)
+    shared = [parse_assignment(t)[0] for t in args.sets]
+    for key, option in (("seed", "--seed"), ("config", "--config")):
+        if key in shared and getattr(args, key) is not None:
+            raise TrackreplayError(f"{option} and --set {key}=... both give the {key} for both operands: give it once")
     for text in [*args.sets, *overrides]:
         key, value = parse_assignment(text)
         if key == "seed":
@@ -83,16 +89,16 @@ def run(args: argparse.Namespace) -> int:
             raise TrackreplayError("an .rrd file is compared with another .rrd file only")
         result = diff_rrd(kinds[0][1], kinds[1][1])
     elif all(kind == "log" for kind, _ in kinds):
-        result = diff_runs(_spec(kinds[0][1], args, args.a_sets), _spec(kinds[1][1], args, args.b_sets))
+        result = diff_runs(_spec(kinds[0][1], args, "--a"), _spec(kinds[1][1], args, "--b"))
     else:
         sides, ids = [], []
-        for (kind, path), overrides in zip(kinds, (args.a_sets, args.b_sets)):
+        for (kind, path), side in zip(kinds, ("--a", "--b")):
             if kind == "summary":  # a summary records its tracker and log
                 summary, recording = load_summary(path)
                 ids.append((summary.get("tracker"), Path(str(summary["log"])).name if summary.get("log") else None))
                 sides.append(recording)
             else:
-                spec = _spec(path, args, overrides)
+                spec = _spec(path, args, side)
                 ids.append((spec.tracker, path.name))
                 sides.append(recording_of_run(spec))
         head = _mismatch(*ids)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import polars as pl
 
-from trackreplay.replay.commands.values import finite_json
+from trackreplay.replay.commands.values import finite_json, positive_float
 from trackreplay.replay.eval import check_frames, evaluate, format_summary
 from trackreplay.replay.export import read_trajectory
 from trackreplay.replay.frames import image_times
@@ -34,7 +34,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    "the groups scenes also write /groundtruth/groups)")
     p.add_argument("--image-topic", help="the image topic the trajectory was replayed on, whose frames it numbers "
                    "(default as replay's: /camera/image, else the stereo left, else the log's only image topic)")
-    p.add_argument("--max-distance-m", type=float, default=MAX_DISTANCE_M, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default 1 m)")
+    p.add_argument("--max-distance-m", type=positive_float, default=MAX_DISTANCE_M, help="3-D match distance for --mot, and the distance at which the 3-D HOTA similarity reaches 0 (default %(default)s m)")
     p.set_defaults(func=run)
     return p
 

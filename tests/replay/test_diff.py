@@ -146,3 +146,11 @@ def test_a_key_given_twice_is_refused_as_batch_refuses_it(short_sim: Path, capsy
     """A review: ``--set flow.q=1 --set q=2`` ran with the last one; batch refuses the same input."""
     assert main(["diff", str(short_sim), str(short_sim), "--tracker", "flow", "--set", "flow.q=1", "--set", "q=2"]) == 2
     assert "--set q given twice (as flow.q)" in capsys.readouterr().err
+
+
+def test_a_seed_or_config_given_two_ways_is_refused(short_sim: Path, capsys) -> None:
+    """A review: ``--seed 1 --set seed=2`` ran seed 2 without a word; a side's repeat names its side."""
+    assert main(["diff", str(short_sim), str(short_sim), "--seed", "1", "--set", "seed=2"]) == 2
+    assert "--seed and --set seed=... both give the seed" in capsys.readouterr().err
+    assert main(["diff", str(short_sim), str(short_sim), "--b", "seed=1", "--b", "seed=2"]) == 2
+    assert "--b seed given twice" in capsys.readouterr().err

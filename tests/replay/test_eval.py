@@ -171,3 +171,14 @@ def test_mot_on_a_2d_tracker_says_the_3d_block_does_not_apply(tmp_path, capsys) 
     assert m["3d"] is None and m["hota"]["3d"] is None and m["3d_not_applicable"] == "the trajectory has no X, Y, Z"
     code, m = _mot(tmp_path, _boxes([3]), log)  # no match at all: MOTP undefined, null in the JSON
     assert code == 0 and m["image"]["motp"] is None
+
+
+def test_a_match_distance_that_is_not_positive_is_refused(capsys) -> None:
+    """A review: ``--max-distance-m -1`` printed a LocA above 1 and exited 0."""
+    from trackreplay.replay.cli import main
+
+    for bad in ("-1", "0", "nan"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["eval", "t.parquet", "l.mcap", "--mot", "--max-distance-m", bad])
+        assert exit_.value.code == 2
+        assert "--max-distance-m" in capsys.readouterr().err

@@ -270,3 +270,26 @@ def test_the_next_record_is_read_before_a_frame_is_handed_over_and_an_error_ther
     assert next(frames).index == 1  # frame 1 handed over although reading what follows it failed ...
     with pytest.raises(LogError, match="message 2 is unreadable"):
         next(frames)  # ... and the error after it
+
+
+def test_an_interrupt_while_reading_ahead_is_not_held_back(tmp_path: Path, monkeypatch) -> None:
+    """A Ctrl-C while message k+1 is read goes out at once: frame k is not handed over first (only errors
+    wait a step, so that no readable frame is lost to them)."""
+    path = tmp_path / "three.mcap"
+    with LogWriter(path) as log:
+        for k in range(3):
+            log.write(T.CAMERA_IMAGE, image_message(_img(k), "png", k * MS), k * MS)
+    reader = LogReader(path)
+    real = LogReader.messages
+
+    def interrupted(self, *args, **kwargs):
+        for item in real(self, *args, **kwargs):
+            if item.index == 2:
+                raise KeyboardInterrupt
+            yield item
+
+    monkeypatch.setattr(LogReader, "messages", interrupted)
+    frames = iter_frames(reader, FrameTopics.detect(reader))
+    assert next(frames).index == 0
+    with pytest.raises(KeyboardInterrupt):
+        next(frames)  # not frame 1 first

@@ -165,3 +165,27 @@ def test_a_block_build_cut_short_is_not_built_again_at_the_flush(monkeypatch: py
         logger.batch(build, "b", 1)
     logger.flush()
     assert built == [[0, 1]]  # not [[0, 1], [0, 1]]
+
+
+def test_a_flush_cut_short_does_not_send_a_path_twice(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A review: the flush cleared its buffers only after sending every path, so a Ctrl-C during it left
+    the paths already sent queued, and the flush in the replay's `finally` sent them again."""
+    import trackreplay.replay.rerun_sink as sink
+
+    logger = FrameLogger(rr.RecordingStream("t"))
+    for frame in range(2):
+        logger.set_frame(frame, frame)
+        for path in ("a", "b", "c"):
+            logger.entity_rows(path, rr.Clear(recursive=False), [frame], [frame])
+    sent: list[str] = []
+
+    def send(rec, path, timelines, rows):
+        sent.append(path)
+        if len(sent) == 2:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(sink, "_send", send)
+    with pytest.raises(KeyboardInterrupt):
+        logger.flush()
+    logger.flush()
+    assert sent == ["a", "b", "c"]  # not a, b, a, b, c
