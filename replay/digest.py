@@ -85,9 +85,10 @@ _FIELD_NAMES: dict[type, tuple[str, ...]] = {}
 
 
 def _field_names(cls: type) -> tuple[str, ...]:
+    """The fields the digest hashes: all but those marked :data:`~trackreplay.trackers.base.NOT_HASHED`."""
     names = _FIELD_NAMES.get(cls)
     if names is None:
-        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls))
+        names = _FIELD_NAMES[cls] = tuple(f.name for f in dataclasses.fields(cls) if f.metadata.get("digest", True))
     return names
 
 
@@ -241,8 +242,8 @@ def leaf_values(value: Any, path: str = "") -> Iterator[tuple[str, Any]]:
     if _leaf_bytes(value) is not None:
         yield path, value
     elif dataclasses.is_dataclass(value):
-        for f in dataclasses.fields(value):
-            yield from leaf_values(getattr(value, f.name), _join(path, f.name))
+        for name in _field_names(type(value)):
+            yield from leaf_values(getattr(value, name), _join(path, name))
     elif isinstance(value, (tuple, list)):
         yield _join(path, "len"), len(value)
         for i, item in enumerate(value):

@@ -16,6 +16,9 @@ Marked = Iterable[tuple[np.ndarray, Sequence[InitRegion]]]  # (image, regions ma
 
 STATUSES = ("measured", "predicted", "interpolated", "lost")
 POSITION_FIELDS = ("x", "y", "X", "Y", "Z", "dx", "dy", "dz")
+# An intermediate's dataclass field with this metadata is what a drawn value is computed from on read
+# (a camera, a model's constants), not a result: the replay digest and diff's per-field hashes skip it.
+NOT_HASHED = {"digest": False}
 
 
 @dataclass(frozen=True)

@@ -247,6 +247,16 @@ def _spread_of(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return centre, np.sqrt(np.maximum(((xy - centre) ** 2).mean(axis=0), 1.0 / 12.0))
 
 
+def measured_spread(mask: np.ndarray, spread: str, clip: float) -> tuple[np.ndarray, np.ndarray] | None:
+    """Centroid and standard deviations of a mask's pixels as ``refine.spread`` says: "moments" over
+    all of them (:func:`_spread`), "clipped" by :func:`clipped_spread`. None when the mask is empty."""
+    if spread == "clipped":
+        return clipped_spread(mask, clip)
+    if spread == "moments":
+        return _spread(mask)
+    raise ValueError(f"spread must be 'moments' or 'clipped', not {spread!r}")
+
+
 def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray, spread: str = "moments",
                   clip: float = 3.0) -> np.ndarray | None:
     """Where the marked box lies relative to its foreground, ``(u_x, u_y, s_x, s_y)``: box centre =
@@ -256,7 +266,7 @@ def region_layout(mask: np.ndarray, offset: np.ndarray, box: np.ndarray, spread:
     is empty. Moments, not the bounding box: a few pixels of the target that differ from the floor on
     one frame and not on another (legs over a zebra crossing) move them little. ``spread`` "clipped"
     (``refine.spread``): measured as the later regions are, by :func:`clipped_spread`."""
-    measured = clipped_spread(mask, clip) if spread == "clipped" else _spread(mask)
+    measured = measured_spread(mask, spread, clip)
     if measured is None:
         return None
     centre, sd = measured
@@ -273,7 +283,7 @@ def region_box(region: np.ndarray, offset: np.ndarray, layout: np.ndarray, sprea
     """The target's box ``(x, y, w, h)`` placed on a non-empty region mask (its top-left pixel at
     ``offset``) by ``layout`` (:func:`region_layout`) from the region's centroid and standard deviations
     (``refine.spread``): "moments", over all its pixels; "clipped", :func:`clipped_spread`."""
-    centre, sd = clipped_spread(region, clip) if spread == "clipped" else _spread(region)
+    centre, sd = measured_spread(region, spread, clip)
     layout = np.asarray(layout, np.float64)
     return np.concatenate([centre + np.asarray(offset, np.float64) + layout[:2] * sd, layout[2:4] * sd])
 

@@ -179,7 +179,7 @@ class BlobConfig:
     # shaded side, its blurred rim, all but a highlight) far more often than the ball's image shrinks
     # that fast, and a target that follows such pieces down lets smaller pieces through next (on the
     # approach clip at 3/4 resolution the target area fell from 11 to 2 px² while the ball's grew past 200,
-    # then specks by the hole were `measured` after the ball dropped). None: target_rate.
+    # then specks by the hole were `measured` after the ball dropped). None (Python only; in TOML give target_rate): target_rate.
     target_shrink_rate: float | None = 0.15  # ... the area, towards a smaller blob, at this rate (pieces of the ball)
     initial_circularity: float = 0.9
     widen_per_miss: float = 0.25  # the area gate (log tolerance) grows by this per frame without a ball...
@@ -208,6 +208,10 @@ class BlobConfig:
             raise ValueError("blobs.area_tolerance must exceed 1")
         if not 0 < self.target_rate <= 1 or not (self.target_shrink_rate is None or 0 < self.target_shrink_rate <= 1):
             raise ValueError("blobs.target_rate and blobs.target_shrink_rate must be in (0, 1]")
+        if self.target_shrink_rate is not None and self.target_shrink_rate > self.target_rate:
+            raise ValueError(f"blobs.target_shrink_rate ({self.target_shrink_rate:g}) must not exceed blobs.target_rate "
+                             f"({self.target_rate:g}): a smaller blob is more often a piece of the ball than the ball shrinking; "
+                             "set it to target_rate to move the target at one rate both ways")
         if min(self.min_area_px, self.area_slack_px, self.shape_area_px, self.circularity_tolerance) < 0 or self.max_blobs < 1:
             raise ValueError("blobs.min_area_px, area_slack_px, shape_area_px and circularity_tolerance must be >= 0, "
                              "blobs.max_blobs >= 1")

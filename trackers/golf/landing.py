@@ -21,10 +21,11 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackreplay.trackers.base import NOT_HASHED
 from trackreplay.trackers.filters.gating import Innovation
 from trackreplay.trackers.filters.kalman import MotionModelEkf
 from trackreplay.trackers.geometry.ptz import PtzCamera
@@ -335,11 +336,15 @@ class EkfState:
 
     The predicted landing is drawn, never used by the tracker: it is integrated on first read
     (``landing_world``, ``landing_image``, ``landing_in_s``) from ``x``, which the digest hashes, so
-    a replay that draws nothing (no ``--rrd``) never spends the ~100 Heun steps on it."""
+    a replay that draws nothing (no ``--rrd``) never spends the ~100 Heun steps on it; what else it
+    needs is the field ``landing_from``, which the digest skips (``NOT_HASHED``) and
+    ``dataclasses.replace`` keeps."""
 
     x: np.ndarray  # (6,) world X, Y, Z, VX, VY, VZ
     P: np.ndarray  # (6, 6)
     nis: float  # of the last update (NaN: none yet)
+    # what the landing is integrated from: contact height, EKF config, the frame's camera (None: no landing)
+    landing_from: tuple | None = field(default=None, repr=False, metadata=NOT_HASHED)
 
     @classmethod
     def empty(cls) -> EkfState:
@@ -350,14 +355,12 @@ class EkfState:
         """The filter now; its predicted landing (:func:`next_landing`) seen through ``camera`` when read."""
         if not ekf.initialised:
             return cls(np.full(6, np.nan), np.full((6, 6), np.nan), float(ekf.last_nis))
-        state = cls(ekf.x.copy(), ekf.P.copy(), float(ekf.last_nis))
-        object.__setattr__(state, "_landing_from", (ekf.contact_z, ekf.config, camera))  # not a field: not hashed
-        return state
+        return cls(ekf.x.copy(), ekf.P.copy(), float(ekf.last_nis), (ekf.contact_z, ekf.config, camera))
 
     @functools.cached_property
     def _landing(self) -> tuple[np.ndarray, np.ndarray, float]:
         world, image, seconds = np.full(3, np.nan), np.full(2, np.nan), math.nan
-        source = self.__dict__.get("_landing_from")
+        source = self.landing_from
         prediction = next_landing(self.x, source[0], source[1]) if source is not None else None
         if prediction is not None:
             seconds, world = prediction

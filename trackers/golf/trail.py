@@ -7,10 +7,11 @@ only rotates needs no depth to draw the stored directions into the image of its 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackreplay.trackers.base import NOT_HASHED
 from trackreplay.trackers.geometry.ptz import PtzCamera
 
 
@@ -83,12 +84,11 @@ class TrailPoints:
 
     measured: np.ndarray  # (K, 5) past measured pixels x, y and their lines of sight dx, dy, dz (NaN: no pose)
     world: np.ndarray  # (K, 3) past EKF positions
+    camera: PtzCamera | None = field(default=None, repr=False, metadata=NOT_HASHED)  # the pose they are drawn into
 
     @classmethod
     def of(cls, measured: np.ndarray, world: np.ndarray, camera: PtzCamera | None) -> TrailPoints:
-        points = cls(measured, world)
-        object.__setattr__(points, "_camera", camera)  # not a field: not hashed
-        return points
+        return cls(measured, world, camera)
 
     @classmethod
     def empty(cls) -> TrailPoints:
@@ -97,4 +97,4 @@ class TrailPoints:
     @functools.cached_property
     def image(self) -> np.ndarray:
         """(K, 2) past measured positions drawn into this frame's pose (:func:`drawn_into`)."""
-        return drawn_into(self.measured, self.__dict__.get("_camera"))
+        return drawn_into(self.measured, self.camera)

@@ -88,3 +88,9 @@ def test_the_switch():
         config_from_dict(ColorPfConfig, {"refine": {"spread": "iqr"}})
     with pytest.raises(TrackreplayError, match="invalid refine .*clip"):
         config_from_dict(ColorPfConfig, {"refine": {"clip": 0.0}})
+
+
+def test_an_unknown_spread_is_refused() -> None:
+    """A review: any other word measured by moments without a word."""
+    with pytest.raises(ValueError, match="spread must be"):
+        region_layout(np.ones((4, 4), bool), np.zeros(2), np.array([0.0, 0.0, 4.0, 4.0]), "clip")

@@ -109,6 +109,8 @@ def test_targets_follow_a_smaller_blob_at_the_shrink_rate_only():
     assert BlobTargets(100.0, 0.9).follow(400.0, 0.9, 0.5, 0.25).area == pytest.approx(200.0)
     assert BlobTargets(100.0, 0.9).follow(25.0, 0.9, 0.5).area == pytest.approx(50.0)  # None: the one rate
     assert BlobConfig().target_shrink_rate == pytest.approx(BlobConfig().target_rate / 2)
+    with pytest.raises(ValueError, match="must not exceed blobs.target_rate"):  # a review: target_rate=0.1 kept 0.15
+        BlobConfig(target_rate=0.1)
 
 
 def _one_blob(draw):

@@ -117,6 +117,15 @@ def test_trail_ring_keeps_the_last_rows_oldest_first():
     assert points.measured.shape == (1, 5) and points.world.tolist() == [[0.0, 1.0, 2.0]]
     assert points.image.tolist() == t.in_image(cam).tolist() and t.points(None).image.tolist() == [[100.0, 200.0]]
     assert TrailPoints.empty().image.shape == (0, 2)
+    # the pose the trail is drawn into survives dataclasses.replace (a review: it was kept outside the fields)
+    import dataclasses
+
+    from trackreplay.replay.digest import _field_names
+    from trackreplay.trackers.geometry.ptz import PtzCamera
+
+    points = TrailPoints.of(np.array([[10.0, 20.0, np.nan, np.nan, np.nan]]), np.zeros((1, 3)), object.__new__(PtzCamera))
+    assert dataclasses.replace(points, world=np.ones((1, 3))).camera is points.camera
+    assert _field_names(TrailPoints) == ("measured", "world")
 
 
 def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
