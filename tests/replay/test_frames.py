@@ -244,16 +244,21 @@ def test_a_mark_for_another_moment_is_refused(tmp_path: Path) -> None:
         list(iter_frames(reader, FrameTopics.detect(reader)))
 
 
+def _three_frames(tmp_path: Path) -> LogReader:
+    """A log of three PNG frames 1 ms apart."""
+    path = tmp_path / "three.mcap"
+    with LogWriter(path) as log:
+        for k in range(3):
+            log.write(T.CAMERA_IMAGE, image_message(_img(k), "png", k * MS), k * MS)
+    return LogReader(path)
+
+
 def test_the_next_record_is_read_before_a_frame_is_handed_over_and_an_error_there_loses_no_frame(tmp_path: Path,
                                                                                                   monkeypatch) -> None:
     """iter_frames reads message k+1 (the log's records parsed in Python, holding the GIL) before it yields
     frame k, so a prefetch thread does that work while the tracker waits rather than while it steps; a
     failure reading message k+1 still hands frame k over first."""
-    path = tmp_path / "three.mcap"
-    with LogWriter(path) as log:
-        for k in range(3):
-            log.write(T.CAMERA_IMAGE, image_message(_img(k), "png", k * MS), k * MS)
-    reader = LogReader(path)
+    reader = _three_frames(tmp_path)
     real = LogReader.messages
     read: list[int] = []
 
@@ -275,11 +280,7 @@ def test_the_next_record_is_read_before_a_frame_is_handed_over_and_an_error_ther
 def test_an_interrupt_while_reading_ahead_is_not_held_back(tmp_path: Path, monkeypatch) -> None:
     """A Ctrl-C while message k+1 is read goes out at once: frame k is not handed over first (only errors
     wait a step, so that no readable frame is lost to them)."""
-    path = tmp_path / "three.mcap"
-    with LogWriter(path) as log:
-        for k in range(3):
-            log.write(T.CAMERA_IMAGE, image_message(_img(k), "png", k * MS), k * MS)
-    reader = LogReader(path)
+    reader = _three_frames(tmp_path)
     real = LogReader.messages
 
     def interrupted(self, *args, **kwargs):
