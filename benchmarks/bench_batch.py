@@ -28,8 +28,8 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from trackreplay.replay.batch import BatchOptions, plan, run_ray, run_serial  # noqa: E402
-from trackreplay.replay.batch_config import grid  # noqa: E402
+from trackreplay.replay.runs.batch import BatchOptions, plan, run_ray, run_serial  # noqa: E402
+from trackreplay.replay.runs.batch_config import grid  # noqa: E402
 
 
 def noop(x: int) -> int:
@@ -40,7 +40,7 @@ TASK_MEMORY = """
 import resource, sys, tracemalloc
 from pathlib import Path
 sys.path.insert(0, {root!r})
-from trackreplay.replay.batch import BatchOptions, plan, run_task
+from trackreplay.replay.runs.batch import BatchOptions, plan, run_task
 task = plan([Path({log!r})], "flow", [0], [])[0]
 tracemalloc.start()
 row = run_task(task, BatchOptions(out=Path({out!r})))

@@ -29,10 +29,10 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from benchmarks.machine import describe  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.log.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.trackers.frame import Frame  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.replay.config import config_from_dict  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.replay.core.config import config_from_dict  # noqa: E402
 from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig  # noqa: E402
 
 # N = 40 step time of other pipelines: the paper's, ours without the camera-motion measurement, and every switch of ours on

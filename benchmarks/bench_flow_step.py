@@ -25,7 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
-from trackreplay.replay.bench import median_seconds  # noqa: E402
+from trackreplay.replay.runs.bench import median_seconds  # noqa: E402
 from trackreplay.trackers.flow.config import FlowConfig  # noqa: E402
 from trackreplay.trackers.flow.refine import online_step  # noqa: E402
 from trackreplay.trackers.flow.velocity import histogram_edges, object_velocity  # noqa: E402

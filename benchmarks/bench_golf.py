@@ -30,9 +30,9 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from trackreplay.replay import frames as frames_module  # noqa: E402
-from trackreplay.replay.bench import median_seconds  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.log import frames as frames_module  # noqa: E402
+from trackreplay.replay.runs.bench import median_seconds  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
 from trackreplay.trackers.filters.particles import ParticleFilter  # noqa: E402
 from trackreplay.trackers.golf.config import GolfConfig, ParticleConfig  # noqa: E402
 from trackreplay.trackers.golf.particles import DIM, likelihood, motion, spread_sigma, state  # noqa: E402

@@ -24,8 +24,8 @@ sys.path.insert(0, str(ROOT))
 from benchmarks.machine import describe  # noqa: E402
 import trackreplay.trackers.appearance.lut as lut  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from trackreplay.replay.bench import median_seconds  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.runs.bench import median_seconds  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
 
 
 def whole_cube(foreground, background, *, smooth, foreground_weight, min_count, background_scale=1.0):

@@ -31,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 
 from benchmarks.machine import describe  # noqa: E402
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from trackreplay.replay.bench import time_replay  # noqa: E402
+from trackreplay.replay.runs.bench import time_replay  # noqa: E402
 
 REAL = ROOT.parent / "shared" / "data" / "real"
 IRON_SHOT = REAL / "golf_iron_shot_sky" / "vid1.mp4"
@@ -39,7 +39,7 @@ IRON_SHOT = REAL / "golf_iron_shot_sky" / "vid1.mp4"
 PEAK_RSS = """
 import resource, sys, tracemalloc
 sys.path.insert(0, {root!r})
-from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.core.engine import ReplayRequest, replay
 tracemalloc.start()
 r = replay(ReplayRequest(log={log!r}, tracker="flow"))
 print(r.frames, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, tracemalloc.get_traced_memory()[1] // 1024)
@@ -47,7 +47,7 @@ print(r.frames, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, tracemalloc.
 IMPORTS_RSS = """
 import resource, sys
 sys.path.insert(0, {root!r})
-import trackreplay.replay.engine, trackreplay.replay.registry, trackreplay.trackers.flow.tracker, polars, cv2
+import trackreplay.replay.core.engine, trackreplay.replay.core.registry, trackreplay.trackers.flow.tracker, polars, cv2
 print(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
 """
 
@@ -64,8 +64,8 @@ def cpu_estimate(log: Path, tracker: str, repeats: int) -> dict[str, float]:
     only a little by shared caches)."""
     import time
 
-    from trackreplay.replay.bench import read_decode
-    from trackreplay.replay.engine import ReplayRequest, replay
+    from trackreplay.replay.runs.bench import read_decode
+    from trackreplay.replay.core.engine import ReplayRequest, replay
 
     def cpu(fn) -> float:
         fn()
@@ -87,7 +87,7 @@ def rrd_cpu_ratio(log: Path, tracker: str, repeats: int) -> dict[str, float]:
     replay with --rrd over replay without; min over repeats, so other processes' load barely moves it."""
     import time
 
-    from trackreplay.replay.engine import ReplayRequest, replay
+    from trackreplay.replay.core.engine import ReplayRequest, replay
 
     def cpu(rrd: Path | None) -> float:
         replay(ReplayRequest(log=log, tracker=tracker, rrd=rrd))
@@ -113,7 +113,7 @@ def iron_shot(tmp: Path) -> Path | None:
     """The real iron shot as a marked JPEG log (as tests/trackers/golf/test_golf_real.py makes it)."""
     if not IRON_SHOT.is_file():
         return None
-    from trackreplay.replay.cli import main as cli
+    from trackreplay.replay.cli.main import main as cli
 
     (tmp / "marks.csv").write_text("frame,x,y,w,h\n458,593,1016,22,22\n")
     for argv in (["record", str(tmp / "iron.mcap"), "--video", str(IRON_SHOT), "--encoding", "jpeg"],
@@ -137,7 +137,7 @@ def main() -> int:
         write_flow_sim(base, FlowSimConfig(scene="flow-sim1", frames=args.frames))
         write_flow_sim(long, FlowSimConfig(scene="flow-sim1", frames=10 * args.frames))
         write_flow_sim(big, FlowSimConfig(scene="flow-sim1", frames=args.frames, size=720, encoding="jpeg"))
-        from trackreplay.replay.cli import main as cli
+        from trackreplay.replay.cli.main import main as cli
 
         tee = Path(tmp) / "teeshot-seed4.mcap"
         if cli(["synth", "golf-teeshot", str(tee), "--seed", "4"]):  # the 720p tee shot the issue names

@@ -28,14 +28,15 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from benchmarks.bench_colorpf import DEFAULT_VENV, ensure_venv  # noqa: E402
-from trackreplay.replay.eval import IOU_THRESHOLDS, iou  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.analysis.eval import IOU_THRESHOLDS  # noqa: E402
+from trackreplay.replay.log.frames import FrameTopics, iter_frames  # noqa: E402
 from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene  # noqa: E402
-from trackreplay.replay.cli import main as cli  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
-from trackreplay.replay.eval import evaluate  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.cli.main import main as cli  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.analysis.eval import evaluate  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.trackers.geometry.box import iou  # noqa: E402
 from trackreplay.trackers.colorpf.config import PAPER  # noqa: E402
 
 REAL = HERE.parents[1] / "shared" / "data" / "real" / "otb_crossing"
@@ -117,7 +118,7 @@ def scores(traj: pl.DataFrame, gt: pl.DataFrame) -> tuple[dict, dict]:
     ok = ~np.isnan(est).any(axis=1)
     ious = np.zeros(len(est))
     if ok.any():
-        ious[ok] = iou(est[ok], frames.select("x", "y", "w", "h").to_numpy()[ok])
+        ious[ok] = iou(est[ok], frames.select("x", "y", "w", "h").to_numpy()[ok], centred=True)
     ce = frames["centre_error"].to_list()
     return ({"auc": s.success_auc, "precision20": s.precision_at_20px, "centre_error_mean": s.centre_error_mean,
              "coverage": s.coverage},

@@ -43,10 +43,10 @@ sys.path.insert(0, str(HERE))
 
 from colorpf_eval import REAL, csrt, scores  # noqa: E402
 from benchmarks.bench_colorpf import DEFAULT_VENV, ensure_venv  # noqa: E402
-from trackreplay.replay.cli import main as cli  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.cli.main import main as cli  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 
 SEEDS = (0, 1, 2)
 W, H = 360, 240  # otb_crossing's frame

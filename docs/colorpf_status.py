@@ -25,12 +25,13 @@ ROOT = HERE.parent
 OTB = ROOT.parent / "shared" / "data" / "real" / "otb_crossing"
 sys.path.insert(0, str(ROOT))
 
-from trackreplay.replay.engine import ReplayRequest, iter_steps, replay  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps, replay  # noqa: E402
 from trackreplay.trackers.colorpf.foreground import neighbour_shares  # noqa: E402
-from trackreplay.replay.eval import evaluate  # noqa: E402
+from trackreplay.replay.analysis.eval import evaluate  # noqa: E402
 from trackreplay.trackers.colorpf.likelihood import measure  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.trackers.geometry.box import iou  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 
 FAR_PX = 20.0
 # the defaults before issue 7's foreground cue and neighbour check (and before the early background
@@ -43,14 +44,6 @@ SEEDS = (0, 1, 2, 3, 4)
 def cli(*args: str) -> str:
     done = subprocess.run([sys.executable, "-m", "trackreplay", *args], capture_output=True, text=True, check=True)
     return (done.stdout + done.stderr).strip()
-
-
-def iou(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """IoU of centre-format boxes (x, y, w, h), row by row."""
-    lo = np.maximum(a[:, :2] - a[:, 2:] / 2, b[:, :2] - b[:, 2:] / 2)
-    hi = np.minimum(a[:, :2] + a[:, 2:] / 2, b[:, :2] + b[:, 2:] / 2)
-    inter = np.prod(np.clip(hi - lo, 0, None), axis=1)
-    return inter / (np.prod(a[:, 2:], axis=1) + np.prod(b[:, 2:], axis=1) - inter)
 
 
 def runs(frames: list[int]) -> str:
@@ -97,7 +90,7 @@ def status_rows(fr: pl.DataFrame) -> tuple[list[str], pl.DataFrame]:
     """The per-status table's rows and the frames with a position (with their IoU)."""
     fr = fr.filter(pl.col("status").is_not_null()).sort("frame")
     has = fr.filter(pl.col("est_x").is_not_null())
-    overlap = iou(has.select("est_x", "est_y", "est_w", "est_h").to_numpy(), has.select("x", "y", "w", "h").to_numpy())
+    overlap = iou(has.select("est_x", "est_y", "est_w", "est_h").to_numpy(), has.select("x", "y", "w", "h").to_numpy(), centred=True)
     has = has.with_columns(pl.Series("iou", overlap))
     lines = []
     for status in ("measured", "predicted", "lost"):

@@ -24,10 +24,10 @@ import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
 from trackreplay.recorder.synth.flow_sims import SCENES, FlowSimConfig, write_flow_sim  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
-from trackreplay.replay.eval import evaluate  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.analysis.eval import evaluate  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 
 TITLES = {"flow-sim1": "sim 1: square, circular motion", "flow-sim2": "sim 2: + rotation 1°/frame",
           "flow-sim3": "sim 3: growing disc"}

@@ -34,16 +34,16 @@ sys.path.insert(0, str(HERE))
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.flight import FlightConfig, fit_flight, observations  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.replay.smooth import log_context  # noqa: E402
-from trackreplay.replay.trajectory import state_row, trajectory_table  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.analysis.flight import FlightConfig, fit_flight, observations  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.replay.analysis.smooth import log_context  # noqa: E402
+from trackreplay.replay.core.trajectory import state_row, trajectory_table  # noqa: E402
 
 GOLF_DEFAULT = ("seed0", "launch2", "occl", "nobounce", "beside")
 GOLF_QUICK = ("seed0", "launch2")
-# The fit before the impact/launch changes (replay/flight.py of 84a9a4e, docs of b31d04b: one horizontal retention for
+# The fit before the impact/launch changes (replay/analysis/flight.py of 84a9a4e, docs of b31d04b: one horizontal retention for
 # every impact, launch time free), same logs and replay, measured in the session that made them:
 # landing error m, fit CPU s (one BLAS thread) — the committed golf_flight.md of b31d04b has the
 # same landing errors.
@@ -139,7 +139,7 @@ def write(results: list[dict], commit: str, dirty: bool) -> None:
     L = ["# Golf: the 3-D flight from one PTZ camera, fitted offline vs the causal EKF", "",
          "Generated end to end by `python docs/golf_flight.py [--quick]` (synthetic tee shots of docs/golf_synthetic.py,",
          f"replay seed 0, deterministic), on commit {commit}" + (" with trackers/golf modified in the working tree" if dirty else "")
-         + ". `trackreplay flight TRAJ LOG` (replay/flight.py) fits launch time and point, launch",
+         + ". `trackreplay flight TRAJ LOG` (replay/analysis/flight.py) fits launch time and point, launch",
          "velocity, drag, lift (with a 1/speed slope) and spin-axis tilt, then the impacts (restitution, Coulomb",
          "friction capped at rolling without slipping, the backspin at the first impact), the hops (drag and the",
          "spin's Magnus lift) and the roll (deceleration), jointly, by SciPy least squares (soft-L1) to every measured",
@@ -219,7 +219,7 @@ def write(results: list[dict], commit: str, dirty: bool) -> None:
           "  extrapolated back from the first frames' apparent-size ranges was tried as the start and was worse",
           "  (31 %): the sizes of a 6 px ball are too noisy. It needs a start from the ground phase backwards.",
           "- Model error left (the synthetic truth's lift is S/(1+2S) of a decaying spin, the fit's a 1/speed",
-          "  law): a noiseless test shot seen like seed0 lands 0.5 % of carry off (tests/replay/test_flight_ground.py).",
+          "  law): a noiseless test shot seen like seed0 lands 0.5 % of carry off (tests/replay/analysis/test_flight_ground.py).",
           "- The golf tracker was being changed at the same time: the commit above names the one replayed."]
     (HERE / "golf_flight.md").write_text("\n".join(L) + "\n")
 

@@ -39,9 +39,9 @@ import polars as pl  # noqa: E402
 from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
 from trackreplay.recorder.synth.golf.operator import OperatorConfig  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 
 SMALL = dict(  # tests/trackers/golf/test_golf_scene.py's SHOT
     width=640, height=360,

@@ -34,7 +34,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import polars as pl  # noqa: E402
 
-from trackreplay.replay.engine import ReplayRequest, iter_steps, replay  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps, replay  # noqa: E402
 from trackreplay.trackers.golf.config import GolfConfig, ReinitConfig  # noqa: E402
 
 CLIP_DIR = ROOT.parent / "shared" / "data" / "real" / "golf_broadcast_approach"

@@ -39,13 +39,13 @@ import polars as pl  # noqa: E402
 
 from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, write_golf_teeshot  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, iter_steps, replay  # noqa: E402
-from trackreplay.replay.eval import evaluate  # noqa: E402
-from trackreplay.replay.export import fill_gaps, write_trajectory  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
-from trackreplay.replay.overlay import project_trajectory  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps, replay  # noqa: E402
+from trackreplay.replay.analysis.eval import evaluate  # noqa: E402
+from trackreplay.replay.core.export import fill_gaps, write_trajectory  # noqa: E402
+from trackreplay.replay.log.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.views.overlay import project_trajectory  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 from trackreplay.schemas import topics as T  # noqa: E402
 from trackreplay.schemas.records import LensTable  # noqa: E402
 from trackreplay.trackers.golf.config import GolfConfig, ReinitConfig  # noqa: E402

@@ -40,12 +40,12 @@ sys.path.insert(0, str(HERE.parent))
 
 from trackreplay.recorder.synth.groups.scene import (  # noqa: E402
     GROUNDTRUTH_GROUPS, SCENES, GroupSceneConfig, write_group_scene)
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.group_table import group_rows, group_table  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.mot import hota_metrics, mot_metrics  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.replay.trajectory import state_row, trajectory_table  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.core.group_table import group_rows, group_table  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.analysis.mot import hota_metrics, mot_metrics  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.replay.core.trajectory import state_row, trajectory_table  # noqa: E402
 from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap  # noqa: E402
 
 MERGE_EVENTS = ("merged into", "absorbed by")

@@ -32,13 +32,13 @@ import polars as pl  # noqa: E402
 from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene  # noqa: E402
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
 from trackreplay.recorder.synth.groups.scene import GROUNDTRUTH_GROUPS, GroupSceneConfig, write_group_scene  # noqa: E402
-from trackreplay.replay.group_table import group_table
-from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
-from trackreplay.replay.eval import evaluate  # noqa: E402
-from trackreplay.replay.export import fill_gaps  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
-from trackreplay.replay.smooth import log_context, smooth_trajectory  # noqa: E402
+from trackreplay.replay.core.group_table import group_table
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.analysis.eval import evaluate  # noqa: E402
+from trackreplay.replay.core.export import fill_gaps  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.replay.analysis.smooth import log_context, smooth_trajectory  # noqa: E402
 
 GOLF_DEFAULT = ("seed0", "occl", "launch2")
 PARTS = ("flow", "colorpf", "groups", "golf")
@@ -212,7 +212,7 @@ def write(store: dict) -> None:
     L = ["# Offline smoothing: RTS over the whole log vs the causal trackers", "",
          "Generated end to end by `python docs/smoothing.py [--quick]` (tables and the lists under them; seed 0",
          "everywhere, deterministic). Each synthetic scene is replayed with the trackers' raw measurements kept",
-         "(as `replay --smooth` does), then replay/smooth.py smooths every track: a Rauch–Tung–Striebel smoother",
+         "(as `replay --smooth` does), then replay/analysis/smooth.py smooths every track: a Rauch–Tung–Striebel smoother",
          "over the tracker's own motion model — image constant velocity for flow, colour PF and golf (`q`, `σ` by",
          "maximum likelihood on a fixed grid, measurement noise `σ/√confidence`, outliers beyond 5σ dropped), the",
          "group EKF's 3-D constant velocity for groups (its own `q`; the raw mean `[u v d]` of the group's points",

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import io
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -16,11 +16,11 @@ from trackreplay.recorder.log_summary import log_file, read_summary, require_top
 from trackreplay.recorder.atomic import replace_when_done
 from trackreplay.recorder.mcap_copy import McapCopy, damage_is_an_error, require_intact
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
-from trackreplay.recorder.sources.base import read_text
+from trackreplay.recorder.sources.base import CsvRows, read_text
 from trackreplay.schemas import messages as m
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import SourceError
-from trackreplay.schemas.records import InitRegion, init_annotations_pb
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,7 @@ def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
     marks: list[Mark] = []
     try:
         with io.StringIO(read_text(path), newline="") as fh:
-            for line_no, row in enumerate(csv.reader(fh), start=1):
+            for line_no, row in enumerate(CsvRows(fh, path), start=1):
                 cells = [c.strip() for c in row]
                 if not cells or not any(cells) or cells[0].startswith("#"):
                     continue
@@ -77,6 +77,77 @@ def read_marks_csv(path: Path, default_label: str) -> list[Mark]:
     if not marks:
         raise SourceError(f"{path} holds no marks")
     return marks
+
+
+def _truth_box(obj: GroundTruthObject, mark_size: float) -> tuple[float, float, float, float] | None:
+    """Centre and size to mark for a truth object: its box, an ``mark_size`` square round a point, or
+    None when the truth does not place it visibly (``visible`` false, or no finite centre)."""
+    if obj.visible is False or obj.x is None or obj.y is None or not (math.isfinite(obj.x) and math.isfinite(obj.y)):
+        return None
+    if obj.w is not None and obj.h is not None and math.isfinite(obj.w) and math.isfinite(obj.h) and obj.w > 0 and obj.h > 0:
+        return obj.x, obj.y, obj.w, obj.h
+    return obj.x, obj.y, mark_size, mark_size
+
+
+def read_truth_frames(log: Path, topic: str = T.GROUNDTRUTH) -> dict[int, tuple[GroundTruthObject, ...]]:
+    """The log's ground truth by frame (``frame`` as recorded: the image's position in the log)."""
+    src = log_file(log)
+    require_topic(src, read_summary(src), topic)
+    frames: dict[int, tuple[GroundTruthObject, ...]] = {}
+    with open(src, "rb") as fh, damage_is_an_error(src):
+        for _, _, msg in make_reader(fh).iter_messages(topics=[topic], log_time_order=True):
+            gt = GroundTruthFrame.from_pb(m.GroundTruthFrame.FromString(msg.data))
+            frames[gt.frame] = frames.get(gt.frame, ()) + gt.objects
+    return frames
+
+
+def marks_from_truth(log: Path, frame: int | None = None, mark_size: float = 12.0, label: str | None = None,
+                     ids: Sequence[int] | None = None, topic: str = T.GROUNDTRUTH) -> list[Mark]:
+    """Marks (top-left box) where the log's ground truth places its objects on ``frame``: a truth box
+    as it is, a point truth (no size) as a ``mark_size`` x ``mark_size`` square round it — a benchmark's
+    start from its first labelled frame (OTB, VOT, TrackNet) without hand arithmetic.
+
+    ``frame`` None: the first frame where the truth places one of ``ids`` visibly (default: any
+    object). ``ids`` None: every object visible on that frame; given: each must be visible there.
+    ``label`` None: ``target``. The marks may reach past the picture: :func:`clip_mark` fits one."""
+    if not (math.isfinite(mark_size) and mark_size >= 1):
+        raise SourceError(f"the mark size round a point must be at least one pixel, not {mark_size!r}")
+    truth = read_truth_frames(log, topic)
+    wanted = None if ids is None else [int(i) for i in ids]
+
+    def usable(objs: tuple[GroundTruthObject, ...]) -> dict[int, tuple[float, float, float, float]]:
+        boxes = {o.id: _truth_box(o, mark_size) for o in objs if wanted is None or o.id in wanted}
+        return {i: b for i, b in boxes.items() if b is not None}
+
+    if frame is None:
+        frame = next((f for f in sorted(truth) if usable(truth[f])), None)
+        if frame is None:
+            who = "object" if wanted is None else "object " + ", ".join(map(str, wanted))
+            raise SourceError(f"{log}: the ground truth places no {who} visibly on any of its {len(truth)} frames")
+    if frame not in truth:
+        raise SourceError(f"{log}: the ground truth does not label frame {frame} "
+                          f"(it labels {len(truth)} frames, {min(truth, default=0)}-{max(truth, default=0)})")
+    boxes = usable(truth[frame])
+    missing = [] if wanted is None else [i for i in wanted if i not in boxes]
+    if missing or not boxes:
+        seen = ", ".join(str(o.id) for o in truth[frame] if _truth_box(o, mark_size)) or "none"
+        who = f"object {', '.join(map(str, missing))}" if missing else "any object"
+        raise SourceError(f"{log}: the ground truth does not place {who} visibly on frame {frame} "
+                          f"(objects visible there: {seen})")
+    order = wanted if wanted is not None else sorted(boxes)
+    return [Mark(frame, boxes[i][0] - boxes[i][2] / 2, boxes[i][1] - boxes[i][3] / 2, boxes[i][2], boxes[i][3],
+                 label or "target", source=f"{log}: ground truth of object {i} on frame {frame}") for i in order]
+
+
+def clip_mark(mark: Mark, width: int, height: int) -> Mark:
+    """``mark`` cut to the ``width`` x ``height`` picture (a truth box or a square round a point near
+    the border may reach past it); refused when less than a pixel of it is inside."""
+    x0, y0 = max(mark.x, 0.0), max(mark.y, 0.0)
+    x1, y1 = min(mark.x + mark.w, float(width)), min(mark.y + mark.h, float(height))
+    if x1 - x0 < 1 or y1 - y0 < 1:
+        raise SourceError(f"{mark.source or 'the mark'}: the box {mark.x:g},{mark.y:g},{mark.w:g},{mark.h:g} on frame "
+                          f"{mark.frame} lies outside the {width}x{height} picture")
+    return dataclasses.replace(mark, x=x0, y=y0, w=x1 - x0, h=y1 - y0)
 
 
 def _frame_times(path: Path, image_topic: str) -> list[int]:

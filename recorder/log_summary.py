@@ -55,6 +55,14 @@ def read_summary(path: str | Path) -> Summary:
             summary = make_reader(fh).get_summary()
     except McapError as err:
         raise TruncatedLogError(truncation_hint(path) + f" ({type(err).__name__})") from None
+    if summary is None:  # a streamed log (no summary section) is read by a linear scan
+        from trackreplay.recorder.mcap_scan import RecordDamage
+        from trackreplay.recorder.mcap_summary import streamed_summary
+
+        try:
+            summary = streamed_summary(path)
+        except RecordDamage as bad:
+            raise TruncatedLogError(f"{truncation_hint(path)} ({bad})") from None
     if summary is None:
         raise TruncatedLogError(truncation_hint(path))
     return summary

@@ -9,6 +9,10 @@ Only chunks are trusted after damage: they are the only data-section records tha
 and every log trackreplay writes keeps its messages in chunks. Schema and channel records lost with
 a damaged chunk are taken from the summary section when the file still has an intact one
 (:func:`summary_definitions`), so the messages of later chunks stay decodable.
+
+:func:`read_record` is the one reader of a record at an offset (framing, bounds, decompression,
+CRC): the scan walks with it, and the replay's indexed reader (``replay.log.chunks``) reads each
+indexed chunk and message index with it.
 """
 
 from __future__ import annotations
@@ -23,8 +27,8 @@ from pathlib import Path
 
 from mcap.data_stream import ReadDataStream
 from mcap.opcode import Opcode
-from mcap.records import (Attachment, Channel, Chunk, DataEnd, Footer, Header, McapRecord, Message, Metadata,
-                          Schema)
+from mcap.records import (Attachment, Channel, Chunk, DataEnd, Footer, Header, McapRecord, Message, MessageIndex,
+                          Metadata, Schema)
 from mcap.stream_reader import breakup_chunk
 
 MCAP_MAGIC = b"\x89MCAP0\r\n"
@@ -62,8 +66,8 @@ class ChunkRecords:
 Item = McapRecord | ChunkRecords | Damage
 
 
-class _Bad(Exception):
-    pass
+class RecordDamage(Exception):
+    """A record that does not check out (framing, bounds, decompression, CRC); the message says why."""
 
 
 def _chunk_framing_ok(data: mmap.mmap | bytes, pos: int, length: int) -> bool:
@@ -80,37 +84,43 @@ def _chunk_framing_ok(data: mmap.mmap | bytes, pos: int, length: int) -> bool:
     return 8 + 8 + 8 + 4 + 4 + compression_len + 8 + records_len == length
 
 
-def _read(data: mmap.mmap | bytes, pos: int) -> tuple[int, McapRecord | ChunkRecords | None]:
-    """The record at ``pos`` and its total size; raises ``_Bad`` for anything that does not check out."""
+def read_record(data: mmap.mmap | bytes, pos: int, *,
+                message_index: bool = False) -> tuple[int, McapRecord | ChunkRecords | None]:
+    """The record at ``pos`` and its total size; a chunk as its CRC-checked :class:`ChunkRecords`;
+    None for the records any writer rebuilds (indexes, statistics, summary offsets), except a
+    message index when ``message_index``. Raises :class:`RecordDamage` for anything that does not
+    check out."""
     if pos + 9 > len(data):
-        raise _Bad("the file ends in the middle of a record")
+        raise RecordDamage("the file ends in the middle of a record")
     opcode = data[pos]
     length = struct.unpack_from("<Q", data, pos + 1)[0]
     if opcode not in _KNOWN:
-        raise _Bad(f"unknown record type 0x{opcode:02x}")
+        raise RecordDamage(f"unknown record type 0x{opcode:02x}")
     if length > MAX_RECORD_BYTES:
-        raise _Bad(f"a record claims {length} bytes")
+        raise RecordDamage(f"a record claims {length} bytes")
     end = pos + 9 + length
     if end > len(data):
-        raise _Bad("the file ends in the middle of a record")
+        raise RecordDamage("the file ends in the middle of a record")
     if opcode == Opcode.CHUNK and not _chunk_framing_ok(data, pos, length):
-        raise _Bad("a chunk's fields do not add up to its length")
+        raise RecordDamage("a chunk's fields do not add up to its length")
     stream = ReadDataStream(BytesIO(data[pos + 9:end]))
     try:
         if opcode == Opcode.MESSAGE:
             record: McapRecord | None = Message.read(stream, length)
+        elif opcode == Opcode.MESSAGE_INDEX and message_index:
+            record = MessageIndex.read(stream)
         elif opcode in _READERS:
             record = _READERS[opcode](stream)
         else:
             record = None  # indexes, statistics, summary offsets: rebuilt by any writer
         if isinstance(record, Chunk):
             if record.uncompressed_size > MAX_RECORD_BYTES:
-                raise _Bad(f"a chunk claims {record.uncompressed_size} bytes uncompressed")
+                raise RecordDamage(f"a chunk claims {record.uncompressed_size} bytes uncompressed")
             return end - pos, ChunkRecords(pos, tuple(breakup_chunk(record, validate_crc=True)))
-    except _Bad:
+    except RecordDamage:
         raise
     except Exception as err:  # CRC, zstd/lz4, struct, UTF-8, EOF inside the record: all mean damage
-        raise _Bad(f"{type(err).__name__}: {err}" if str(err) else type(err).__name__) from None
+        raise RecordDamage(f"{type(err).__name__}: {err}" if str(err) else type(err).__name__) from None
     return end - pos, record
 
 
@@ -125,10 +135,19 @@ def _resync(data: mmap.mmap | bytes, start: int) -> int:
         if length > MAX_RECORD_BYTES or pos + 9 + length > len(data) or not _chunk_framing_ok(data, pos, length):
             continue
         try:
-            _read(data, pos)
-        except _Bad:
+            read_record(data, pos)
+        except RecordDamage:
             continue
         return pos
+
+
+def chunk_messages(data: bytes) -> list[Message]:
+    """The messages of the chunk record that ``data`` holds whole (e.g. read at a chunk index's offset
+    and length), CRC-checked; raises :class:`RecordDamage` when it is damaged or not one chunk."""
+    size, item = read_record(data, 0)
+    if not isinstance(item, ChunkRecords) or size != len(data):
+        raise RecordDamage("no chunk record at the indexed offset")
+    return [r for r in item.records if isinstance(r, Message)]
 
 
 def scan(data: mmap.mmap | bytes) -> Iterator[Item]:
@@ -138,8 +157,8 @@ def scan(data: mmap.mmap | bytes) -> Iterator[Item]:
     pos = len(MCAP_MAGIC)
     while pos < len(data):
         try:
-            size, record = _read(data, pos)
-        except _Bad as bad:
+            size, record = read_record(data, pos)
+        except RecordDamage as bad:
             nxt = _resync(data, pos)
             yield Damage(pos, nxt, str(bad))
             pos = nxt
@@ -160,10 +179,12 @@ def scan(data: mmap.mmap | bytes) -> Iterator[Item]:
 
 
 def _summary_intact(data: mmap.mmap | bytes, footer: Footer, footer_at: int) -> bool:
-    """Does the CRC in the footer match the summary section and the footer's own offset fields?"""
-    if not len(MCAP_MAGIC) <= footer.summary_start <= footer_at:
+    """Does the CRC in the footer match the summary section and the footer's own offset fields?
+    (``summary_start`` 0: a streamed log without a summary; the CRC covers those fields alone.)"""
+    start = footer_at if footer.summary_start == 0 else footer.summary_start
+    if not len(MCAP_MAGIC) <= start <= footer_at:
         return False
-    return zlib.crc32(data[footer.summary_start:footer_at + 9 + 16]) == footer.summary_crc
+    return zlib.crc32(data[start:footer_at + 9 + 16]) == footer.summary_crc
 
 
 def summary_definitions(data: mmap.mmap | bytes) -> tuple[dict[int, Schema], dict[int, Channel]]:
@@ -182,8 +203,8 @@ def summary_definitions(data: mmap.mmap | bytes) -> tuple[dict[int, Schema], dic
     pos = summary_start
     while pos < start:
         try:
-            size, record = _read(data, pos)
-        except _Bad:
+            size, record = read_record(data, pos)
+        except RecordDamage:
             return {}, {}
         if isinstance(record, Schema):
             schemas[record.id] = record

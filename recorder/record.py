@@ -186,6 +186,7 @@ def record(
                     pending = next(ptz, None)
                 if frames == 0:
                     _write_once(rec, topics, left, right is not None, calib, lens_table, plane)
+                    gt = gt.in_pixels(*left.size) if gt is not None else None  # (TrackNet's normalised centres)
                 if right is None:
                     rec.write(topics.camera_image, _image_pb(left, encoding, "camera"), t)
                 else:
@@ -207,8 +208,7 @@ def record(
         writer.close()  # keep what was recorded as a valid log
         raise
     except BaseException:
-        writer.close()
-        out.unlink(missing_ok=True)  # a half-recorded log of a broken source would mislead
+        writer.discard()  # a half-recorded log of a broken source would mislead; an earlier `out` stays
         raise
     writer.close()
     lost = losses.warnings() if video is not None else ()
@@ -247,7 +247,7 @@ def _warnings(gt: GroundTruthTable | None, frames: int) -> tuple[str, ...]:
     if gt is not None and gt.last_frame >= frames:
         extra = sum(1 for f in gt.frames if f >= frames)
         return (f"{gt.path} annotates {extra} frame(s) after the last recorded frame ({frames}); they were not written",)
-    if gt is not None and not gt.dense and len(gt.frames) < frames:
+    if gt is not None and gt.format in ("otb", "vot") and len(gt.frames) < frames:  # (line k = frame k)
         first, last = min(gt.frames), gt.last_frame
         return (f"{gt.path} has {len(gt.frames)} boxes for {frames} recorded frames: they were taken as frames "
                 f"{first}-{last} (line 1 = frame {first}); frames without a box have no ground truth "

@@ -17,7 +17,7 @@ from typing import Any, BinaryIO
 from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import register_schema
 
-from trackreplay.recorder.atomic import partial_path
+from trackreplay.recorder.atomic import open_partial
 from trackreplay.recorder.interrupts import deferred_interrupts
 from trackreplay.recorder.provenance import RECORD_NAME, provenance
 from trackreplay.schemas.errors import OutputError
@@ -46,12 +46,10 @@ class LogWriter:
         if compression not in COMPRESSION:
             raise ValueError(f"compression must be one of {sorted(COMPRESSION)}, not {compression!r}")
         self.path = Path(path)
-        self.partial = partial_path(self.path)
         self._closed = False
-        try:
-            self._fh: BinaryIO = open(self.partial, "wb")
-        except OSError as err:
-            raise OutputError(f"cannot write {self.path} ({err.strerror})") from None
+        # this process's own file: another recording of the same name, or the leftover of one kept for
+        # `recover`, is never truncated
+        self.partial, self._fh = open_partial(self.path)
         self._writer = Writer(self._fh, chunk_size=chunk_size, compression=COMPRESSION[compression])
         with self._failing_as_output_error():
             self._writer.start(profile=profile, library="trackreplay")
@@ -125,6 +123,14 @@ class LogWriter:
             self._closed = True
             self._fh.close()
             os.replace(self.partial, self.path)
+
+    def discard(self) -> None:
+        """Stop without a log: remove this writer's own temporary file (a file already under the final
+        name, from an earlier run, stays as it was). After a failed write the partial log stays, for `recover`."""
+        if self._closed:
+            return
+        self._abandon()
+        self.partial.unlink(missing_ok=True)
 
     def _abandon(self) -> None:
         """After a failed write: stop, keeping ``NAME.partial`` (every flushed chunk) for ``recover``."""

@@ -1,4 +1,4 @@
-"""Default topic names of the log contract (ARCHITECTURE.md ★ Log contract)."""
+"""Default topic names of the log contract (docs/architecture.md §3 Log contract)."""
 
 CAMERA_IMAGE = "/camera/image"
 CAMERA_CALIBRATION = "/camera/calibration"

@@ -9,7 +9,7 @@ import polars as pl
 import pytest
 
 import trackreplay
-from trackreplay.replay.cli import main
+from trackreplay.replay.cli.main import main
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.flow.config import FlowConfig
 

@@ -12,9 +12,9 @@ from pathlib import Path
 import polars as pl
 import pytest
 
-from trackreplay.replay.registry import NAMES
-from trackreplay.replay.rerun_sink import rrd_digest
-from trackreplay.replay.trajectory import table_digest
+from trackreplay.replay.core.registry import NAMES
+from trackreplay.replay.views.rerun_sink import rrd_digest
+from trackreplay.replay.core.trajectory import table_digest
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,7 +42,7 @@ def test_two_processes_agree(tracker: str, tracker_logs: dict[str, Path], tmp_pa
 
 
 def test_different_seed_is_a_different_stream(tracker_logs: dict[str, Path]) -> None:
-    from trackreplay.replay.engine import tracker_rng
+    from trackreplay.replay.core.engine import tracker_rng
 
     assert tracker_rng(1, "flow").integers(1 << 30) != tracker_rng(2, "flow").integers(1 << 30)
     assert tracker_rng(1, "flow").integers(1 << 30) != tracker_rng(1, "golf").integers(1 << 30)

@@ -7,8 +7,8 @@ import numpy as np
 import polars as pl
 import pytest
 
-from trackreplay.replay.engine import ReplayRequest, replay
-from trackreplay.replay.trajectory import FLOAT_COLUMNS
+from trackreplay.replay.core.engine import ReplayRequest, replay
+from trackreplay.replay.core.trajectory import FLOAT_COLUMNS
 
 GOLDEN = Path(__file__).parent / "golden"
 EXPECTED = json.loads((GOLDEN / "expected.json").read_text())

@@ -1,4 +1,4 @@
-"""The import graph (ARCHITECTURE.md): one direction only, no cycles, no bare top-level packages.
+"""The import graph (docs/architecture.md §1 Layers): one direction only, no cycles, no bare top-level packages.
 
 Layering rules count every import, at module level or inside a function (a lazy import is still
 a dependency). Cycle detection uses module-level imports only (not those inside functions or under
@@ -34,7 +34,7 @@ class Import:
 
 
 def module_files() -> dict[str, Path]:
-    """Our modules by installed name: ``replay/engine.py`` -> ``trackreplay.replay.engine``."""
+    """Our modules by installed name: ``replay/core/engine.py`` -> ``trackreplay.replay.core.engine``."""
     out = {}
     for top in (PACKAGE, *FOLDERS):
         base = ROOT / top
@@ -104,7 +104,7 @@ def _violations(layer: str, allowed: tuple[str, ...]) -> list[str]:
 
 
 def test_the_source_folders_were_found() -> None:
-    assert {"trackreplay.replay.engine", "trackreplay.trackers.base", "trackreplay.recorder.annotate",
+    assert {"trackreplay.replay.core.engine", "trackreplay.trackers.base", "trackreplay.recorder.annotate",
             "trackreplay.schemas.records", "trackreplay"} <= set(MODULES)
 
 
@@ -120,13 +120,38 @@ def test_recorder_never_imports_replay() -> None:
     assert _violations("recorder", (f"{PACKAGE}.schemas", f"{PACKAGE}.recorder", f"{PACKAGE}.trackers")) == []
 
 
+# replay/'s floors, lowest first: a sub-package imports only what lies on its own floor or below
+# (each sub-package's ``__init__`` says the same in words).
+BELOW_REPLAY = (f"{PACKAGE}.schemas", f"{PACKAGE}.trackers", f"{PACKAGE}.recorder")
+REPLAY_FLOORS = {
+    "log": ("log",),
+    "views": ("views",),
+    "core": ("log", "views", "core"),
+    "analysis": ("log", "views", "core", "analysis"),
+    "runs": ("log", "views", "core", "analysis", "runs"),
+    "cli": ("log", "views", "core", "analysis", "runs", "cli"),
+}
+
+
+def test_replay_is_split_into_the_declared_sub_packages() -> None:
+    top = {name.split(".")[2] for name in MODULES if name.startswith(f"{PACKAGE}.replay.")}
+    assert top == set(REPLAY_FLOORS)
+
+
+@pytest.mark.parametrize("floor", list(REPLAY_FLOORS))
+def test_replay_sub_packages_import_only_their_floor_and_below(floor: str) -> None:
+    allowed = BELOW_REPLAY + tuple(f"{PACKAGE}.replay.{f}" for f in REPLAY_FLOORS[floor])
+    found = [v for v in _violations(f"replay.{floor}", allowed) if not v.endswith(f"imports {PACKAGE}")]  # __version__
+    assert found == []
+
+
 def test_the_rules_catch_a_back_edge(tmp_path: Path) -> None:
     """The checker itself: a function-level import of replay in recorder is found."""
     path = tmp_path / "annotate.py"
-    path.write_text("import os\n\ndef f():\n    from trackreplay.replay.reader import LogReader\n    from . import log_summary\n")
+    path.write_text("import os\n\ndef f():\n    from trackreplay.replay.log.reader import LogReader\n    from . import log_summary\n")
     found = imports_of("trackreplay.recorder.annotate", path)
     assert [(i.target, i.module_level) for i in found] == [
-        ("os", True), ("trackreplay.replay.reader", False), ("trackreplay.recorder.log_summary", False)]
+        ("os", True), ("trackreplay.replay.log.reader", False), ("trackreplay.recorder.log_summary", False)]
 
 
 def cycles(edges: dict[str, set[str]]) -> list[list[str]]:
@@ -229,7 +254,7 @@ def test_pypi_trackers_and_trackreplay_install_and_import_side_by_side(tmp_path:
         pytest.skip(f"could not install trackers from the package index: {got.stderr.strip()[-300:]}")
     got = subprocess.run([*pip, str(src)], capture_output=True, text=True, timeout=900)
     assert got.returncode == 0, got.stderr[-2000:]
-    code = ("import trackers, trackreplay, trackreplay.trackers.base, trackreplay.replay.engine; "
+    code = ("import trackers, trackreplay, trackreplay.trackers.base, trackreplay.replay.core.engine; "
             "from pathlib import Path; "
             "assert Path(trackers.__file__).parent.name == 'trackers' and 'trackreplay' not in trackers.__file__; "
             "print(trackreplay.__version__)")

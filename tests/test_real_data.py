@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from trackreplay.replay.cli import main
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.log.reader import LogReader
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "data" / "real"
 ROSBAGS = sorted((REAL / "mcap_rosbag2").rglob("*.mcap")) if REAL.is_dir() else []

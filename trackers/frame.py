@@ -1,4 +1,4 @@
-"""The immutable frame bundle a tracker receives (ARCHITECTURE.md ★ Replay contract)."""
+"""The immutable frame bundle a tracker receives (docs/architecture.md §4 Tracker contract)."""
 
 from __future__ import annotations
 
@@ -37,8 +37,6 @@ class Frame:
     @property
     def grey(self) -> np.ndarray:
         """The image as float32 luminance (cached per frame by the caller if needed)."""
-        import cv2
+        from trackreplay.trackers.appearance.color import to_grey  # OpenCV on first use, as before
 
-        if self.image.ndim == 2:
-            return self.image.astype(np.float32)
-        return cv2.cvtColor(self.image, cv2.COLOR_BGR2GRAY).astype(np.float32)
+        return to_grey(self.image).astype(np.float32)

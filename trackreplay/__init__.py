@@ -24,11 +24,11 @@ except PackageNotFoundError:  # a source tree that was never installed
     __version__ = "0+unknown"
 
 _API = {
-    "replay_log": "trackreplay.replay.api",
-    "iter_steps": "trackreplay.replay.engine",
-    "ReplayRequest": "trackreplay.replay.engine",
-    "ReplayResult": "trackreplay.replay.engine",
-    "ReplayStep": "trackreplay.replay.engine",
+    "replay_log": "trackreplay.replay.core.api",
+    "iter_steps": "trackreplay.replay.core.engine",
+    "ReplayRequest": "trackreplay.replay.core.engine",
+    "ReplayResult": "trackreplay.replay.core.engine",
+    "ReplayStep": "trackreplay.replay.core.engine",
 }
 __all__ = ["__version__", *_API]
 

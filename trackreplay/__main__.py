@@ -1,5 +1,5 @@
 """``python -m trackreplay``: the command line."""
 
-from trackreplay.replay.cli import main
+from trackreplay.replay.cli.main import main
 
 raise SystemExit(main())

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import csv
+import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -141,3 +144,70 @@ def read_timestamps(path: str | Path) -> list[int]:
     if not out:
         raise SourceError(f"timestamps file {path} holds no timestamps")
     return out
+
+
+class CsvRows:
+    """``csv.reader`` over ``lines`` whose own errors (a field over its 128 KB limit, a NUL byte) are one
+    ``SourceError`` sentence naming the file and line; ``line_num`` as the reader's."""
+
+    def __init__(self, lines, path: Path, lines_before: int = 0) -> None:
+        self._rows = csv.reader(lines)
+        self.path = path
+        self._before = lines_before  # lines of the file before ``lines`` (one line parsed on its own)
+
+    def __iter__(self) -> CsvRows:
+        return self
+
+    def __next__(self) -> list[str]:
+        try:
+            return next(self._rows)
+        except csv.Error as err:
+            raise SourceError(f"{self.path}:{self._before + self._rows.line_num}: not valid CSV ({err})") from None
+
+    @property
+    def line_num(self) -> int:
+        return self._rows.line_num
+
+
+MAX_JSON_DEPTH = 64  # arrays and objects inside one another; a calibration goes three deep
+MAX_JSON_DIGITS = 40  # an integer longer than this is no calibration value (Python refuses over 4300)
+_JSON_TOKENS = re.compile(r'"(?:[^"\\\n]|\\.)*"|[\[\]{}\n]')
+
+
+def _line_at(text: str, offset: int) -> int:
+    return text.count("\n", 0, max(offset, 0)) + 1
+
+
+def _too_deep(text: str) -> int | None:
+    """The line where arrays and objects first nest deeper than ``MAX_JSON_DEPTH`` (strings skipped), else None."""
+    depth = 0
+    for token in _JSON_TOKENS.finditer(text):
+        ch = token.group()
+        if ch in "[{":
+            depth += 1
+            if depth > MAX_JSON_DEPTH:
+                return _line_at(text, token.start())
+        elif ch in "]}":
+            depth -= 1
+    return None
+
+
+def read_json(path: Path) -> Any:
+    """A JSON input's value; malformed JSON, nesting deeper than ``MAX_JSON_DEPTH`` or an integer of more
+    than ``MAX_JSON_DIGITS`` digits is one ``SourceError`` sentence naming the file and line (checked
+    before parsing: the parser's own recursion and digit limits are internal errors)."""
+    text = read_text(path)
+    line = _too_deep(text)
+    if line is not None:
+        raise SourceError(f"{path}:{line}: nested more than {MAX_JSON_DEPTH} deep")
+
+    def integer(digits: str) -> int:
+        if len(digits.lstrip("-")) > MAX_JSON_DIGITS:
+            raise SourceError(f"{path}:{_line_at(text, text.find(digits))}: a number of {len(digits)} digits; "
+                              f"at most {MAX_JSON_DIGITS} are read")
+        return int(digits)
+
+    try:
+        return json.loads(text, parse_int=integer)
+    except json.JSONDecodeError as err:
+        raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None

@@ -12,13 +12,12 @@ to the origin.
 
 from __future__ import annotations
 
-import csv
 import io
 import math
 from collections.abc import Iterator
 from pathlib import Path
 
-from trackreplay.recorder.sources.base import parse_t_ns, read_text, require_file
+from trackreplay.recorder.sources.base import CsvRows, parse_t_ns, read_text, require_file
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.records import LensEntry, LensTable, PtzReading
 
@@ -45,7 +44,7 @@ def read_encoders(path: str | Path) -> Iterator[PtzReading]:
     """Stream readings; any bad row raises ``SourceError('file:line: ...')``."""
     path = require_file(path, "encoder file")
     with io.StringIO(read_text(path), newline="") as fh:
-        rows = csv.reader(fh)
+        rows = CsvRows(fh, path)
         header = next(rows, None)
         names = [h.strip() for h in header] if header else []
         if sorted(names) != sorted(ENCODER_COLUMNS):
@@ -103,7 +102,7 @@ def read_lens_table(path: str | Path, width: int | None = None, height: int | No
             if text.startswith("#"):
                 _comment(text, header, where)
                 continue
-            cells = [c.strip() for c in next(csv.reader([text]))]
+            cells = [c.strip() for c in next(CsvRows([text], path, lineno - 1))]
             if cells == list(LENS_COLUMNS):
                 continue
             if len(cells) != len(LENS_COLUMNS):

@@ -24,14 +24,13 @@ it exceeds 5 cm.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
 
-from trackreplay.recorder.sources.base import read_text, require_file
+from trackreplay.recorder.sources.base import read_json, require_file
 from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.trackers.geometry.homography import apply_homography
@@ -67,9 +66,7 @@ def read_ground_plane(path: str | Path) -> tuple[GroundPlaneCalibration, tuple[s
     """The calibration in ``path`` and any warnings about it."""
     path = require_file(path, "ground-plane file")
     try:
-        data = json.loads(read_text(path))
-    except json.JSONDecodeError as err:
-        raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None
+        data = read_json(path)
     except UnicodeDecodeError:
         raise SourceError(f"{path} is not a text (JSON) file") from None
     if not isinstance(data, dict):

@@ -20,7 +20,6 @@ Calibration file: JSON (``.json``) or OpenCV FileStorage (``.yaml``/``.yml``/``.
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -30,7 +29,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_text, require_file
+from trackreplay.recorder.sources.base import FrameClock, ImageFrame, read_json, read_text, require_file
 from trackreplay.recorder.sources.images import check_count, list_images, read_image_files
 from trackreplay.recorder.sources.video import read_video, video_fps
 from foxglove_schemas_protobuf.Quaternion_pb2 import Quaternion
@@ -85,10 +84,7 @@ class Calibration:
 
 
 def _load_json(path: Path) -> dict[str, Any]:
-    try:
-        data = json.loads(read_text(path))
-    except json.JSONDecodeError as err:
-        raise SourceError(f"{path}:{err.lineno}: not valid JSON ({err.msg})") from None
+    data = read_json(path)
     if not isinstance(data, dict):
         raise SourceError(f"calibration {path} must hold a JSON object")
     return data

@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.rerun_sink import FrameLogger
 from trackreplay.replay.views import parts
 from trackreplay.replay.views.parts import STATUS_COLOURS, to_uint8  # noqa: F401  (used by views)
 from trackreplay.trackers.base import TrackState

@@ -15,12 +15,13 @@ import polars as pl
 import rerun as rr
 
 from trackreplay.schemas.errors import OutputError
+from trackreplay.trackers.golf.ball_flight import PHASES
 
 COLOURS = {"tee": (200, 200, 200), "air": (255, 200, 40), "bounce": (255, 120, 40), "roll": (80, 200, 255), "rest": (80, 200, 255)}
 
 
 def write_flight_rrd(path: str | Path, fit, rows: pl.DataFrame, name: str = "flight", rescanned: frozenset[int] = frozenset()) -> Path:
-    """Write the 3-D view of ``fit`` (a :class:`~trackreplay.replay.flight.FlightFit`) and its ``rows``;
+    """Write the 3-D view of ``fit`` (a :class:`~trackreplay.replay.analysis.flight.FlightFit`) and its ``rows``;
     the lines of sight of the ``rescanned`` frames (found by ``flight --rescan``) apart, under
     ``flight/lines_of_sight_rescan``, in their own colour."""
     path = Path(path)
@@ -45,10 +46,8 @@ def write_flight_rrd(path: str | Path, fit, rows: pl.DataFrame, name: str = "fli
                                                                 radii=0.02), static=True)
     t = np.linspace(fit.shot.t[0], fit.shot.t[-1], 600)
     path_pos, path_phase = fit.shot.at(t)
-    from trackreplay.replay.flight import PHASES
-
     strips, colours = [], []
-    for code, phase_name in enumerate(PHASES):
+    for code, phase_name in enumerate(PHASES):  # the shared model's phase codes
         sel = path_phase == code
         if sel.sum() >= 2:
             strips.append(path_pos[sel])

@@ -13,7 +13,7 @@ import rerun.blueprint as rrb
 from trackreplay.trackers.base import TrackState
 from trackreplay.trackers.frame import Frame
 
-from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.rerun_sink import FrameLogger
 from trackreplay.replay.views import parts
 
 ARROW_STRIDE = 4  # one arrow per 4x4 pixels keeps the field readable
@@ -138,7 +138,7 @@ def _frames_logger(root: str) -> functools.partial:
 
 def _log_frames(root: str, rec: FrameLogger, records: list[tuple[int, int, object]]) -> None:
     """What :func:`log` logs frame by frame, for many frames at once: stacked arrays through the same
-    elementwise operations, so the same rows (``tests/replay/test_rrd_columns.py`` compares them).
+    elementwise operations, so the same rows (``tests/replay/views/test_rrd_columns.py`` compares them).
     Runs of frames with one window and histogram size go together."""
     for _, run in itertools.groupby(records, key=lambda r: (r[2].flow_u.shape, r[2].hist_edges.shape)):
         run = list(run)

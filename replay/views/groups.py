@@ -18,7 +18,7 @@ import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.rerun_sink import FrameLogger
 from trackreplay.replay.views import parts
 from trackreplay.trackers.base import TrackState
 from trackreplay.trackers.frame import Frame

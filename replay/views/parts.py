@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import rerun as rr
 
-from trackreplay.replay.rerun_sink import FrameLogger
+from trackreplay.replay.views.rerun_sink import FrameLogger
 from trackreplay.trackers.base import TrackState
 
 Logger = FrameLogger | rr.RecordingStream

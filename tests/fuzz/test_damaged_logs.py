@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from mcap.reader import make_reader
 
-from trackreplay.replay.cli import INTERNAL_ERROR, main
+from trackreplay.replay.cli.main import INTERNAL_ERROR, main
 
 # Documented exit statuses (docs/exit_codes.md) a damaged input may end in.
 DAMAGED_OK = {0, 1, 2, 3, 7}

@@ -20,7 +20,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1]))
 
 from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
 
 def _golf(path: Path) -> None:
     from trackreplay.recorder.synth.golf.flight import Launch

@@ -2,9 +2,9 @@ from pathlib import Path
 
 import pytest
 
-from trackreplay.replay.cli import main
-from trackreplay.replay.frames import FrameTopics, read_hints
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.log.frames import FrameTopics, read_hints
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas import topics as T
 
 
@@ -65,7 +65,7 @@ def test_annotated_log_gets_ordinary_permissions_and_missing_folders_are_one_sen
     import stat
 
     from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
-    from trackreplay.replay.cli import main
+    from trackreplay.replay.cli.main import main
 
     src = tmp_path / "src.mcap"
     write_flow_sim(src, FlowSimConfig(scene="flow-sim1", frames=3))

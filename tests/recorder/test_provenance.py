@@ -12,7 +12,7 @@ import numpy as np
 from mcap.reader import make_reader
 
 from trackreplay import __version__
-from trackreplay.replay.cli import main
+from trackreplay.replay.cli.main import main
 
 
 def provenance_records(path: Path) -> list[dict[str, str]]:

@@ -8,7 +8,7 @@ import json
 import pytest
 
 from trackreplay.recorder.record import RecordTopics, record
-from trackreplay.replay.commands import record as record_cmd
+from trackreplay.replay.cli.commands import record as record_cmd
 from trackreplay.schemas.errors import TrackreplayError
 
 
@@ -50,7 +50,7 @@ def test_cli_rejects_bad_topic_and_flush(tmp_path, make_images):
 
 
 def test_cli_user_error_is_one_line_and_exit_2(tmp_path, make_images, capsys):
-    from trackreplay.replay.cli import main
+    from trackreplay.replay.cli.main import main
 
     folder = make_images(tmp_path / "img", 2)
     enc = tmp_path / "enc.csv"

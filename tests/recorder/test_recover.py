@@ -13,7 +13,7 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from trackreplay.recorder.image_codec import image_message
 from trackreplay.recorder.recover import recover
 from trackreplay.recorder.writer import LogWriter
-from trackreplay.replay.commands import recover as recover_cmd
+from trackreplay.replay.cli.commands import recover as recover_cmd
 from trackreplay.schemas.errors import LogError
 from trackreplay.schemas.records import PtzReading
 
@@ -179,7 +179,7 @@ def test_cli_exit_codes(intact, tmp_path, capsys):
     assert "saved 60 messages" in capsys.readouterr().out
     junk = tmp_path / "junk.mcap"
     junk.write_text("hello")
-    from trackreplay.replay.cli import main
+    from trackreplay.replay.cli.main import main
 
     assert main(["recover", str(junk), str(tmp_path / "c.mcap")]) == 2
     assert "trackreplay: error:" in capsys.readouterr().err
@@ -203,9 +203,9 @@ def test_damage_in_the_summary_is_reported_and_every_message_kept(intact, tmp_pa
 def test_marks_and_ground_truth_are_renumbered_past_lost_images(tmp_path):
     """Frames count images from the log's start: after a damaged chunk drops images, a mark (and a
     ground-truth frame) names the image at its own time in the recovered log, or is dropped with it."""
-    from trackreplay.replay.frames import read_hints
-    from trackreplay.replay.groundtruth import read_groundtruth
-    from trackreplay.replay.reader import LogReader
+    from trackreplay.replay.log.frames import read_hints
+    from trackreplay.replay.log.groundtruth import read_groundtruth
+    from trackreplay.replay.log.reader import LogReader
     from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb
 
     path = tmp_path / "marked.mcap"

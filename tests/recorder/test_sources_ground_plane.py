@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from trackreplay.recorder.sources.ground_plane import read_ground_plane
-from trackreplay.replay.cli import main
-from trackreplay.replay.frames import FrameTopics, iter_frames
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.log.frames import FrameTopics, iter_frames
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas.errors import SourceError
 
 H = [[0.02, 0.0, -0.64], [0.0, -0.001, 0.5], [0.0, 0.004, -0.05]]

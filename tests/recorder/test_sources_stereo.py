@@ -111,8 +111,8 @@ def test_calibration_size_must_match_images(tmp_path, make_images):
 def test_rig_pose_in_the_calibration_reaches_the_log_and_the_reader(tmp_path, make_images, log_messages):
     """A rig 2 m up, looking along world +Y and tilted 30° down: written on /stereo/pose, read back
     as the same rotation and centre."""
-    from trackreplay.replay.frames import read_rig_pose
-    from trackreplay.replay.reader import LogReader
+    from trackreplay.replay.log.frames import read_rig_pose
+    from trackreplay.replay.log.reader import LogReader
 
     tilt = np.radians(30.0)
     # camera axes in the world: x right = world +X; z forward = (0, cos, -sin); y down = z x x

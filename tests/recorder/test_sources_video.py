@@ -71,7 +71,7 @@ def test_exactly_one_image_source(tmp_path, make_video):
 def test_a_truncated_video_is_recorded_up_to_the_damage_and_says_so(tmp_path, make_video, log_messages):
     """A review cut a video to half its bytes: `record` wrote the first half as the whole clip, exit 0.
     Now every readable frame is kept (a valid log), a warning names the shortfall and the CLI exits 7."""
-    from trackreplay.replay.cli import main as cli
+    from trackreplay.replay.cli.main import main as cli
 
     video = make_video(tmp_path / "v.avi", 40, fps=20.0, size=(160, 120), fourcc="MJPG")
     cut = tmp_path / "cut.avi"

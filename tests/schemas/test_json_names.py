@@ -14,8 +14,8 @@ from google.protobuf import descriptor_pb2, descriptor_pool, message_factory
 from google.protobuf.timestamp_pb2 import Timestamp
 from mcap.writer import Writer
 
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas import records as r
 from trackreplay.schemas.generate import GEN_DIR
 

@@ -98,7 +98,7 @@ def test_every_schema_of_ours_imports(tmp_path: Path, rerun_env) -> None:
 
 @pytest.mark.parametrize("name", ["golf-teeshot-640x360.mcap", "flow-sim1-24f.mcap"])
 def test_synthetic_golden_logs_import(tmp_path: Path, rerun_env, name: str) -> None:
-    from trackreplay.replay.reader import LogReader
+    from trackreplay.replay.log.reader import LogReader
 
     log = GOLDEN / name
     topics = LogReader(log).topics()

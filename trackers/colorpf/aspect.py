@@ -5,7 +5,7 @@ Particles near the estimate (eq. 10, ``d_i`` within ``near * sqrt(S')``) whose l
 distribution is ragged, so an ``R_t`` that jumps from ``R_{t-1}`` (by more than ``max_jump`` either
 way) is taken as wrong and ``R_{t-1}`` kept. By default ``l`` is read relative to the best
 particle (``L > L_max / l``; ``aspect.relative``, see the config for why). The box then follows from the area: eq. (12) with
-SPEC's **(fix)** ``w = sqrt(S'/R)``, ``h = R w`` (the paper prints ``h = sqrt(S'/w)``, which does
+the correction of docs/papers.md §3, ``w = sqrt(S'/R)``, ``h = R w`` (the paper prints ``h = sqrt(S'/w)``, which does
 not give ``w h = S'``).
 """
 

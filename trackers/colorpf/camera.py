@@ -12,7 +12,8 @@ marked frame to each frame: Shi-Tomasi corners of a key frame (outside the track
 target moves on its own) followed by pyramidal Lucas-Kanade into each frame (brightness-matched to
 the key frame: LK assumes constant brightness, an illumination change is not motion), and a
 least-squares similarity refitted on the corners within 3x the median residual (other movers are a
-minority of the corners; :func:`fit_similarity`). Always against the key frame, not chained frame
+minority of the corners; the project's one fitter, :func:`..geometry.view_change.fit_similarity`,
+"medians", with the parameters here). Always against the key frame, not chained frame
 to frame, so a still camera has no drift (chained, otb_crossing's still camera wandered 0.6 px in
 120 frames); LK starts each corner where it was last found (the motion since the last frame is
 small). The key frame is renewed when fewer than half of its corners are still tracked, and (``renew =
@@ -32,6 +33,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from trackreplay.trackers.appearance.color import to_grey
+from trackreplay.trackers.geometry.view_change import apply, at_full_size, fit_similarity
+from trackreplay.trackers.median import median
+
 MAX_CORNERS = 120  # LK cost is linear in it; 120 vs 200: the robustness table within seed noise (zoom 0.59 vs 0.60)
 QUALITY = 0.01
 # maxLevel 1: LK starts from the last position, so it searches only the motion since the last
@@ -47,87 +52,10 @@ HALVE_FROM = 640  # frames at least this wide are measured at half size
 # renew="deformation": the key frame is renewed once the scale and rotation since it move a corner of the
 # LK window by this much relative to its centre (snap's half pixel, on the window; 15 px: a ~6.7 % scale)
 MAX_DEFORMATION_PX = 0.5
-
-
-def grey(image: np.ndarray) -> np.ndarray:
-    return cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else np.ascontiguousarray(image, dtype=np.uint8)
-
-
-def _similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """Least-squares ``x' = a x - b y + tx, y' = b x + a y + ty`` (3x3), in closed form: about the
-    points' means the normal equations separate into ``a`` (dot products) and ``b`` (cross products)."""
-    c0, c1 = p0.mean(axis=0), p1.mean(axis=0)
-    q0, q1 = p0 - c0, p1 - c1
-    spread = float(np.einsum("ij,ij->", q0, q0))
-    if spread <= 0.0:  # all points on one spot: a translation
-        a, b = 1.0, 0.0
-    else:
-        a = float(np.einsum("ij,ij->", q0, q1)) / spread
-        b = float((q0[:, 0] * q1[:, 1] - q0[:, 1] * q1[:, 0]).sum()) / spread
-    t = c1 - np.array([a * c0[0] - b * c0[1], b * c0[0] + a * c0[1]])
-    return np.array([[a, -b, t[0]], [b, a, t[1]], [0.0, 0.0, 1.0]])
-
-
-def median(values: np.ndarray) -> float:
-    """``float(np.median(values))`` of a 1-D float array: the same partition and the same mean of the
-    two middle values in the array's precision, without np.median's per-call overhead (the fit takes
-    ~10 medians of ~120 values a frame)."""
-    n = len(values)
-    if n == 0:
-        return float("nan")
-    half = n // 2
-    part = np.partition(values, (half - 1, half, n - 1) if n % 2 == 0 else (half, n - 1))
-    if np.isnan(part[-1]):  # np.median: NaN in, NaN out
-        return float("nan")
-    return float(part[half]) if n % 2 else float((part[half - 1] + part[half]) / 2)
-
-
-def _column_medians(xy: np.ndarray) -> np.ndarray:
-    """``np.median(xy, axis=0)`` of (n, 2) points."""
-    return np.array([median(xy[:, 0]), median(xy[:, 1])])
-
-
-MIN_BASELINE = 20.0  # px: corners closer than this to the median say little about scale and rotation
-
-
-def _median_similarity(p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
-    """Scale and rotation as the medians over the points of their distance ratio and turn about the
-    points' (per-axis) median, then the median translation: each a median, so a minority of other
-    movers does not move it. O(n)."""
-    v0, v1 = p0 - _column_medians(p0), p1 - _column_medians(p1)
-    n0, n1 = np.hypot(*v0.T), np.hypot(*v1.T)
-    far = n0 >= MIN_BASELINE
-    scale, angle = 1.0, 0.0
-    if np.count_nonzero(far) >= 3:
-        scale = median(n1[far] / n0[far])
-        u0, u1 = v0[far], v1[far]  # the turn from u0 to u1, in (-pi, pi]
-        turn = np.arctan2(u0[:, 0] * u1[:, 1] - u0[:, 1] * u1[:, 0], (u0 * u1).sum(axis=1))
-        angle = median(turn)
-    a, b = scale * np.cos(angle), scale * np.sin(angle)
-    linear = np.array([[a, -b], [b, a]])
-    t = _column_medians(p1 - p0 @ linear.T)
-    return np.array([[a, -b, t[0]], [b, a, t[1]], [0.0, 0.0, 1.0]])
-
-
-def fit_similarity(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarray:
-    """A similarity ``p1 ~ T p0`` (3x3) robust to a minority of other movers: from the
-    medians (:func:`_median_similarity`), each round keeps the points within 3x the median residual
-    (at least 1 px) and refits by least squares."""
-    p0, p1 = np.asarray(p0, np.float64).reshape(-1, 2), np.asarray(p1, np.float64).reshape(-1, 2)
-    transform = _median_similarity(p0, p1)
-    kept = None
-    for _ in range(rounds):
-        r = np.hypot(*(apply(transform, p0) - p1).T)
-        keep = r <= max(3.0 * median(r), 1.0)
-        if np.count_nonzero(keep) < 3 or (kept is not None and np.array_equal(keep, kept)):
-            break  # the same points would give the same fit
-        transform, kept = _similarity(p0[keep], p1[keep]), keep
-    return transform
-
-
-def apply(transform: np.ndarray, xy: np.ndarray) -> np.ndarray:
-    xy = np.asarray(xy, np.float64).reshape(-1, 2)
-    return xy @ transform[:2, :2].T + transform[:2, 2]
+# The fit (geometry.view_change.fit_similarity, "medians"): its least-squares refits, and how far from
+# the points' median a point must lie to say anything about scale and rotation
+FIT_ROUNDS = 3
+MIN_BASELINE = 20.0  # px
 
 
 def scale_of(transform: np.ndarray) -> float:
@@ -197,8 +125,7 @@ class CameraMotion:
     def transform(self) -> np.ndarray:
         if self._factor == 1:
             return self._transform.copy()
-        s = np.diag([float(self._factor), float(self._factor), 1.0])
-        return s @ self._transform @ np.diag([1.0 / self._factor, 1.0 / self._factor, 1.0])
+        return at_full_size(self._transform, 1.0 / self._factor)
 
     def _rekey(self, g: np.ndarray, box: np.ndarray | None) -> None:
         mask = np.full(g.shape, 255, np.uint8)
@@ -250,7 +177,7 @@ class CameraMotion:
 
     def update(self, image: np.ndarray, box: np.ndarray | None = None) -> np.ndarray:
         """The frame's transform; ``box``: the tracked box's corners (left out of a new key frame's corners)."""
-        g = grey(image)
+        g = to_grey(image)
         if self._key is None:
             self._factor = 2 if g.shape[1] >= HALVE_FROM else 1
         if self._factor > 1:
@@ -274,7 +201,8 @@ class CameraMotion:
         ok = (status.ravel() == 1) & inside
         step = None
         if ok.sum() >= self.min_corners:
-            step = fit_similarity(corners[ok], moved[ok])  # key -> this frame
+            fit = fit_similarity(corners[ok], moved[ok], rounds=FIT_ROUNDS, min_baseline=MIN_BASELINE)
+            step = fit.transform  # key -> this frame
             self._transform = step @ self._key_transform
         # a corner lost now moves with the scene from here on
         if step is not None:

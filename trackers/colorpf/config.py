@@ -35,6 +35,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from trackreplay.trackers.appearance.histogram import KERNELS  # the pixel weights the histograms know
+from trackreplay.trackers.lifecycle import LifecycleConfig
 
 # Overrides (a ``[colorpf]`` table as a dict) that give the paper's pipeline: uniform pixel weights,
 # no foreground cue, a reference fixed at initialisation, the plain early median, no neighbour check
@@ -529,3 +530,9 @@ class ColorPfConfig:
             raise ValueError("reacquire_frames must be >= 1 (1: one frame's match is measured again)")
         if self.min_separation < 0 or self.min_box_pixels < 0:
             raise ValueError("min_separation and min_box_pixels must be >= 0")
+
+    @property
+    def lifecycle(self) -> LifecycleConfig:
+        """The track's life (trackers.lifecycle): "lost" on the lost_after-th miss in a row, measured
+        again after reacquire_frames matches in a row."""
+        return LifecycleConfig(lost_after=self.lost_after, reacquire_frames=self.reacquire_frames)

@@ -42,9 +42,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from trackreplay.trackers.colorpf.camera import median, resamples
+from trackreplay.trackers.appearance.color import to_grey
+from trackreplay.trackers.colorpf.camera import resamples
 from trackreplay.trackers.colorpf.likelihood import box_corners
 from trackreplay.trackers.foreground.background import foreground_mask
+from trackreplay.trackers.median import median
 
 RING_SCALE = float(np.sqrt(2.0))  # the outer box per axis: the ring has the box's own area
 
@@ -53,21 +55,12 @@ SCENE_STEP = 4  # the whole-frame statistics on every 4th pixel per axis
 SCENE_CHANGED = 0.5  # the background no longer describes a frame that differs from it over more than this share
 
 
-def _grey(image: np.ndarray) -> np.ndarray:
-    """float32 mean of the channels."""
-    if image.ndim == 3 and image.dtype == np.uint8 and image.shape[-1] == 3:
-        # The float32 channel sum of uint8 is an exact integer (<= 765): summed as integers, then
-        # divided, it is the same number as image.astype(np.float32).mean(axis=-1), ~8x cheaper.
-        return (image[..., 0].astype(np.uint16) + image[..., 1] + image[..., 2]).astype(np.float32) / np.float32(3)
-    return image.astype(np.float32).mean(axis=-1) if image.ndim == 3 else image.astype(np.float32)
-
-
 def brightness_gain(image: np.ndarray, background: np.ndarray) -> float:
     """The frame's brightness relative to the background: the median of the grey-level ratio
     image / background over the background's pixels brighter than 8 (every 4th pixel per axis). A
     uniform illumination change (§3.1's reason for H-S) scales every pixel alike; the target and
     other movers are a small part of the frame, so the median is the scene's."""
-    gi, gb = _grey(image[::SCENE_STEP, ::SCENE_STEP]), _grey(background[::SCENE_STEP, ::SCENE_STEP])
+    gi, gb = to_grey(image[::SCENE_STEP, ::SCENE_STEP], "mean"), to_grey(background[::SCENE_STEP, ::SCENE_STEP], "mean")
     ok = gb > 8
     return median((gi[ok] / gb[ok]).reshape(-1)) if ok.any() else 1.0
 
@@ -318,12 +311,28 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
     """
     x, y, w, h = (float(v) for v in np.asarray(estimate, dtype=np.float64)[:4])
     height, width = image.shape[:2]
-    cx0, cy0, cx1, cy1 = (int(v) for v in box_corners(np.array([x, y, w * REGION_CONTEXT, h * REGION_CONTEXT]),
-                                                        width, height)[0])
+    context = tuple(int(v) for v in box_corners(np.array([x, y, w * REGION_CONTEXT, h * REGION_CONTEXT]),
+                                                 width, height)[0])
+    cx0, cy0, cx1, cy1 = context
     if cx1 <= cx0 or cy1 <= cy0 or w <= 0 or h <= 0:
         return None, "outside the image"
     fg = _mask(image[cy0:cy1, cx0:cx1], background[cy0:cy1, cx0:cx1], threshold, open_px, gain,
                _crop(band, cy0, cy1, cx0, cx1))
+    region, why = _target_parts(fg, context, (width, height), np.array([x, y, w, h]), window, factor, min_part)
+    if region is None:
+        return None, why
+    box = region_box(region, np.array([cx0, cy0]), layout, spread, clip)
+    why = _inconsistent(box, fg, region, context, (width, height), np.array([w, h]), factor, mark_share)
+    return (None, why) if why else (box, "")
+
+
+def _target_parts(fg: np.ndarray, context: tuple[int, ...], size: tuple[int, int], estimate: np.ndarray,
+                  window: float, factor: float, min_part: float) -> tuple[np.ndarray | None, str]:
+    """:func:`foreground_region`'s region in the context's mask ``fg`` (corners ``context`` in the picture
+    of ``size``): the components not larger than the target could be with most of their pixels, and at
+    least ``min_part`` of the box's area, inside the estimate's box times ``window``; or None and why not."""
+    x, y, w, h = (float(v) for v in estimate)
+    (cx0, cy0, cx1, cy1), (width, height) = context, size
     n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), connectivity=8)
     if n <= 1:
         return None, "no foreground"
@@ -339,23 +348,30 @@ def foreground_region(image: np.ndarray, background: np.ndarray, estimate: np.nd
     part[0] = False  # the background label
     if not part.any():
         return None, "no region of the target's size" if (counts[1:] > 0).any() else "no foreground"
-    region = part[labels]
-    box = region_box(region, np.array([cx0, cy0]), layout, spread, clip)
+    return part[labels], ""
+
+
+def _inconsistent(box: np.ndarray, fg: np.ndarray, region: np.ndarray, context: tuple[int, ...],
+                  size: tuple[int, int], wh: np.ndarray, factor: float, mark_share: float) -> str:
+    """Why the region's ``box`` is not one target's (:func:`foreground_region`'s three tests; "" when it is);
+    ``wh``: the estimate's width and height."""
+    (cx0, cy0, cx1, cy1), (width, height) = context, size
+    w, h = float(wh[0]), float(wh[1])
     ratio = box[2:4] / np.array([w, h])
     if not ((ratio >= 1.0 / np.sqrt(factor)) & (ratio <= np.sqrt(factor))).all():
-        return None, "size"
+        return "size"
     # the region's pixels in the target's box, and the four boxes of the estimate's size beside it
     bx, by = box[0], box[1]
     xy = np.array([[bx, by], [bx - w, by], [bx + w, by], [bx, by - h], [bx, by + h]])
-    wh = np.vstack([box[2:4], np.broadcast_to([w, h], (4, 2))])
-    corners = box_corners(np.column_stack([xy, wh]), width, height) - shift
+    sides = np.vstack([box[2:4], np.broadcast_to([w, h], (4, 2))])
+    corners = box_corners(np.column_stack([xy, sides]), width, height) - np.array([cx0, cy0, cx0, cy0])
     c = np.clip(corners, 0, [cx1 - cx0, cy1 - cy0, cx1 - cx0, cy1 - cy0])
     c[:, 2:] = np.maximum(c[:, 2:], c[:, :2])
     areas = np.prod(c[:, 2:] - c[:, :2], axis=1).astype(np.float64)
     own = _sums(cv2.integral(region.astype(np.uint8)), c[:1])[0] / max(areas[0], 1.0)
     if not mark_share / factor <= own <= mark_share * factor:
-        return None, "share"
+        return "share"
     beside = np.where(areas[1:] > 0, _sums(cv2.integral(fg.astype(np.uint8)), c[1:]) / np.maximum(areas[1:], 1.0), 0.0)
     if beside.max() > mark_share:
-        return None, "against a larger region"
-    return box, ""
+        return "against a larger region"
+    return ""

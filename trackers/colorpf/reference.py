@@ -1,7 +1,7 @@
 """The reference histogram, §3.2: background subtraction at initialisation, then eq. (7).
 
 ``H_ref = (P_detect / P_square) H_target + ((P_square - P_detect) / P_square) H_back`` — the paper
-prints ``P_detect - P_square`` in the second weight, which would make it negative; SPEC's **(fix)**
+prints ``P_detect - P_square`` in the second weight, which would make it negative; corrected in docs/papers.md §3
 (the two weights sum to one, so ``H_ref`` stays normalised).
 
 ``P_detect`` are the marked box's foreground pixels (their histogram is ``H_target``), ``P_square``
@@ -33,7 +33,7 @@ from trackreplay.trackers.foreground.background import ExcludingMedianBackground
 
 
 def mixed_reference(h_target: np.ndarray, h_back: np.ndarray, p_detect: float, p_square: float) -> np.ndarray:
-    """Eq. (7) with SPEC's fix: ``(P_d / P_s) H_target + ((P_s - P_d) / P_s) H_back``."""
+    """Eq. (7) as corrected (docs/papers.md §3): ``(P_d / P_s) H_target + ((P_s - P_d) / P_s) H_back``."""
     if p_square <= 0 or not 0 <= p_detect <= p_square:
         raise ValueError(f"eq. (7) needs 0 <= P_detect <= P_square and P_square > 0, not {p_detect}, {p_square}")
     a = p_detect / p_square

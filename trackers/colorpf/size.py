@@ -1,7 +1,7 @@
 """Box area from the distance to the target, §4.1 eq. (9): weak perspective ``S' = f² (S + ω_S) / Z²``.
 
 ``S`` is fixed at initialisation from the marked box's area ``S'_0`` at the known distance ``Z_0``:
-``S = S'_0 Z_0² / f²``, so ``S' = S'_0 (Z_0 / Z)² (1 + ω)`` with ``ω ~ N(0, r_S)`` (relative, as SPEC
+``S = S'_0 Z_0² / f²``, so ``S' = S'_0 (Z_0 / Z)² (1 + ω)`` with ``ω ~ N(0, r_S)`` (relative, as docs/papers.md §3
 states r_S; the paper's "standard deviation r_S" of ``ω_S`` relative to ``S``): ``f`` cancels and
 the log's ground plane needs no focal length.
 

@@ -26,13 +26,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from trackreplay.trackers.appearance.color import to_grey
+
 
 TEMPLATE_SIDE = 48  # the stored template is at most this many pixels on its longer side
-
-
-def grey(image: np.ndarray) -> np.ndarray:
-    """float32 grey levels (the mean of the channels)."""
-    return image.astype(np.float32).mean(axis=-1) if image.ndim == 3 else image.astype(np.float32)
 
 
 def epanechnikov(w: int, h: int) -> np.ndarray:
@@ -55,7 +52,7 @@ class TemplateModel:
         self.template: np.ndarray | None = None
         self.weights: np.ndarray | None = epanechnikov(*self.wh) if mask == "kernel" else None
         if w >= 3 and h >= 3:
-            self.template = cv2.resize(grey(image[y0:y1, x0:x1]), self.wh, interpolation=cv2.INTER_AREA)
+            self.template = cv2.resize(to_grey(image[y0:y1, x0:x1], "mean"), self.wh, interpolation=cv2.INTER_AREA)
 
     def set_foreground(self, fg: np.ndarray) -> None:
         """``template_mask = "foreground"``: eq. (7)'s foreground mask of the marked box (its pixels)."""
@@ -72,7 +69,7 @@ class TemplateModel:
         x1, y1 = int(np.floor(x + w / 2 + 0.5)), int(np.floor(y + h / 2 + 0.5))
         if x0 < 0 or y0 < 0 or x1 > width or y1 > height or x1 - x0 < 3 or y1 - y0 < 3:
             return
-        c = cv2.resize(grey(image[y0:y1, x0:x1]), self.wh, interpolation=cv2.INTER_AREA)
+        c = cv2.resize(to_grey(image[y0:y1, x0:x1], "mean"), self.wh, interpolation=cv2.INTER_AREA)
         self.template = (1.0 - rate) * self.template + rate * c
 
 
@@ -96,7 +93,7 @@ def template_scores(image: np.ndarray, template: np.ndarray, xy: np.ndarray, siz
     y0 = max(int(np.floor(lo[inside, 1].min() + 0.5)), 0)
     x1 = min(int(np.ceil(lo[inside, 0].max() + 0.5 + w)) + 1, width)
     y1 = min(int(np.ceil(lo[inside, 1].max() + 0.5 + h)) + 1, height)
-    window = grey(image[y0:y1, x0:x1])
+    window = to_grey(image[y0:y1, x0:x1], "mean")
     if s < 1.0:
         window = cv2.resize(window, (max(int(round((x1 - x0) * s)), 1), max(int(round((y1 - y0) * s)), 1)),
                             interpolation=cv2.INTER_AREA)

@@ -4,16 +4,18 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
 
 1. Before the mark: frames are kept for the background (:mod:`.reference`).
 2. At the mark: background subtraction in the marked box, reference ``H_ref`` by eq. (7) (the
-   fix of SPEC), ``S`` of eq. (9) from the marked box's area and its foot's distance, ``R_0`` from
+   correction in docs/papers.md §3), ``S`` of eq. (9) from the marked box's area and its foot's distance, ``R_0`` from
    the box; the particles start on the box.
-3. Then: select (systematic resampling, the engine's Generator) -> eq. (2) predict, ``w, h`` from
-   the size estimate (:mod:`.motion`, :mod:`.size`, :mod:`.aspect`) -> eqs. (4)-(5) weigh with the
-   H-S histogram intersection (:mod:`.likelihood`) -> eq. (6) estimate -> eqs. (10)-(11) ``R_t``
-   with jump rejection.
+3. Then (``_track``, one method per stage): select (systematic resampling, the engine's Generator) ->
+   eq. (2) predict, ``w, h`` from the size estimate (``_predict``; :mod:`.motion`, :mod:`.size`) ->
+   eqs. (4)-(5) weigh with the H-S histogram intersection (:mod:`.likelihood`; our cues, ``_cues``)
+   -> eq. (6) estimate (``_weigh``) -> ours: refine or hold (``_refine``, ``_hold``) -> eqs. (10)-(11)
+   ``R_t`` with jump rejection (``_size_and_aspect``; :mod:`.aspect`) -> confidence (``_score``) ->
+   ours: adapt (``_adapt``) -> status (``_status``).
 4. Status: the confidence places the estimate box's intersection ``S`` between the background's
    score and the marked box's (see ``ColorPfConfig.measured_fraction``); "measured" from 0.5 on,
    "predicted" otherwise; "lost" (no position) after ``lost_after`` such frames in a row, until
-   the colour is found again. When the background scores within ``min_separation`` of the mark
+   the colour is found again (the track's life: :mod:`trackreplay.trackers.lifecycle`). When the background scores within ``min_separation`` of the mark
    (H-S cannot tell them apart), it cannot set the scale: ``c = S / S_mark`` then, said once.
    With an "early" reference ``S_mark`` is the marked box's score against the new reference.
    Ours (``neighbour_check``): a "measured" estimate with a neighbouring box (its size, beside it)
@@ -50,6 +52,7 @@ starts the track; later marks are not used (a notice says so).
 from __future__ import annotations
 
 import dataclasses
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -63,8 +66,9 @@ from trackreplay.trackers.colorpf.config import ColorPfConfig
 from trackreplay.trackers.colorpf.foreground import (IDENTITY, Band, brightness_gain, foreground_contrast,
                                                      foreground_region, neighbour_shares, region_layout,
                                                      registration_band, scene_changed)
+from trackreplay.trackers.colorpf.hold import VouchedMotion
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
-from trackreplay.trackers.colorpf.likelihood import ColourModel, box_histogram, mean_shift, measure
+from trackreplay.trackers.colorpf.likelihood import ColourModel, Measurement, box_histogram, mean_shift, measure
 from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition, vouched_prediction
 from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
                                                     subtract_and_mix)
@@ -74,6 +78,8 @@ from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.colorpf.timing import FrameClock, frames_for, noise_for, smoothing_for
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.ground_plane import GroundPlane
+from trackreplay.trackers.lifecycle import Run, TrackLife
 
 GREY_SHARE = 0.005  # fewer saturated pixels than this share around the marked box: a grey picture
 GREY_CONTEXT = 3.0  # ... in the marked box times this per axis: where the particles' boxes will be (a coloured
@@ -89,6 +95,37 @@ NO_PLANE_NOTICE = ("no ground plane (/camera/ground_plane) in the log: the size 
                    "foreground region rescales it once the log's background exists)")
 
 
+@dataclass(frozen=True, eq=False)
+class ForegroundView:
+    """This frame's eq. (7) background where the scene is now (None: none, or the scene changed), the
+    brightness gain against it and, where it was resampled, its registration band."""
+
+    background: np.ndarray | None
+    gain: float
+    band: Band | None
+
+
+@dataclass(frozen=True, eq=False)
+class SizeStage:
+    """Eq. (9)'s area and distance at the estimate's foot, and eqs. (10)-(11)'s aspect update."""
+
+    area: float
+    distance: float
+    update: AspectUpdate
+
+
+@dataclass(frozen=True, eq=False)
+class Score:
+    """The estimate's colour score: its histogram, ``S`` against H_ref as built and the confidence;
+    ``separated``: the mark outscores the background; ``telling``: and the reference was built against it."""
+
+    confidence: float
+    s_est: float
+    current: np.ndarray
+    separated: bool
+    telling: bool
+
+
 def start_mark(hints: tuple[InitRegion, ...]) -> tuple[InitRegion | None, str]:
     """The mark that starts the track and, when there are several, a sentence saying which."""
     if not hints:
@@ -101,10 +138,9 @@ def start_mark(hints: tuple[InitRegion, ...]) -> tuple[InitRegion | None, str]:
 
 
 class ColorPfTracker(TrackerBase):
-    """Seed 002 (SPEC Tracker 2). ``step(frame)`` returns one track (id 1) from the marked frame on."""
+    """Seed 002 (docs/papers.md §3). ``step(frame)`` returns one track (id 1) from the marked frame on."""
 
-    name = "colorpf"
-    needs = "mark"  # the engine refuses a log that marks no target (replay.marks.check_can_track)
+    name = "colorpf"  # what the replay needs of it is declared in trackers/colorpf/__init__.py (SPEC)
 
     def __init__(self, config: ColorPfConfig, rng: np.random.Generator) -> None:
         self.config = config
@@ -117,8 +153,9 @@ class ColorPfTracker(TrackerBase):
         self.size: WeakPerspectiveSize | None = None
         self.aspect: AspectEstimate | None = None
         self.started = False
-        self.misses = 0
-        self.placed_run = 0  # refine.mode = "foreground": placed frames in a row since the last measured one
+        # the track's life (trackers.lifecycle): lost after lost_after misses, restarted after reacquire_frames
+        self.life = TrackLife(config.lifecycle)
+        self.placed_run = Run()  # refine.mode = "foreground": placed frames in a row since the last measured one
         self.side = 0.0
         self.initial_wh = np.zeros(2)
         self._marked_image: np.ndarray | None = None
@@ -129,14 +166,8 @@ class ColorPfTracker(TrackerBase):
         self.layout: np.ndarray | None = None  # refine.mode = "foreground": foreground_region's layout
         self.template: TemplateModel | None = None  # likelihood.template > 0: the target's grey template
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
-        self.track_velocity = np.zeros(2)  # hold.enabled: smoothed displacement per frame between vouched estimates
-        self._vouched: tuple[int, np.ndarray] | None = None  # hold.enabled: the last vouched frame and centre
-        self._rematch: tuple[int, np.ndarray, int] | None = None  # lost: the last matching frame, centre, run length
+        self.motion = VouchedMotion()  # hold.enabled: the last vouched estimate, the velocity between them, held frames
         self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
-        self.hold_run = 0  # hold.enabled: held frames in a row
-        self._velocity_steps = 0  # hold.enabled: displacements between vouched estimates measured so far
-        # hold.early = "region": the estimates before eq. (7)'s background (frame, box in the marked frame's view)
-        self._early_rows: list[tuple[int, np.ndarray]] = []
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
@@ -157,40 +188,64 @@ class ColorPfTracker(TrackerBase):
 
     # --- the step ---------------------------------------------------------------------------------
     def step(self, frame: Frame) -> list[TrackState]:
-        r = self.clock.step(frame.t_ns)  # frame_rate: the constants that describe time, at this step's interval
-        if self.mark is None:
-            self.mark, several = start_mark(frame.all_hints or frame.hints)
-            if self.mark is None:
-                self._say(NO_MARK_NOTICE)
-                self.intermediates = ColorPfIntermediates.idle(self._notice())
-                return []
-            self._say(several)
-            self.background = BackgroundFrames(self.config.reference, self.mark.frame)
-        assert self.background is not None
+        """The frame's row: before the mark the frame is kept for eq. (7)'s background; at the mark the
+        track starts (:meth:`_start`); then the camera's motion, the "early" reference once its median is
+        ready, and the filter's stages (:meth:`_track`)."""
+        self.clock.step(frame.t_ns)  # frame_rate: the constants that describe time, at this step's interval
+        if not self._find_mark(frame):
+            return self._idle()
+        assert self.mark is not None and self.background is not None
         self.background.set_frames(frames_for(self.config.reference.frames, self.clock.typical))  # the median's window, in time
         if not self.started:
             if frame.index < self.mark.frame:
                 self.background.offer(frame.index, frame.image)
-                self.intermediates = ColorPfIntermediates.idle(self._notice())
-                return []
+                return self._idle()
             return self._start(frame)
         if self.camera is not None:  # camera.compensate: the background and the cloud follow the scene
             self._follow_camera(frame.image)
         self.background.offer(frame.index, frame.image, self.camera_transform)
-        mask = None
-        if self.background.early_ready:  # "early": the median is ready, the reference is rebuilt now
-            marked = self._marked_image
-            early = self.background.early_frames()  # (let go by early_model)
-            mask = self._rebuild_reference(self.background.early_model(), "early")
-            if self.config.hold.enabled and self.config.hold.early == "region":
-                self._revouch(early)
-            if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
-                self._s_mark = self._mark_score(marked)
+        mask = self._early_reference()
         out = self._track(frame, mask)
-        if out and out[0].x is not None:  # reference.exclude: the target is in this box on this frame
+        self._leave_out(frame, out)
+        return out
+
+    def _find_mark(self, frame: Frame) -> bool:
+        """The mark that starts the track (:func:`start_mark`, once); False while the log marks none."""
+        if self.mark is None:
+            self.mark, several = start_mark(frame.all_hints or frame.hints)
+            if self.mark is None:
+                self._say(NO_MARK_NOTICE)
+                return False
+            self._say(several)
+            self.background = BackgroundFrames(self.config.reference, self.mark.frame)
+        return True
+
+    def _idle(self) -> list[TrackState]:
+        self.intermediates = ColorPfIntermediates.idle(self._notice())
+        return []
+
+    def _early_reference(self) -> np.ndarray | None:
+        """``reference.background = "early"``: once the median is ready, eq. (7)'s reference is rebuilt
+        (the marked box's foreground mask is returned), the early rows revouched and ``S_mark`` rescored."""
+        assert self.background is not None
+        if not self.background.early_ready:
+            return None
+        marked = self._marked_image
+        early = self.background.early_frames()  # (let go by early_model)
+        mask = self._rebuild_reference(self.background.early_model(), "early")
+        if self.config.hold.enabled and self.config.hold.early == "region":
+            self._revouch(early)
+        assert self.reference is not None
+        if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
+            self._s_mark = self._mark_score(marked)
+        return mask
+
+    def _leave_out(self, frame: Frame, out: list[TrackState]) -> None:
+        """``reference.exclude``: the target is in its tracked box on this frame (out of the early median)."""
+        assert self.background is not None
+        if out and out[0].x is not None:
             self.background.leave_out(np.array([out[0].x, out[0].y, out[0].w, out[0].h], dtype=np.float64),
                                       (frame.image.shape[1], frame.image.shape[0]), transform=self.camera_transform)
-        return out
 
     def _follow_camera(self, image: np.ndarray) -> None:
         """``camera.compensate``: the camera's motion since the marked frame (snapped); the particle
@@ -216,47 +271,15 @@ class ColorPfTracker(TrackerBase):
         return marked_box(tuple(box), image.shape[1], image.shape[0])
 
     def _start(self, frame: Frame) -> list[TrackState]:
+        """The marked frame (§2-§3): the marked box's pixels, the histogram, the reference (eq. (7) when a
+        background exists), eq. (9)'s ``S`` and ``R_0``, the particles on the box; the frame is weighed."""
         cfg, mark = self.config, self.mark
         assert mark is not None and self.background is not None
-        height, width = frame.image.shape[:2]
-        box = marked_box((mark.x, mark.y, mark.w, mark.h), width, height)
-        if box[2] <= box[0] or box[3] <= box[1]:
-            raise LogError(f"the box marked on frame {mark.frame} ({mark.w:g}x{mark.h:g} px round {mark.x:g},{mark.y:g}) "
-                           f"covers no whole pixel of the {width}x{height} picture: mark the target with a box of at least a pixel")
-        pixels = int((box[2] - box[0]) * (box[3] - box[1]))
-        self._too_small = pixels < cfg.min_box_pixels
-        if self._too_small:
-            self._say(f"the box marked on frame {mark.frame} holds {pixels} pixels, too few for a colour histogram to tell "
-                      f"the target by (min_box_pixels = {cfg.min_box_pixels}): it is followed, but its rows are \"predicted\", "
-                      "never \"measured\"; mark a larger box if the target allows")
-        x0, y0, x1, y1 = marked_box((mark.x, mark.y, GREY_CONTEXT * mark.w, GREY_CONTEXT * mark.h), width, height)
-        context = frame.image[y0:y1, x0:x1]
-        if cfg.likelihood.histogram == "hs" and saturated_share(context, cfg.likelihood.s_min) < GREY_SHARE:
-            # no hue or saturation to histogram: every box would score alike, and confidently
-            self.model = ColourModel(dataclasses.replace(cfg.likelihood, histogram="hsv"))
-            self._say(GREY_NOTICE)
+        box = self._marked_pixels(frame.image)
+        self._choose_histogram(frame.image)
         self.reference = box_reference(self.model, frame.image, box)
-        background, source = self.background.at_start(frame.image)
-        mask = None
-        if source == "before":
-            mask = self._rebuild_reference(background, "before", frame.image, box)
-        elif source == "early":
-            self._marked_image = frame.image
-            self._marked_box = box
-        else:
-            self._say(self._no_background("the log has no usable background"
-                                          if cfg.reference.background != "none" else "reference.background = \"none\""))
-        # eq. (9): S from the marked box's area at its foot's distance; R_0 from the box
-        plane = frame.ground_plane
-        foot = foot_points(np.array([[mark.x, mark.y]]), mark.h)
-        if plane is not None:
-            self.side = float(horizon_side(plane, foot)[0])
-        distance0 = float(ground_distance(plane, foot, self.side)[0])
-        if cfg.size.mode == "geometry" and not np.isfinite(distance0):
-            self._say(NO_PLANE_NOTICE if plane is None else
-                      "the marked box's foot is not on the ground plane: the size estimate takes the distance as constant")
-        self.size = WeakPerspectiveSize(cfg.size.r_s, mark.w * mark.h, distance0)
-        self.aspect = AspectEstimate(cfg.aspect, mark.h / mark.w)
+        mask = self._start_reference(frame.image, box)
+        self._start_size(frame.ground_plane)
         self.initial_wh = np.array([mark.w, mark.h], dtype=np.float64)
         sigma = np.concatenate([position_sigma(self.initial_wh, cfg.noise, cfg.min_noise_px), [0.0, 0.0]])
         self.pf.initialise(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64), sigma)
@@ -268,6 +291,65 @@ class ColorPfTracker(TrackerBase):
         self.background.leave_out(np.array([mark.x, mark.y, mark.w, mark.h], dtype=np.float64),
                                   (frame.image.shape[1], frame.image.shape[0]), marked=box)
         return out
+
+    def _marked_pixels(self, image: np.ndarray) -> np.ndarray:
+        """The marked box's whole pixels (integer corners); a box covering none is the log's error, and
+        one under ``min_box_pixels`` is followed but never "measured" (said)."""
+        cfg, mark = self.config, self.mark
+        assert mark is not None
+        height, width = image.shape[:2]
+        box = marked_box((mark.x, mark.y, mark.w, mark.h), width, height)
+        if box[2] <= box[0] or box[3] <= box[1]:
+            raise LogError(f"the box marked on frame {mark.frame} ({mark.w:g}x{mark.h:g} px round {mark.x:g},{mark.y:g}) "
+                           f"covers no whole pixel of the {width}x{height} picture: mark the target with a box of at least a pixel")
+        pixels = int((box[2] - box[0]) * (box[3] - box[1]))
+        self._too_small = pixels < cfg.min_box_pixels
+        if self._too_small:
+            self._say(f"the box marked on frame {mark.frame} holds {pixels} pixels, too few for a colour histogram to tell "
+                      f"the target by (min_box_pixels = {cfg.min_box_pixels}): it is followed, but its rows are \"predicted\", "
+                      "never \"measured\"; mark a larger box if the target allows")
+        return box
+
+    def _choose_histogram(self, image: np.ndarray) -> None:
+        """H-S (§3.1) unless the marked box and its surroundings are grey: then Pérez et al.'s H-S + V (said)."""
+        cfg, mark = self.config, self.mark
+        assert mark is not None
+        height, width = image.shape[:2]
+        x0, y0, x1, y1 = marked_box((mark.x, mark.y, GREY_CONTEXT * mark.w, GREY_CONTEXT * mark.h), width, height)
+        context = image[y0:y1, x0:x1]
+        if cfg.likelihood.histogram == "hs" and saturated_share(context, cfg.likelihood.s_min) < GREY_SHARE:
+            # no hue or saturation to histogram: every box would score alike, and confidently
+            self.model = ColourModel(dataclasses.replace(cfg.likelihood, histogram="hsv"))
+            self._say(GREY_NOTICE)
+
+    def _start_reference(self, image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
+        """Eq. (7) now when the background was there "before" the mark (the mask returned), later for an
+        "early" one (the marked frame kept); else the marked box's own histogram stays (said)."""
+        assert self.background is not None
+        background, source = self.background.at_start(image)
+        if source == "before":
+            return self._rebuild_reference(background, "before", image, box)
+        if source == "early":
+            self._marked_image = image
+            self._marked_box = box
+        else:
+            self._say(self._no_background("the log has no usable background"
+                                          if self.config.reference.background != "none" else "reference.background = \"none\""))
+        return None
+
+    def _start_size(self, plane: GroundPlane | None) -> None:
+        """Eq. (9): ``S`` from the marked box's area at its foot's distance; ``R_0`` from the box."""
+        cfg, mark = self.config, self.mark
+        assert mark is not None
+        foot = foot_points(np.array([[mark.x, mark.y]]), mark.h)
+        if plane is not None:
+            self.side = float(horizon_side(plane, foot)[0])
+        distance0 = float(ground_distance(plane, foot, self.side)[0])
+        if cfg.size.mode == "geometry" and not np.isfinite(distance0):
+            self._say(NO_PLANE_NOTICE if plane is None else
+                      "the marked box's foot is not on the ground plane: the size estimate takes the distance as constant")
+        self.size = WeakPerspectiveSize(cfg.size.r_s, mark.w * mark.h, distance0)
+        self.aspect = AspectEstimate(cfg.aspect, mark.h / mark.w)
 
     def _mark_score(self, image: np.ndarray) -> float:
         """``S`` of the marked box (on the marked frame) against the current reference."""
@@ -353,55 +435,40 @@ class ColorPfTracker(TrackerBase):
         cfg, ref = self.config, self.reference
         assert ref is not None
         horizon = frames_for(cfg.hold.max_frames, self.clock.typical)  # frame_rate: the same duration
-        if self.hold_run >= horizon or self._velocity_steps == 0:
+        motion = self.motion
+        if not motion.held.within(horizon) or motion.steps == 0:
             # (no velocity measured yet, e.g. right after the mark: holding would freeze the box where it
             # was marked while the target walks off; a review saw otb_crossing marked on frame 60 held there)
             return estimate, False
         shares = neighbour_shares(image, background, estimate, cfg.reference.threshold, cfg.reference.open_px, gain,
                                   band=band)
         if shares.max() <= ref.p_detect / ref.p_square:
-            self.hold_run = 0
+            motion.held.reset()
             return estimate, False
         vouched = cfg.hold.anchor == "vouched"
-        if vouched and (self._vouched is None or index - self._vouched[0] > horizon):
+        if vouched and (motion.last is None or index - motion.last[0] > horizon):
             return estimate, False  # no vouched position recent enough to predict from
-        self.hold_run += 1
+        motion.held.extend()
         if vouched:  # in the marked frame's view (as _vouch keeps it), then into this one (camera.compensate)
-            assert self._vouched is not None
-            centre = vouched_prediction(*self._vouched, self.track_velocity, index)
+            assert motion.last is not None
+            centre = vouched_prediction(*motion.last, motion.velocity, index)
             target = apply(self.camera_transform, centre)[0]
         else:  # the velocity into this view (camera.compensate)
-            target = prev[:2] + self.camera_transform[:2, :2] @ self.track_velocity
+            target = prev[:2] + self.camera_transform[:2, :2] @ motion.velocity
         self.pf.particles[:, :2] += target - estimate[:2]  # the cloud moves with it
         return self.pf.estimate(), True
-
-    def _reacquiring(self, index: int, estimate: np.ndarray, weigh_only: bool) -> bool:
-        """Called on a frame whose colour matches: True while a lost track's match has not yet held on
-        ``reacquire_frames`` consecutive frames, each estimate within its box's size of the last."""
-        if weigh_only or self.misses < self.config.lost_after:
-            self._rematch = None
-            return False
-        last = self._rematch
-        run = 1
-        if last is not None and last[0] == index - 1 and bool(np.all(np.abs(estimate[:2] - last[1]) <= estimate[2:4])):
-            run = last[2] + 1
-        self._rematch = (index, estimate[:2].copy(), run)
-        if run < self.config.reacquire_frames:
-            return True
-        self._rematch = None
-        return False
 
     def _revouch(self, frames: dict[int, np.ndarray]) -> None:
         """``hold.early = "region"``: once eq. (7)'s background exists, the estimates made before it (colour
         alone, against the marked box's own histogram) are vouched for by the foreground region on the
         frames the median was taken over, as later ones are: the hold's velocity and anchor are refitted
         from the placed ones only (none placed: no velocity, no anchor)."""
-        rows, self._early_rows = self._early_rows, []
+        rows = self.motion.take_early_rows()
         ref, cfg, background = self.reference, self.config, self.background_image
         if (cfg.refine.mode != "foreground" or ref is None or ref.kind == "box" or background is None
                 or ref.p_square <= 0 or self.layout is None or self.mark is None):
             return  # no region to vouch with: the colour's rows stand, as they would have
-        self._vouched, self.track_velocity, self._velocity_steps = None, np.zeros(2), 0
+        self.motion.forget()
         layout = self.layout if cfg.refine.layout else IDENTITY
         for index, box in rows:
             image = frames.get(index)
@@ -421,30 +488,56 @@ class ColorPfTracker(TrackerBase):
         """``hold.enabled``: the track's velocity from consecutive vouched estimates (exponentially smoothed)."""
         if not vouched:
             return
-        if self._vouched is not None:
-            last, xy = self._vouched
-            self._velocity_steps += 1
-            s = smoothing_for(self.config.hold.smoothing, self.clock.ratio)  # frame_rate: the same memory in time
-            self.track_velocity = s * self.track_velocity + (1.0 - s) * (estimate[:2] - xy) / max(index - last, 1)
-        self._vouched = (index, estimate[:2].copy())
+        # frame_rate: the same memory in time
+        self.motion.vouch(index, estimate, smoothing_for(self.config.hold.smoothing, self.clock.ratio))
 
+    # --- the step's stages (§3-§4) ---------------------------------------------------------------------
     def _track(self, frame: Frame, mask: np.ndarray | None, weigh_only: bool = False) -> list[TrackState]:
-        cfg = self.config
+        """One frame of the filter: select and predict (eq. 2), weigh (eqs. 3-5 and our cues), estimate
+        (eq. 6), refine or hold, size and aspect (eqs. 9-12), confidence, adapt, status. ``weigh_only``:
+        the marked frame (the particles start on the mark: nothing is selected, predicted or refined)."""
         assert self.reference is not None and self.size is not None and self.aspect is not None
         image, plane = frame.image, frame.ground_plane
         prev = self.pf.estimate()
         working = self.reference.histogram if self.adapted is None else self.adapted
         if not weigh_only:
-            self.pf.resample()  # select by the previous weights
-            drift = self.velocity if cfg.motion.model == "constant_velocity" else None
-            # frame_rate: eq. (2)'s random walk spreads with the square root of the step's interval
-            sigma = noise_for(position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), self.clock.ratio)
-            self.pf.predict(transition(
-                sigma=sigma, size=cfg.size, ratio=self.aspect.ratio,
-                box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh,
-                drift=drift))  # eq. (2)
+            self._predict(prev, plane)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
-        likelihood = m.likelihood
+        view = self._foreground_view(image)
+        estimate = self._weigh(self._cues(m.likelihood, image, view, prev, mask))
+        placed = held = False
+        if not weigh_only:
+            estimate, placed = self._refine(image, view, working, estimate)
+            if self.config.hold.enabled and not placed and self._vouchable(view):
+                estimate, held = self._hold(image, view.background, view.gain, prev, estimate, frame.index, view.band)
+            self._follow_velocity(prev, estimate)
+        size = self._size_and_aspect(estimate, m.likelihood, plane, weigh_only)
+        score = self._score(image, estimate, weigh_only)
+        if not weigh_only:
+            self._adapt(image, estimate, working, score)
+        status = self._status(frame.index, image, view, estimate, score, placed, held, weigh_only)
+        if self.config.hold.enabled and not weigh_only:
+            self._remember(frame.index, estimate, status == "measured" or placed)
+        self.intermediates = self._intermediates(m, estimate, score, size, mask, status)
+        return self._rows(status, estimate, prev, score.confidence, weigh_only)
+
+    def _predict(self, prev: np.ndarray, plane: GroundPlane | None) -> None:
+        """Select by the previous weights (systematic resampling), then eq. (2)'s transition."""
+        cfg = self.config
+        assert self.aspect is not None
+        self.pf.resample()
+        drift = self.velocity if cfg.motion.model == "constant_velocity" else None
+        # frame_rate: eq. (2)'s random walk spreads with the square root of the step's interval
+        sigma = noise_for(position_sigma(prev[2:4], cfg.noise, cfg.min_noise_px), self.clock.ratio)
+        self.pf.predict(transition(
+            sigma=sigma, size=cfg.size, ratio=self.aspect.ratio,
+            box_wh=prev[2:4], model=self.size, plane=plane, side=self.side, initial_wh=self.initial_wh,
+            drift=drift))  # eq. (2)
+
+    def _foreground_view(self, image: np.ndarray) -> ForegroundView:
+        """Eq. (7)'s background where the scene is now (camera.compensate), its brightness gain and
+        registration band; none on a frame that differs from it over most of its area."""
+        cfg = self.config
         background, gain, band = self.background_image, 1.0, None
         if background is not None:  # camera.compensate: the background (marked frame's place) where the scene is now
             background = warp(background, self.camera_transform)
@@ -456,11 +549,23 @@ class ColorPfTracker(TrackerBase):
                 background = None  # no foreground cue and no neighbour check on this frame
             else:  # resampled (not a whole-pixel shift): its edges may be off by a fraction of a pixel
                 band = registration_band(background, self.camera_transform, cfg.reference.registration_tolerance)
-        if cfg.likelihood.foreground > 0 and background is not None:  # ours: the foreground cue
-            contrast = foreground_contrast(image, background, self.pf.particles[:, :2], prev[2:4],
-                                           cfg.reference.threshold, cfg.reference.open_px, gain, band=band)
+        return ForegroundView(background, gain, band)
+
+    def _vouchable(self, view: ForegroundView) -> bool:
+        """A foreground region can place or hold the estimate: a background on this frame, a marked box
+        with foreground, and the track not lost (no re-acquisition by region)."""
+        assert self.reference is not None
+        return view.background is not None and self.reference.p_square > 0 and not self.life.lost
+
+    def _cues(self, likelihood: np.ndarray, image: np.ndarray, view: ForegroundView, prev: np.ndarray,
+              mask: np.ndarray | None) -> np.ndarray:
+        """Ours: eq. (5)'s likelihood times the foreground centre-surround cue and the layout (template) cue."""
+        cfg = self.config
+        if cfg.likelihood.foreground > 0 and view.background is not None:
+            contrast = foreground_contrast(image, view.background, self.pf.particles[:, :2], prev[2:4],
+                                           cfg.reference.threshold, cfg.reference.open_px, view.gain, band=view.band)
             likelihood = likelihood * np.exp(cfg.likelihood.foreground * contrast)
-        if cfg.likelihood.template > 0:  # ours: the layout (template) cue
+        if cfg.likelihood.template > 0:
             if self.template is None:  # the marked box, on the marked frame (this one)
                 assert self.mark is not None
                 corners = marked_box((self.mark.x, self.mark.y, self.mark.w, self.mark.h), *image.shape[1::-1])
@@ -471,40 +576,58 @@ class ColorPfTracker(TrackerBase):
                 ncc = template_scores(image, self.template.template, self.pf.particles[:, :2], prev[2:4],
                                       cfg.likelihood.template_side, self.template.weights)
                 likelihood = likelihood * np.exp(cfg.likelihood.template * np.maximum(ncc, 0.0))
-        self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)  # eq. (3): pi = L (after selection)
+        return likelihood
+
+    def _weigh(self, likelihood: np.ndarray) -> np.ndarray:
+        """Eq. (3), pi = L (after selection), and eq. (6)'s estimate."""
+        self.pf.weights = np.full(self.pf.n, 1.0 / self.pf.n)
         self.pf.weigh(lambda _: likelihood)
-        estimate = self.pf.estimate()  # eq. (6)
-        placed = False  # refine.mode = "foreground" placed the estimate on a region consistent with the target
-        if cfg.refine.mode == "meanshift" and not weigh_only:
+        return self.pf.estimate()
+
+    def _refine(self, image: np.ndarray, view: ForegroundView, working: np.ndarray,
+                estimate: np.ndarray) -> tuple[np.ndarray, bool]:
+        """``refine.mode``: mean shift, or the foreground region (True: it placed the estimate)."""
+        cfg = self.config
+        if cfg.refine.mode == "meanshift":
             refined, _ = mean_shift(self.model, image, estimate, working, cfg.refine.iterations)
             self.pf.particles[:, :2] += refined[:2] - estimate[:2]  # the cloud moves with the estimate
-            estimate = self.pf.estimate()
-        elif (cfg.refine.mode == "foreground" and not weigh_only and background is not None
-              and self.reference.p_square > 0 and self.misses < cfg.lost_after):  # no re-acquisition by region
-            estimate, placed = self._refine_foreground(image, background, gain, estimate, band)
-        held = False  # hold.enabled: the estimate is the motion prediction (a larger moving region beside it)
-        if (cfg.hold.enabled and not weigh_only and not placed and background is not None
-                and self.reference.p_square > 0 and self.misses < cfg.lost_after):
-            estimate, held = self._hold(image, background, gain, prev, estimate, frame.index, band)
-        if not weigh_only:
-            s = smoothing_for(cfg.motion.smoothing, self.clock.ratio)
-            self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
+            return self.pf.estimate(), False
+        if cfg.refine.mode == "foreground" and self._vouchable(view):
+            assert view.background is not None
+            return self._refine_foreground(image, view.background, view.gain, estimate, view.band)
+        return estimate, False
+
+    def _follow_velocity(self, prev: np.ndarray, estimate: np.ndarray) -> None:
+        """``motion.model = "constant_velocity"``'s drift: the estimate's displacement, smoothed."""
+        s = smoothing_for(self.config.motion.smoothing, self.clock.ratio)
+        self.velocity = s * self.velocity + (1.0 - s) * (estimate[:2] - prev[:2])
+
+    def _size_and_aspect(self, estimate: np.ndarray, likelihood: np.ndarray, plane: GroundPlane | None,
+                         weigh_only: bool) -> SizeStage:
+        """Eq. (9)'s area and distance at the estimate's foot; eqs. (10)-(11)'s aspect ``R_t``."""
+        cfg = self.config
+        assert self.aspect is not None
         area_a, distance_a = standing_box(estimate[None, :2], estimate[3], self.size, plane, self.side, self.aspect.ratio)
         area, distance = float(area_a[0]), float(distance_a[0])
         if cfg.size.mode == "geometry" and cfg.aspect.mode == "likelihood" and not weigh_only:
-            update = self.aspect.update(self.pf.particles[:, :2], m.likelihood, estimate, area)  # eqs. (10)-(11)
+            update = self.aspect.update(self.pf.particles[:, :2], likelihood, estimate, area)  # eqs. (10)-(11)
         else:
             update = AspectUpdate(float("nan"), self.aspect.ratio, True)
+        return SizeStage(area, distance, update)
+
+    def _score(self, image: np.ndarray, estimate: np.ndarray, weigh_only: bool) -> Score:
+        """The confidence: the estimate's ``S`` between the background's score and the marked box's."""
+        cfg, ref = self.config, self.reference
+        assert ref is not None
         current = box_histogram(self.model, image, estimate)
-        s_est = float(self.model.pooled_similarity(current, self.reference.histogram))  # against H_ref as built
+        s_est = float(self.model.pooled_similarity(current, ref.histogram))  # against H_ref as built
         if weigh_only or self._s_mark is None:
             self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
-        ref_h = self.reference.histogram
-        s_back = float(self.model.pooled_similarity(self.reference.h_back, ref_h))
+        s_back = float(self.model.pooled_similarity(ref.h_back, ref.histogram))
         separated = self._s_mark - s_back >= cfg.min_separation
         # the confidence tells the target from the background only with a background-built reference
         # whose mark stands out from it; only then may the reference adapt (reference.update_rate)
-        telling = self.reference.kind != "box" and separated
+        telling = ref.kind != "box" and separated
         if not separated:
             # the background scores (nearly) as well as the mark: it cannot scale the confidence
             self._say(f"the marked box scores S = {self._s_mark:.2f} against the reference and the background "
@@ -513,65 +636,95 @@ class ColorPfTracker(TrackerBase):
                       "\"predicted\", not \"measured\"")
             s_back = 0.0
         confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
+        return Score(confidence, s_est, current, separated, telling)
+
+    def _adapt(self, image: np.ndarray, estimate: np.ndarray, working: np.ndarray, score: Score) -> None:
+        """Ours: the reference (Nummiaro et al.'s adaptive model) and the template follow a confident estimate."""
+        cfg = self.config
+        if not score.telling or score.confidence < cfg.reference.update_above:
+            return
         rate = cfg.reference.update_rate
-        if rate > 0 and telling and not weigh_only and confidence >= cfg.reference.update_above and current.sum() > 0:
-            self.adapted = (1.0 - rate) * working + rate * current  # Nummiaro et al.'s adaptive model
-        t_rate = cfg.likelihood.template_rate
-        if (self.template is not None and t_rate > 0 and telling and not weigh_only
-                and confidence >= cfg.reference.update_above):
-            self.template.blend(image, estimate, t_rate)
-        if confidence >= cfg.measured_fraction and self._reacquiring(frame.index, estimate, weigh_only):
-            status = "lost"  # lost, and the colour matches again: not yet on reacquire_frames frames in a row
-        elif held:  # the estimate is the motion prediction: whatever the colour says there, nothing saw it (nor vouches)
-            status = "predicted"  # bounded by hold.max_frames; a colour match there is no miss towards "lost" either
-            if confidence >= cfg.measured_fraction:
-                self.misses = 0
-        elif confidence >= cfg.measured_fraction and not weigh_only and (not separated or self._too_small):
+        if rate > 0 and score.current.sum() > 0:
+            self.adapted = (1.0 - rate) * working + rate * score.current
+        if self.template is not None and cfg.likelihood.template_rate > 0:
+            self.template.blend(image, estimate, cfg.likelihood.template_rate)
+
+    def _status(self, index: int, image: np.ndarray, view: ForegroundView, estimate: np.ndarray, score: Score,
+                placed: bool, held: bool, weigh_only: bool) -> str:
+        """The row's status and the track's life (:mod:`trackreplay.trackers.lifecycle`): "measured" on a
+        colour match that vouches, "predicted" while held, placed or unsupported, "lost" from the
+        ``lost_after``-th miss in a row until the colour has matched again on ``reacquire_frames`` frames."""
+        cfg, life = self.config, self.life
+        matched = score.confidence >= cfg.measured_fraction
+        if matched and life.reacquiring(index, estimate[:2], estimate[2:4]):
+            return "lost"  # lost, and the colour matches again: not yet on reacquire_frames frames in a row
+        if held:  # the estimate is the motion prediction: whatever the colour says there, nothing saw it (nor vouches)
+            if matched:  # bounded by hold.max_frames; a colour match there is no miss towards "lost" either
+                life.supported()
+            return life.held()
+        if matched and not weigh_only and (not score.separated or self._too_small):
             # the background scores about as well as the mark, or the box is too small for a histogram: the
             # colour match vouches for little; not a miss either
-            status, self.misses = "predicted", 0
-        elif confidence >= cfg.measured_fraction:
-            status, self.misses, self.placed_run = "measured", 0, 0
-            if cfg.neighbour_check and background is not None and self.reference.p_square > 0 and not weigh_only:
-                # a neighbour holds more foreground than the marked box did: the estimate is on or against
-                # a larger moving region; its colour matches, its position is not vouched for. Only the
-                # status changes (the misses towards "lost" are colour's)
-                shares = neighbour_shares(image, background, estimate, cfg.reference.threshold,
-                                          cfg.reference.open_px, gain, band=band)
-                if shares.max() > self.reference.p_detect / self.reference.p_square:
-                    status = "predicted"
-        elif placed and cfg.refine.keeps_track and (cfg.refine.keep_frames is None
-                                                    or self.placed_run < cfg.refine.keep_frames):
-            self.placed_run += 1
-            status = "predicted"  # the foreground region places the target: not a miss towards "lost"
-        else:
-            self.misses += 1
-            status = "lost" if self.misses >= cfg.lost_after else "predicted"
-        if cfg.hold.enabled and not weigh_only:
-            # in the marked frame's view (camera.compensate): the velocity is the target's, not the camera's
-            scene = np.concatenate([apply(np.linalg.inv(self.camera_transform), estimate[:2])[0], estimate[2:4]]) \
-                if self.camera is not None and not np.array_equal(self.camera_transform, NO_MOTION) else estimate
-            self._vouch(frame.index, scene, status == "measured" or placed)
-            if cfg.hold.early == "region" and self.reference.kind == "box" and self.background.source == "early":
-                box = scene.copy()  # the box too in the marked frame's view (the early median's frames)
-                box[2:4] /= scale_of(self.camera_transform)
-                self._early_rows.append((frame.index, box))
-        ref = self.reference
-        self.intermediates = ColorPfIntermediates(
+            life.supported()
+            return "predicted"
+        if matched:
+            self.placed_run.reset()
+            status = life.supported()
+            if not weigh_only and self._beside_larger_region(image, view, estimate):
+                return "predicted"
+            return status
+        if placed and cfg.refine.keeps_track and self.placed_run.within(cfg.refine.keep_frames):
+            self.placed_run.extend()
+            return life.held()  # the foreground region places the target: not a miss towards "lost"
+        return life.missed()
+
+    def _beside_larger_region(self, image: np.ndarray, view: ForegroundView, estimate: np.ndarray) -> bool:
+        """``neighbour_check``: a neighbour holds more foreground than the marked box did: the estimate is on
+        or against a larger moving region; its colour matches, its position is not vouched for. Only the
+        status changes (the misses towards "lost" are colour's)."""
+        cfg, ref = self.config, self.reference
+        assert ref is not None
+        if not cfg.neighbour_check or view.background is None or ref.p_square <= 0:
+            return False
+        shares = neighbour_shares(image, view.background, estimate, cfg.reference.threshold,
+                                  cfg.reference.open_px, view.gain, band=view.band)
+        return bool(shares.max() > ref.p_detect / ref.p_square)
+
+    def _remember(self, index: int, estimate: np.ndarray, vouched: bool) -> None:
+        """``hold.enabled``: the estimate in the marked frame's view (camera.compensate: the velocity is the
+        target's, not the camera's) for the hold's velocity, and, before eq. (7)'s background, for ``_revouch``."""
+        assert self.reference is not None and self.background is not None
+        moved = self.camera is not None and not np.array_equal(self.camera_transform, NO_MOTION)
+        scene = np.concatenate([apply(np.linalg.inv(self.camera_transform), estimate[:2])[0], estimate[2:4]]) \
+            if moved else estimate
+        self._vouch(index, scene, vouched)
+        if self.config.hold.early == "region" and self.reference.kind == "box" and self.background.source == "early":
+            box = scene.copy()  # the box too in the marked frame's view (the early median's frames)
+            box[2:4] /= scale_of(self.camera_transform)
+            self.motion.early_rows.append((index, box))
+
+    def _intermediates(self, m: Measurement, estimate: np.ndarray, score: Score, size: SizeStage,
+                       mask: np.ndarray | None, status: str) -> ColorPfIntermediates:
+        ref, cfg = self.reference, self.config
+        assert ref is not None
+        return ColorPfIntermediates(
             "track", self.pf.particles.copy(), self.pf.weights.copy(), m.similarity, m.likelihood, estimate,
-            ref.histogram.reshape(self.model.shape), current.reshape(self.model.shape), s_est,
-            area if cfg.size.mode == "geometry" else float("nan"), distance, update.measured, update.ratio,
-            update.kept, ref.kind, ref.background,
+            ref.histogram.reshape(self.model.shape), score.current.reshape(self.model.shape), score.s_est,
+            size.area if cfg.size.mode == "geometry" else float("nan"), size.distance, size.update.measured,
+            size.update.ratio, size.update.kept, ref.kind, ref.background,
             mask if mask is not None else np.zeros((0, 0), bool),
             ref.mask_offset.copy() if mask is not None else np.zeros(2, np.int64), status, self._notice())
+
+    @staticmethod
+    def _rows(status: str, estimate: np.ndarray, prev: np.ndarray, confidence: float,
+              weigh_only: bool) -> list[TrackState]:
+        """The track's row: no position when lost; no velocity on the marked frame."""
         if status == "lost":
             return [TrackState(1, status="lost", confidence=confidence)]
         x, y, w, h = (float(v) for v in estimate)
         vx = vy = None
         if not weigh_only:
             vx, vy = x - float(prev[0]), y - float(prev[1])
-        return [TrackState(1, x=x, y=y, w=w, h=h, vx=vx, vy=vy, status=status,
-                           confidence=confidence)]
-
+        return [TrackState(1, x=x, y=y, w=w, h=h, vx=vx, vy=vy, status=status, confidence=confidence)]
 
 __all__ = ["ColorPfTracker", "start_mark", "box_from_area"]

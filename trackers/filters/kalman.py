@@ -3,7 +3,9 @@
 Linear models use ``filterpy.kalman.KalmanFilter`` (``update(z, R=, H=)`` takes the measurement
 model per call). Nonlinear ones use :class:`MotionModelEkf`, filterpy's ``ExtendedKalmanFilter``
 whose state prediction is a function the tracker passes in (filterpy's documented way: override
-``predict_x``); ``update(z, HJacobian, Hx, R=)`` takes the measurement model per call.
+``predict_x``); its ``update(z, HJacobian, Hx, R=)``, filterpy's call, takes the measurement model
+per call. Every EKF of the trackers (the groups' stereo filter, golf's ballistic one) updates
+through it.
 """
 
 from __future__ import annotations
@@ -70,12 +72,27 @@ class MotionModelEkf(ExtendedKalmanFilter):
     def predict_x(self, u: float = 0.0) -> None:
         self.x = self.fx(self.x, u)
 
-    def update_linearised(self, z: np.ndarray, H: np.ndarray, hx: np.ndarray, R: np.ndarray,
-                          PHT: np.ndarray | None = None, S: np.ndarray | None = None) -> None:
-        """filterpy's ``update(z, lambda x: H, lambda x: hx, R=R)`` (Joseph form) in its own numpy
-        operations, so the same ``x`` and ``P``; ``PHT = P Hᵀ`` and ``S = H PHT + R`` when the caller
-        formed them already (a gate before the update). Without filterpy's bookkeeping (a deep copy
-        of ``z``, the posterior copies), which cost more than the 3 x 6 algebra itself."""
+    def update(self, z: np.ndarray | None, HJacobian: Callable[..., np.ndarray], Hx: Callable[..., np.ndarray],
+               R: np.ndarray | float | None = None, args: tuple = (), hx_args: tuple = (),
+               residual: Callable[[np.ndarray, np.ndarray], np.ndarray] = np.subtract,
+               PHT: np.ndarray | None = None, S: np.ndarray | None = None) -> None:
+        """filterpy's ``ExtendedKalmanFilter.update(z, HJacobian, Hx, R=, args=, hx_args=, residual=)``
+        (Joseph form) in its own numpy operations, in its order: the same ``x`` and ``P``. ``PHT = P
+        Hᵀ`` and ``S = H PHT + R`` when the caller formed them already (a gate before the update).
+        Without filterpy's bookkeeping (a deep copy of ``z``, the posterior copies: kept by
+        reference), which costs more than the 3 x 6 algebra itself."""
+        if z is None:
+            self.z, self.x_post, self.P_post = np.array([[None] * self.dim_z]).T, self.x, self.P
+            return
+        args = args if isinstance(args, tuple) else (args,)
+        hx_args = hx_args if isinstance(hx_args, tuple) else (hx_args,)
+        if R is None:
+            R = self.R
+        elif np.isscalar(R):
+            R = np.eye(self.dim_z) * R
+        if np.isscalar(z) and self.dim_z == 1:
+            z = np.asarray([z], float)
+        H = HJacobian(self.x, *args)
         if PHT is None:
             PHT = np.dot(self.P, H.T)
         if S is None:
@@ -83,11 +100,12 @@ class MotionModelEkf(ExtendedKalmanFilter):
         self.S = S
         self.SI = inverse(S)
         self.K = PHT.dot(self.SI)
-        self.y = np.subtract(z, hx)
+        self.y = residual(z, Hx(self.x, *hx_args))
         self.x = self.x + np.dot(self.K, self.y)
         I_KH = self._I - np.dot(self.K, H)
         self.P = np.dot(I_KH, self.P).dot(I_KH.T) + np.dot(self.K, R).dot(self.K.T)
         self._log_likelihood = self._likelihood = self._mahalanobis = None
+        self.z, self.x_post, self.P_post = z, self.x, self.P
 
 
 def inverse(a: np.ndarray) -> np.ndarray:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from trackreplay.trackers.lifecycle import LifecycleConfig
+
 
 @dataclass(frozen=True)
 class FlowConfig:
@@ -59,6 +61,11 @@ class FlowConfig:
             raise ValueError("hist_bin, hist_range and lost_after must be positive")
         if self.init_center is not None and len(self.init_center) != 2:
             raise ValueError(f"init_center must be (x, y), not {self.init_center}")
+
+    @property
+    def lifecycle(self) -> LifecycleConfig:
+        """The track's life (trackers.lifecycle): "lost" on the lost_after-th frame in a row without moving pixels."""
+        return LifecycleConfig(lost_after=self.lost_after)
 
     def sigma_at(self, iteration: int) -> float:
         """Blur of the given refinement (offline) or frame (on-line); the last value repeats."""

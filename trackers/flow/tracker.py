@@ -3,7 +3,9 @@
 Step k (frame k arrives; the FOV centre c was set after frame k−1):
 crop frames k−1 and k at c (eq. 26) → flow (on-line: one refinement warm-started from the
 previous flow, eq. 25; offline: eq. 7–10) → velocity and centroid (eq. 11) → Kalman filter
-(eq. 23–24) → the FOV moves to the rounded filtered position.
+(eq. 23–24) → the FOV moves to the rounded filtered position. "measured" on a frame with moving
+pixels, "predicted" without, "lost" on the ``lost_after``-th such frame in a row or once the FOV has left
+the picture (the track's life: :mod:`trackreplay.trackers.lifecycle`).
 """
 
 from __future__ import annotations
@@ -19,8 +21,9 @@ from trackreplay.trackers.flow.fov import crop, fov_origin, inside, next_centre,
 from trackreplay.trackers.flow.kalman import AxisFilters
 from trackreplay.trackers.flow.local_flow import FlowField
 from trackreplay.trackers.flow.refine import online_step, refine_flow
-from trackreplay.trackers.flow.velocity import histogram_edges, object_velocity
+from trackreplay.trackers.flow.velocity import VelocityEstimate, histogram_edges, object_velocity
 from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.lifecycle import TrackLife
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,43 +66,72 @@ class FlowTracker(TrackerBase):
         self._kf: AxisFilters | None = None
         self._warm: FlowField | None = None
         self._steps = 0
-        self._still = 0
+        # the track's life (trackers.lifecycle): "lost" after lost_after frames in a row without moving pixels
+        self.life = TrackLife(config.lifecycle)
         self._extent: tuple[float | None, float | None] = (None, None)
         # how far S reaches beyond a moving edge: the derivative and neighbourhood radii, of which
         # about three quarters carry flow above ε (measured on the flow-sim scenes)
         self._spread = 0.75 * ((config.derivative - 1) / 2 + (config.neighbourhood - 1) / 2)
 
     def step(self, frame: Frame) -> list[TrackState]:
+        """Step k: the flow in the window (eq. 26; eqs. 7-10 or 25), the object's velocity and centroid
+        (eq. 11), the Kalman filter (eqs. 23-24) and the track's life, the window moved, the row."""
         grey = frame.grey
         if self._prev is None:
             return self._start(frame, grey)
-        cfg = self.config
         centre = self._centre
-        # eq. 26: both frames seen through the same window, so the background stands still
+        flow, est = self._measure(grey, centre)
+        origin = fov_origin(centre, self.config.fov)
+        status, observed = self._filter(est, origin)
+        assert self._kf is not None
+        kalman_x = self._kf.state
+        filtered, velocity = kalman_x[:, 0].copy(), kalman_x[:, 1].copy()
+        self._move_window(grey, flow, est, velocity, filtered, centre)
+        self.intermediates = self._intermediates(flow, est, origin, observed, kalman_x, velocity)
+        if status == "lost" or not inside(filtered, grey.shape):
+            # no position: nothing has moved for lost_after frames, or the FOV has left the picture
+            return [TrackState(1, status="lost")]
+        return [TrackState(1, x=float(filtered[0]), y=float(filtered[1]), w=self._extent[0], h=self._extent[1],
+                           vx=float(velocity[0]), vy=float(velocity[1]), status=status)]
+
+    def _measure(self, grey: np.ndarray, centre: tuple[int, int]) -> tuple[FlowField, VelocityEstimate]:
+        """Eq. 26: both frames seen through the same window, so the background stands still; their flow
+        (on-line: one refinement warm-started from the previous flow, eq. 25; offline: eqs. 7-10) and the
+        object's velocity and moving set (eq. 11)."""
+        cfg = self.config
         e0, e1 = crop(self._prev, centre, cfg.fov), crop(grey, centre, cfg.fov)
         flow = online_step(e0, e1, self._warm, cfg, step=self._steps) if cfg.online else refine_flow(e0, e1, cfg)
-        est = object_velocity(flow, cfg.epsilon, self.edges, self._spread)
-        x0, y0 = fov_origin(centre, cfg.fov)
+        return flow, object_velocity(flow, cfg.epsilon, self.edges, self._spread)
+
+    def _filter(self, est: VelocityEstimate, origin: tuple[int, int]) -> tuple[str, np.ndarray]:
+        """Eqs. 23-24: predict, and update on the moving pixels' centroid and velocity when any moved (a
+        frame that supports the track, :mod:`trackreplay.trackers.lifecycle`); the status and the observation."""
         assert self._kf is not None
         self._kf.predict()
         observed = np.full(2, np.nan)
-        if est.count > 0:
-            # S's centroid sits half-way between the frames (so does the flow): half the velocity
-            # carries it to frame k
-            observed = est.centroid + 0.5 * est.velocity + np.array([x0, y0], dtype=np.float64)
-            self._kf.update(observed, est.velocity)
-            self._still = 0
-            self._extent = (float(est.extent[0]), float(est.extent[1]))
-        else:
-            self._still += 1
-        kalman_x = self._kf.state
-        filtered, velocity = kalman_x[:, 0].copy(), kalman_x[:, 1].copy()
+        if est.count == 0:
+            return self.life.missed(), observed
+        # S's centroid sits half-way between the frames (so does the flow): half the velocity
+        # carries it to frame k
+        observed = est.centroid + 0.5 * est.velocity + np.array(origin, dtype=np.float64)
+        self._kf.update(observed, est.velocity)
+        self._extent = (float(est.extent[0]), float(est.extent[1]))
+        return self.life.supported(), observed
+
+    def _move_window(self, grey: np.ndarray, flow: FlowField, est: VelocityEstimate, velocity: np.ndarray,
+                     filtered: np.ndarray, centre: tuple[int, int]) -> None:
+        """§4.2: the FOV moves to the rounded filtered position; the next step starts from this flow."""
         self._centre = next_centre(filtered, grey.shape)
         self._warm = self._warm_start(flow, est.moving, est.velocity if est.count else velocity, centre, self._centre)
         self._prev = grey
         self._steps += 1
-        self.intermediates = FlowIntermediates(
-            fov_box=np.array([x0, y0, cfg.fov, cfg.fov], dtype=np.float64),
+
+    def _intermediates(self, flow: FlowField, est: VelocityEstimate, origin: tuple[int, int], observed: np.ndarray,
+                       kalman_x: np.ndarray, velocity: np.ndarray) -> FlowIntermediates:
+        assert self._kf is not None
+        cfg = self.config
+        return FlowIntermediates(
+            fov_box=np.array([origin[0], origin[1], cfg.fov, cfg.fov], dtype=np.float64),
             # this step's own arrays (nothing else writes to them): no copies
             flow_u=flow.u.astype(np.float32, copy=False),
             flow_v=flow.v.astype(np.float32, copy=False),
@@ -117,12 +149,6 @@ class FlowTracker(TrackerBase):
             residual=float(flow.residual),
             moving_pixels=est.count,
         )
-        lost = not inside(filtered, grey.shape) or self._still >= cfg.lost_after
-        if lost:  # no position: the FOV has left the picture or nothing has moved for lost_after frames
-            return [TrackState(1, status="lost")]
-        status = "measured" if est.count > 0 else "predicted"
-        return [TrackState(1, x=float(filtered[0]), y=float(filtered[1]), w=self._extent[0], h=self._extent[1],
-                           vx=float(velocity[0]), vy=float(velocity[1]), status=status)]
 
     @staticmethod
     def _warm_start(flow: FlowField, moving: np.ndarray, motion: np.ndarray, old: tuple[int, int], new: tuple[int, int]) -> FlowField:
@@ -155,6 +181,7 @@ class FlowTracker(TrackerBase):
         else:
             start = ((grey.shape[1] - 1) / 2.0, (grey.shape[0] - 1) / 2.0)
         self._kf = AxisFilters(start, cfg.alpha, cfg.q, cfg.r_pos, cfg.r_vel, cfg.p0)
+        self.life.start()
         self._centre = next_centre(np.array(start), grey.shape)
         self._prev = grey
         x0, y0 = fov_origin(self._centre, cfg.fov)

@@ -23,3 +23,20 @@ def crop(image: np.ndarray, box: tuple[int, int, int, int]) -> tuple[np.ndarray,
     """The pixels of a clipped box (a view, not a copy) and its top-left offset ``(x0, y0)``."""
     x0, y0, x1, y1 = box
     return image[y0:y1, x0:x1], (x0, y0)
+
+
+def iou(a: np.ndarray, b: np.ndarray, *, centred: bool = False) -> np.ndarray:
+    """Intersection over union of boxes ``(x, y, w, h)`` (the last axis), broadcast over the other
+    axes: rows pair row by row, ``a[:, None]`` with ``b[None]`` gives every pair. ``(x, y)`` is the
+    top-left corner, or the centre when ``centred``; 0 where the union is empty."""
+    a, b = np.asarray(a, np.float64), np.asarray(b, np.float64)
+    if centred:
+        a_lo, a_hi = a[..., :2] - a[..., 2:] / 2, a[..., :2] + a[..., 2:] / 2
+        b_lo, b_hi = b[..., :2] - b[..., 2:] / 2, b[..., :2] + b[..., 2:] / 2
+    else:
+        a_lo, a_hi = a[..., :2], a[..., :2] + a[..., 2:]
+        b_lo, b_hi = b[..., :2], b[..., :2] + b[..., 2:]
+    side = np.clip(np.minimum(a_hi, b_hi) - np.maximum(a_lo, b_lo), 0.0, None)
+    inter = side[..., 0] * side[..., 1]
+    union = a[..., 2] * a[..., 3] + b[..., 2] * b[..., 3] - inter
+    return np.where(union > 0, inter / np.where(union > 0, union, 1.0), 0.0)

@@ -32,6 +32,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from trackreplay.trackers.appearance.color import to_grey
+
 
 @dataclass(frozen=True)
 class SgbmConfig:
@@ -66,10 +68,6 @@ def make_matcher(cfg: SgbmConfig) -> cv2.StereoSGBM:
         speckleRange=cfg.speckle_range, mode=_MODES[cfg.mode])
 
 
-def _grey(image: np.ndarray) -> np.ndarray:
-    return image if image.ndim == 2 else cv2.cvtColor(image, cv2.COLOR_BGR2GRAY)
-
-
 def _to_float(raw: np.ndarray, cfg: SgbmConfig) -> np.ndarray:
     disp = raw.astype(np.float32) / 16.0
     disp[raw < (cfg.min_disparity * 16)] = np.nan  # SGBM marks "no match" with (min_disparity - 1) * 16
@@ -79,7 +77,7 @@ def _to_float(raw: np.ndarray, cfg: SgbmConfig) -> np.ndarray:
 def full_disparity(left: np.ndarray, right: np.ndarray, cfg: SgbmConfig, matcher: cv2.StereoSGBM | None = None) -> np.ndarray:
     """SGBM over the whole frame (the reference subtraction stereo is compared with)."""
     matcher = matcher or make_matcher(cfg)
-    return _to_float(matcher.compute(_grey(left), _grey(right)), cfg)
+    return _to_float(matcher.compute(to_grey(left), to_grey(right)), cfg)
 
 
 CELL = 4  # px: crops are found on a grid of CELL x CELL cells (connected components on VGA took ~2 ms, ~10x SGBM's per-call cost)
@@ -200,7 +198,7 @@ def subtraction_stereo(left: np.ndarray, right: np.ndarray, left_mask: np.ndarra
                        matcher: cv2.StereoSGBM | None = None, band_px: int = 0) -> SubtractionStereo:
     """Disparity of the left foreground from SGBM on foreground crops only (see module docstring)."""
     matcher = matcher or make_matcher(cfg)
-    gl, gr = _grey(left), _grey(right)
+    gl, gr = to_grey(left), to_grey(right)
     disparity = np.full(gl.shape, np.nan, np.float32)
     crops = foreground_crops(left_mask, cfg, margin, band_px=band_px)
     depth = np.full(gl.shape, -1, np.int64)

@@ -28,6 +28,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from trackreplay.trackers.golf.ball_flight import GRAVITY, BallModel
+from trackreplay.trackers.lifecycle import LifecycleConfig
+
+_BALL = BallModel()  # the regulation ball: the EKF's physical constants
+
 
 @dataclass(frozen=True)
 class ParticleConfig:
@@ -283,8 +288,10 @@ class ValidateConfig:
 class EkfConfig:
     """The 3-D ballistic EKF that predicts the landing (§2.3); ``[golf.ekf]``."""
 
-    gravity: float = 9.81
-    drag_k: float = 0.0047  # quadratic drag rho*Cd*A/(2m) of a golf ball, 1/m (0 = vacuum)
+    gravity: float = GRAVITY  # (B1) of the shared ball model (ball_flight)
+    # (B1)'s quadratic drag k C_d = rho*Cd*A/(2m) of the regulation ball (ball_flight.BallModel: 0.00467), to
+    # two figures: 0.0047 1/m (0 = vacuum)
+    drag_k: float = round(_BALL.k * _BALL.drag_cd, 4)
     accel_noise: float = 8.0  # m/s^2, absorbs lift, wind and drag error
     pixel_sigma: float = 1.5  # px, image position measurement
     init_velocity_sigma: float = 40.0  # m/s
@@ -295,7 +302,7 @@ class EkfConfig:
     # forgets the ball (and the tracker calls it lost) instead of sub-stepping across the gap
     # (a 1-day gap would be 5 million 1/60 s steps; a log time near 2**63 ns, forever).
     max_gap_s: float = 2.0
-    restitution: float = 0.4  # after the bounce: vertical speed *= -restitution
+    restitution: float = _BALL.restitution  # after the bounce: vertical speed *= -restitution ((B4)'s e)
     bounce_friction: float = 0.7  # ... horizontal speed *= this
 
 
@@ -355,7 +362,7 @@ class ReinitConfig:
 class GolfConfig:
     """The whole tracker: shared scalars here, one table per stage."""
 
-    ball_diameter_m: float = 0.04267
+    ball_diameter_m: float = _BALL.diameter  # the regulation ball (ball_flight.BallModel)
     max_predicted_frames: int = 5  # misses reported as "predicted" before the track is "lost" (no position)
     trail_length: int = 600  # past measurements kept for the drawn trajectory
     reference_height: int = 1080  # the frame height the pixel parameters are given for
@@ -376,3 +383,11 @@ class GolfConfig:
     def __post_init__(self) -> None:
         if not self.reference_height > 0 or not self.reference_ball_px >= 0:
             raise ValueError("reference_height must be > 0 and reference_ball_px >= 0 (0: the height alone scales)")
+        if self.max_predicted_frames < 0:
+            raise ValueError("max_predicted_frames must be >= 0 (0: lost on the first miss)")
+
+    @property
+    def lifecycle(self) -> LifecycleConfig:
+        """The track's life (trackers.lifecycle): "predicted" on up to max_predicted_frames misses in a row,
+        "lost" on the next one. (A lost ball is found again by the validation's confirmed jump or a mark.)"""
+        return LifecycleConfig(lost_after=self.max_predicted_frames + 1)

@@ -1,8 +1,11 @@
 """3-D extended Kalman filter of the ball and its landing (seed 000, §2.3).
 
-State ``x = (X, Y, Z, VX, VY, VZ)`` in world metres (Z up) and m/s. Motion ``f``: gravity and
-quadratic drag ``a = g - k |v| v`` (``k = rho C_d A / 2m``), integrated with Heun's method; the
-unmodelled rest (Magnus lift, wind) is white acceleration noise ``Q``. Measurement
+State ``x = (X, Y, Z, VX, VY, VZ)`` in world metres (Z up) and m/s. Motion ``f``: the shared ball
+model's (B1) (:mod:`trackreplay.trackers.golf.ball_flight`) without lift, gravity and quadratic drag
+``a = g - k |v| v`` (``k = rho C_d A / 2m``), integrated with Heun's method; the unmodelled rest
+(Magnus lift, wind) is white acceleration noise ``Q``. The integration stays hand-written: an EKF
+needs the Jacobian ``F`` of each step (:func:`~trackreplay.trackers.golf.ball_flight.drag_jacobian`),
+and one Heun step per 1/60 s substep is what every golden digest was computed with. Measurement
 ``z = (u, v, r)``: the ball's image position through the frame's PTZ camera and its range from the
 apparent area (:mod:`trackreplay.trackers.golf.range`; the paper's "position and area"), so
 ``h(x) = (project(X, Y, Z), |X - C|)`` with Jacobian ``H``.
@@ -29,6 +32,7 @@ from trackreplay.trackers.base import NOT_HASHED
 from trackreplay.trackers.filters.gating import Innovation
 from trackreplay.trackers.filters.kalman import MotionModelEkf
 from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.golf.ball_flight import acceleration
 from trackreplay.trackers.golf.config import EkfConfig
 
 NIS_GATE = 30.0  # chi-square, 3 dof: beyond 99.999 %; a selected blob that far is not our ball
@@ -43,27 +47,10 @@ class GroundContact:
     fraction: float  # where in the last step, 0 = previous frame, 1 = this frame
 
 
-def _accel(v: np.ndarray, g: float, k: float) -> np.ndarray:
-    speed = math.sqrt(float(v @ v))
-    return np.array([0.0, 0.0, -g]) - k * speed * v
-
-
-EYE3 = np.eye(3)
-EYE3.flags.writeable = False
-
-
-def _accel_jacobian(v: np.ndarray, k: float) -> np.ndarray:
-    """d(-k |v| v)/dv = -k (|v| I + v v^T / |v|)."""
-    speed = math.sqrt(float(v @ v))
-    if speed < 1e-9 or k == 0.0:
-        return np.zeros((3, 3))
-    return -k * (speed * EYE3 + v[:, None] * v[None, :] / speed)  # np.outer(v, v) is that product
-
-
 def _substep_jacobian(v: np.ndarray, k: float, h: float, F0: np.ndarray) -> np.ndarray:
-    """``F0`` with ``h * _accel_jacobian(v, k)`` added to its velocity block, in Python floats: the
-    same IEEE operations in the same order as ``F[3:, 3:] += h * (-k * (|v| I + v vᵀ / |v|))``
-    (``|v| * 1`` is ``|v|``, ``|v| * 0`` is ``0.0``; ``F0`` itself when the Jacobian is zero, as
+    """``F0`` with ``h * drag_jacobian(v, k)`` (:mod:`~trackreplay.trackers.golf.ball_flight`, (B1)) added to
+    its velocity block, in Python floats: the same IEEE operations in the same order as
+    ``F[3:, 3:] += h * (-k * (|v| I + v vᵀ / |v|))`` (``|v| * 1`` is ``|v|``, ``|v| * 0`` is ``0.0``; ``F0`` itself when the Jacobian is zero, as
     adding zeros to it gives)."""
     speed = math.sqrt(float(v @ v))
     if speed < 1e-9 or k == 0.0:
@@ -81,18 +68,15 @@ def _substep_jacobian(v: np.ndarray, k: float, h: float, F0: np.ndarray) -> np.n
 
 
 def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
-    """``f(x)``: one Heun (RK2) step of the state mean.
+    """``f(x)``: one Heun (RK2) step of the state mean under (B1) without lift (:func:`acceleration`).
 
     Component by component in Python floats: the same IEEE operations, in the same order, as the
     vector form ``a = [0, 0, -g] - (k |v|) v``, ``v1 = v + dt a1``, ``p + (0.5 dt)(v + v1)``,
-    ``v + (0.5 dt)(a1 + a2)``; the speeds ``|v|`` are numpy's dot products as before."""
+    ``v + (0.5 dt)(a1 + a2)``."""
     X, Y, Z, vx, vy, vz = x.tolist()
-    ks = k * math.sqrt(float(x[3:] @ x[3:]))
-    ax, ay, az = 0.0 - ks * vx, 0.0 - ks * vy, -g - ks * vz
-    v1 = np.array([vx + dt * ax, vy + dt * ay, vz + dt * az])
-    ux, uy, uz = v1.tolist()
-    ks = k * math.sqrt(float(v1 @ v1))
-    bx, by, bz = 0.0 - ks * ux, 0.0 - ks * uy, -g - ks * uz
+    ax, ay, az = acceleration((vx, vy, vz), k, g)
+    ux, uy, uz = vx + dt * ax, vy + dt * ay, vz + dt * az
+    bx, by, bz = acceleration((ux, uy, uz), k, g)
     half = 0.5 * dt
     return np.array([X + half * (vx + ux), Y + half * (vy + uy), Z + half * (vz + uz),
                      vx + half * (ax + bx), vy + half * (ay + by), vz + half * (az + bz)])
@@ -101,27 +85,25 @@ def propagate(x: np.ndarray, dt: float, g: float, k: float) -> np.ndarray:
 def predict_landing(x: np.ndarray, contact_z: float, g: float, k: float, horizon: float, step: float) -> tuple[float, np.ndarray] | None:
     """First time (s from now) and point at which the centre comes down to ``contact_z``.
 
-    Pure-Python Heun steps (faster than numpy for a 6-vector), linear interpolation in the last.
+    :func:`propagate`'s Heun steps in Python floats (faster than numpy for a 6-vector), linear
+    interpolation in the last.
     """
     X, Y, Z, vx, vy, vz = x.tolist()
     if Z <= contact_z:
         return None
     t = 0.0
-    # The constant factors hoisted (the same roundings: ``-k * s * vx`` is ``(-k * s) * vx``,
-    # ``-g - k * s * vz`` is ``-g + (-k * s) * vz`` exactly, ``0.5 * step * w`` is ``(0.5 * step) * w``).
-    sqrt, nk, ng, half = math.sqrt, -k, -g, 0.5 * step
+    half = 0.5 * step
     while t < horizon:
-        ks = nk * sqrt(vx * vx + vy * vy + vz * vz)
-        ax, ay, az = ks * vx, ks * vy, ng + ks * vz
+        ax, ay, az = acceleration((vx, vy, vz), k, g)
         ux, uy, uz = vx + step * ax, vy + step * ay, vz + step * az
-        ks = nk * sqrt(ux * ux + uy * uy + uz * uz)
         nZ = Z + half * (vz + uz)
         if nZ <= contact_z:
             nX, nY = X + half * (vx + ux), Y + half * (vy + uy)
             f = (Z - contact_z) / (Z - nZ) if Z != nZ else 1.0
             return t + f * step, np.array([X + f * (nX - X), Y + f * (nY - Y), contact_z])
+        bx, by, bz = acceleration((ux, uy, uz), k, g)
         X, Y, Z = X + half * (vx + ux), Y + half * (vy + uy), nZ
-        vx, vy, vz = vx + half * (ax + ks * ux), vy + half * (ay + ks * uy), vz + half * (az + (ng + ks * uz))
+        vx, vy, vz = vx + half * (ax + bx), vy + half * (ay + by), vz + half * (az + bz)
         t += step
     return None
 
@@ -308,7 +290,7 @@ class BallisticEkf:
                 self.initialise(camera, uv, range_m, rel_sigma)
             return False
         self.rejections = 0
-        self.kf.update_linearised(z, H, h, R, PHT, S)  # filterpy's update (Joseph form)
+        self.kf.update(z, lambda _x: H, lambda _x: h, R=R, PHT=PHT, S=S)  # filterpy's update (Joseph form)
         if self.kf.x[2] >= self.config.landing_arm_height_m + self.contact_z:
             self.armed = True
         return True

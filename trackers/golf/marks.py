@@ -28,6 +28,7 @@ class Marks:
         self._keys: set = set()
         self._snap, self._core = snap or SnapConfig(), core  # core: the ball samples' share of a box (LutConfig.core)
         self._placed: dict[tuple, InitRegion] = {}  # a drawn box's key -> the box placed on its ball
+        self._log_marks: object = None  # the log's marks last remembered (remember_log)
 
     def __bool__(self) -> bool:
         return bool(self.regions)
@@ -38,6 +39,12 @@ class Marks:
             if key not in self._keys:
                 self._keys.add(key)
                 self.regions.append(r)
+
+    def remember_log(self, regions: Iterable[InitRegion]) -> None:
+        """The log's marks: the frame bundle carries them on every frame as one tuple, remembered once."""
+        if regions is not self._log_marks or not isinstance(regions, tuple):
+            self.remember(regions)
+            self._log_marks = regions
 
     def place(self, image: np.ndarray, index: int) -> None:
         """Place the boxes marked on frame ``index`` on the ball in that frame's ``image`` (each once)."""

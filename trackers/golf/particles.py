@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from trackreplay.trackers.filters.particles import Likelihood, Transition, constant_velocity, linear_gaussian
+from trackreplay.trackers.filters.particles import (Likelihood, ParticleFilter, Transition, constant_velocity, linear_gaussian,
+                                                   squared_deviations)
 from trackreplay.trackers.geometry.homography import apply_homography, transfer_velocities
 from trackreplay.trackers.golf.config import ParticleConfig
 
@@ -146,3 +147,35 @@ class ParticleSet:
     @classmethod
     def empty(cls) -> ParticleSet:
         return cls(np.zeros((0, DIM)), np.zeros(0), np.full(DIM, np.nan))
+
+
+class SampleMoments:
+    """The samples' weighted moments and estimate (eq. (3)), each computed once per set of samples:
+    the search region, the apparent motion, the injection and the re-initialisation all ask, and
+    a set of samples is new whenever the filter replaces its particles or weights."""
+
+    def __init__(self, pf: ParticleFilter) -> None:
+        self.pf = pf
+        self._moments: tuple = (None, None, {})  # particles, weights, {first component: (mean, spread)}
+        self._estimate: tuple = (None, None, None)  # particles, weights, estimate
+
+    def moments(self, first: int) -> tuple[np.ndarray, np.ndarray]:
+        """Weighted mean and spread of components ``first``, ``first + 1`` (positions: 0, velocities:
+        2), as ``weights @ particles[:, first:first + 2]`` and ``ParticleFilter.spread`` compute them."""
+        particles, weights = self.pf.particles, self.pf.weights
+        if self._moments[0] is not particles or self._moments[1] is not weights:
+            self._moments = (particles, weights, {})
+        known = self._moments[2]
+        out = known.get(first)
+        if out is None:
+            p = particles[:, first:first + 2]
+            mean = weights @ p
+            out = known[first] = (mean, np.sqrt(np.maximum(weights @ squared_deviations(p, mean), 0.0)))
+        return out
+
+    def estimate(self) -> np.ndarray:
+        """``ParticleFilter.estimate`` (eq. (3)), a copy (the caller may keep it)."""
+        pf = self.pf
+        if self._estimate[0] is not pf.particles or self._estimate[1] is not pf.weights:
+            self._estimate = (pf.particles, pf.weights, pf.estimate())
+        return self._estimate[2].copy()

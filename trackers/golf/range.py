@@ -23,6 +23,7 @@ import numpy as np
 
 from trackreplay.trackers.geometry.ptz import PtzCamera
 from trackreplay.trackers.golf.config import RangeConfig
+from trackreplay.trackers.median import median
 
 MAX_CALIBRATION_RANGE_M = 1000.0
 
@@ -66,21 +67,11 @@ def photometric_area(y: np.ndarray, cx: float, cy: float, radius: float, ball_lu
     inner, ring = d2 <= radius * radius, (d2 > radius * radius) & (d2 <= r_out * r_out)
     if not ring.any() or not inner.any():
         return float("nan")
-    bg = _median(win[ring])
+    bg = median(win[ring])
     contrast = ball_luminance - bg
     if contrast < 10.0:
         return float("nan")
     return float(np.maximum(win[inner] - bg, 0.0).sum() / contrast)
-
-
-def _median(values: np.ndarray) -> float:
-    """``float(np.median(values))`` of a 1-D float64 array without NaN: the middle of the sorted
-    values, or the mean of the middle two (their sum halved, as ``np.mean`` of two)."""
-    s = np.sort(values)
-    n = len(s)
-    if n % 2:
-        return float(s[n // 2])
-    return float((s[n // 2 - 1] + s[n // 2]) / 2.0)
 
 
 def ground_range(camera: PtzCamera, pixel: np.ndarray, centre_height_m: float) -> float | None:

@@ -33,6 +33,7 @@ from trackreplay.trackers.geometry.ptz import PtzCamera, pose_homography
 from trackreplay.trackers.golf.config import ReinitConfig, SearchConfig
 from trackreplay.trackers.golf.landing import BallisticEkf
 from trackreplay.trackers.golf.search_region import filling_sigma
+from trackreplay.trackers.lifecycle import TrackLife
 
 NAN2 = np.full(2, np.nan)
 
@@ -75,14 +76,13 @@ def image_parabola_landing(history: np.ndarray, now: float, min_points: int = 5)
 class ReinitPolicy:
     """Decides, once per frame, whether and where the particles start again.
 
-    ``lost_after`` is the number of misses after which the track is "lost"; ``search`` is the
-    search region's table (the largest region bounds the spread).
+    ``search`` is the search region's table (the largest region bounds the spread). Whether the
+    track is missed or lost is the track's life's (:class:`~trackreplay.trackers.lifecycle.TrackLife`).
     """
 
-    def __init__(self, cfg: ReinitConfig, search: SearchConfig, lost_after: int) -> None:
+    def __init__(self, cfg: ReinitConfig, search: SearchConfig) -> None:
         self.cfg = cfg
         self.search = search
-        self.lost_after = lost_after
         self.history: deque = deque(maxlen=cfg.parabola_history)  # (frame, x, y) of past measurements
         self.parabola_used = False
         self.landed_at: int | None = None  # the frame of the last predicted landing (after_landing_frames)
@@ -147,12 +147,12 @@ class ReinitPolicy:
         self.landed_at, self.followed_landing = index, False
         return None if misses == 0 and self.cfg.after_landing_frames > 0 else landing
 
-    def _after_landing(self, index: int, size: tuple[int, int], scale: float, misses: int, camera: PtzCamera | None,
+    def _after_landing(self, index: int, size: tuple[int, int], scale: float, life: TrackLife, camera: PtzCamera | None,
                        ekf: BallisticEkf) -> Reinit | None:
         """``after_landing_frames``: around the 3-D filter's prediction, projected into this frame, while
         the ball is missed (not yet lost) after a landing (None: not now, or the prediction is outside
         the picture)."""
-        if (self.landed_at is None or not 0 < misses <= self.lost_after or camera is None or not ekf.initialised
+        if (self.landed_at is None or not life.misses or life.lost or camera is None or not ekf.initialised
                 or index - self.landed_at > self.cfg.after_landing_frames):  # once lost: the fallbacks below
             return None
         centre = camera.project_points(ekf.kf.x[:3].reshape(1, 3))[0]
@@ -164,15 +164,16 @@ class ReinitPolicy:
         self.followed_landing = True
         return Reinit("after_landing", centre, sigma)
 
-    def choose(self, *, index: int, size: tuple[int, int], scale: float, misses: int, landing: np.ndarray | None,
+    def choose(self, *, index: int, size: tuple[int, int], scale: float, life: TrackLife, landing: np.ndarray | None,
                camera: PtzCamera | None, previous: PtzCamera | None, ekf: BallisticEkf, estimate: np.ndarray) -> Reinit:
         """The re-initialisation for frame ``index`` of ``size`` (w, h) px, or ``Reinit.none()``.
 
-        ``landing`` is the EKF's ground contact this frame (None: none), ``estimate`` the
-        particles' last estimate (x, y).
+        ``life``: the track's misses in a row and whether it is lost; ``landing`` is the EKF's ground
+        contact this frame (None: none), ``estimate`` the particles' last estimate (x, y).
         """
         cfg = self.cfg
         width, height = size
+        misses = life.misses
         landing = self._landing_now(index, misses, landing)
         if landing is not None and camera is not None and cfg.landing:
             centre = camera.project_points(landing.reshape(1, 3))[0]
@@ -183,7 +184,7 @@ class ReinitPolicy:
                 sigma = np.clip(sigma, cfg.min_sigma_px * scale, filling_sigma(self.search.max_px * scale, self.search))
                 return Reinit("ekf_landing", centre, sigma)
         if cfg.landing:
-            after = self._after_landing(index, size, scale, misses, camera, ekf)
+            after = self._after_landing(index, size, scale, life, camera, ekf)
             if after is not None:
                 return after
         if cfg.landing and not ekf.initialised and not self.parabola_used and misses >= cfg.parabola_misses:
@@ -192,7 +193,7 @@ class ReinitPolicy:
                 centre, half = found
                 self.parabola_used = True
                 return Reinit("image_parabola", centre, np.maximum(half, cfg.min_sigma_px * scale))
-        if misses > self.lost_after and self.centre_search(camera, previous, width, height):
+        if life.lost and self.centre_search(camera, previous, width, height):
             centre = np.array([(width - 1) / 2.0, (height - 1) / 2.0])
             sigma = filling_sigma(min(self.search.max_px * scale, width, height), self.search)
             return Reinit("lost_centre", centre, np.full(2, sigma))

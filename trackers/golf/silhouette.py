@@ -29,12 +29,12 @@ import numpy as np
 import cv2
 
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
-from trackreplay.trackers.appearance.histogram import level_counts
 from trackreplay.trackers.appearance.lut import ColourLut
 from trackreplay.trackers.foreground.morphology import disc_top_hat
 from trackreplay.trackers.foreground.silhouette import crop_pixels, silhouette
 from trackreplay.trackers.golf.config import ContrastConfig
 from trackreplay.trackers.golf.lut import LUT_NAMES, SKY, GolfLuts
+from trackreplay.trackers.median import median_and_mad
 
 CONTRAST = "contrast"  # lut_name of a contrast silhouette
 
@@ -104,22 +104,6 @@ def top_hat(ycc: np.ndarray, diameter: float, cfg: ContrastConfig, scale: float)
     side = int(np.clip(round(cfg.kernel_diameters * diameter), 3, max(3, cfg.max_kernel_px * scale)))
     side += 1 - side % 2
     return disc_top_hat(y, side)  # OpenCV's MORPH_TOPHAT with the MORPH_ELLIPSE disc, by row segments
-
-
-def median_and_mad(values: np.ndarray, low: int, levels: int) -> tuple[float, float]:
-    """``np.median`` of integer ``values`` (all in ``[low, low + levels)``) and ``np.median`` of their
-    absolute deviations from it, read off the counts per level: the middle one or two of the
-    sorted values (and of the sorted deviations), averaged. The same numbers: every value,
-    deviation and mean of two is a multiple of 1/4 far below 2^20, exact in float32 and float64."""
-    counts = level_counts(values, low, levels)
-    n = int(values.size)
-    middle = np.array([(n - 1) // 2, n // 2])
-    lo, hi = (np.searchsorted(np.cumsum(counts), middle, side="right") + low).tolist()
-    med = (lo + hi) / 2
-    deviation = np.abs(np.arange(low, low + levels) - med)
-    order = np.argsort(deviation, kind="stable")
-    a, b = deviation[order[np.searchsorted(np.cumsum(counts[order]), middle, side="right")]].tolist()
-    return float(med), (a + b) / 2
 
 
 def at_least(values: np.ndarray, threshold: float) -> np.ndarray:

@@ -24,7 +24,7 @@ import numpy as np
 from trackreplay.trackers.foreground.blobs import Blobs, measure_blobs
 from trackreplay.trackers.golf.blobs import ApparentMotion, streak_excess
 from trackreplay.trackers.golf.config import BlobConfig
-from trackreplay.trackers.golf.silhouette import median_and_mad
+from trackreplay.trackers.median import median_and_mad
 
 
 def whole_streak(top_hat: Callable[[], np.ndarray], blob_pixels: np.ndarray, corner: tuple[int, int], offset: tuple[int, int],

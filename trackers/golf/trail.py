@@ -1,4 +1,4 @@
-"""The trajectory so far, for drawing (seed 000, §2 / SPEC 1: lines of sight drawn into any later pose).
+"""The trajectory so far, for drawing (seed 000, §2; docs/papers.md §2: lines of sight drawn into any later pose).
 
 Each measured position keeps its pixel and, with a camera pose, its line of sight; a camera that
 only rotates needs no depth to draw the stored directions into the image of its pose *now*.

@@ -358,10 +358,20 @@ class Validator:
         ``must_move``: the view is fixed, so a track that stays put over its confirm frames (less
         than a ball diameter) is part of the scene, not a ball in play, and is not confirmed.
         ``evidence``: the blobs that may extend or start a track (default: the shape-accepted ones)."""
-        cfg = self.cfg
         ok = np.flatnonzero(gated.accepted if evidence is None else evidence)
-        c = gated.blobs.centroid
         rounds = roundness(gated.blobs)
+        kept, free = self._continue_tracks(index, gated, rounds, ok, diameter, scale, repeat)
+        kept += self._new_tracks(index, gated, rounds, ok[free], predicted, border)
+        min_move = diameter if must_move else 0.0
+        kept = self._keep(kept, must_move, min_move)
+        return self._ready(kept, gated, scale, min_move)
+
+    def _continue_tracks(self, index: int, gated: GatedBlobs, rounds: np.ndarray, ok: np.ndarray, diameter: float,
+                         scale: float, repeat: bool) -> tuple[list[tuple[Tentative, int]], np.ndarray]:
+        """The tracks live on the frame before, longest first, each extended by the free blob of ``ok``
+        nearest its extrapolation when within reach: the (track, blob row) pairs, and which of ``ok``
+        no track took."""
+        cfg, c = self.cfg, gated.blobs.centroid
         live = sorted((t for t in self.tracks if index - t.rows[-1][0] == 1), key=lambda t: -len(t.rows))
         free = np.ones(len(ok), bool)
         kept: list[tuple[Tentative, int]] = []
@@ -377,29 +387,44 @@ class Validator:
                 k = int(ok[j])
                 track.add(index, (float(c[k, 0]), float(c[k, 1])), (float(gated.blobs.area[k]), float(rounds[k])), repeat)
                 kept.append((track, k))
-        starts = ok[free]
+        return kept, free
+
+    @staticmethod
+    def _new_tracks(index: int, gated: GatedBlobs, rounds: np.ndarray, starts: np.ndarray, predicted: np.ndarray,
+                    border: tuple[tuple[int, int], float] | None) -> list[tuple[Tentative, int]]:
+        """A new track from each blob row of ``starts`` (within ``border`` of the edge when given),
+        nearest the prediction first."""
+        c = gated.blobs.centroid
         if border is not None and starts.size:
             (width, height), margin = border
             x, y = c[starts, 0], c[starts, 1]
             starts = starts[(x < margin) | (y < margin) | (x > width - 1 - margin) | (y > height - 1 - margin)]
         order = np.argsort(np.hypot(c[starts, 0] - predicted[0], c[starts, 1] - predicted[1]), kind="stable")
-        for k in starts[order]:
-            kept.append((Tentative([(index, float(c[k, 0]), float(c[k, 1]))],
-                                   [(float(gated.blobs.area[k]), float(rounds[k]))]), int(k)))
-        min_move = diameter if must_move else 0.0
-        # In a fixed view a track that stays put is scenery (a tee, a marker, a cap): never confirmed.
-        # (Still a rival in _ambiguous: a look-alike in view keeps a new track from confirmation.)
-        # Scenery has places of its own
-        # (up to SCENERY_PLACES x max_tentative), so it neither crowds out a ball's new track nor,
-        # dropped and restarted, comes back each frame as a new rival.
+        return [(Tentative([(index, float(c[k, 0]), float(c[k, 1]))], [(float(gated.blobs.area[k]), float(rounds[k]))]),
+                 int(k)) for k in starts[order]]
+
+    def _keep(self, kept: list[tuple[Tentative, int]], must_move: bool,
+              min_move: float) -> list[tuple[Tentative, int]]:
+        """The tracks kept for the next frame (the longest first is :attr:`best`), at most
+        ``max_tentative``. In a fixed view a track that stays put is scenery (a tee, a marker, a cap):
+        never confirmed (still a rival in :meth:`_ambiguous`: a look-alike in view keeps a new track from
+        confirmation). Scenery has places of its own (up to SCENERY_PLACES x max_tentative), so it
+        neither crowds out a ball's new track nor, dropped and restarted, comes back each frame as a
+        new rival."""
         self.scenery = {k for track, k in kept if must_move and self._still(track, min_move)}
-        kept = ([tk for tk in kept if tk[1] not in self.scenery][:cfg.max_tentative]
-                + [tk for tk in kept if tk[1] in self.scenery][:SCENERY_PLACES * cfg.max_tentative])
+        kept = ([tk for tk in kept if tk[1] not in self.scenery][:self.cfg.max_tentative]
+                + [tk for tk in kept if tk[1] in self.scenery][:SCENERY_PLACES * self.cfg.max_tentative])
         self.tracks = [t for t, _ in kept]
         self.best = self.tracks[0] if self.tracks else None
+        return kept
+
+    def _ready(self, kept: list[tuple[Tentative, int]], gated: GatedBlobs, scale: float,
+               min_move: float) -> tuple[int, float]:
+        """The blob row and track fit of the track to confirm: of several that could be, the one most
+        like the ball last seen (its area), then :attr:`best`; else the longest track's (-1: none)."""
         fits = [self._fit(track, scale, min_move) for track, _ in kept]
-        ready = [j for j, fit in enumerate(fits) if fit >= cfg.confirm_fit]
-        if ready:  # several could be confirmed: the one most like the ball last seen (its area)
+        ready = [j for j, fit in enumerate(fits) if fit >= self.cfg.confirm_fit]
+        if ready:
             slack = self.blobs.area_slack_px * scale * scale
             target = float(gated.targets[0]) + slack
             unlike = [abs(math.log((float(np.median(np.array(kept[j][0].shapes)[:, 0])) + slack) / target)) for j in ready]

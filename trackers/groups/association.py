@@ -1,5 +1,5 @@
 """§3.3 points to trackers: the Mahalanobis gate (eq. 8) and, where several trackers gate a point,
-the arg max of ``m_p · m_v`` (eqs. 9–11; the paper prints ``m_v · m_v``, SPEC's fix).
+the arg max of ``m_p · m_v`` (eqs. 9–11; the paper prints ``m_v · m_v``: corrected in docs/papers.md §4).
 
 ``m_p = k_p N(y_i; ξ_j, P_ξj)``, ``m_v = k_v N(λ_i; v_j, P_vj)`` with ``P_ξj`` the group's position
 extent plus its EKF position covariance and ``P_vj`` its velocity spread plus its EKF velocity

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from trackreplay.trackers.geometry.subtraction_stereo import SgbmConfig
+from trackreplay.trackers.lifecycle import LifecycleConfig
 
 
 @dataclass(frozen=True)
@@ -156,6 +157,11 @@ class MergeConfig:
 @dataclass(frozen=True)
 class TrackConfig:
     max_empty_frames: int = 12  # deleted after this many consecutive frames without an update (0.25 s at 48 fps)
+
+    @property
+    def lifecycle(self) -> LifecycleConfig:
+        """The groups' life (trackers.lifecycle): deleted on the (max_empty_frames + 1)-th frame in a row without an update."""
+        return LifecycleConfig(lost_after=self.max_empty_frames + 1)
 
 
 @dataclass(frozen=True)

@@ -72,6 +72,7 @@ class GroupEkf:
         self.kf.predict()
 
     def update(self, z: np.ndarray) -> None:
+        """filterpy's ``update(z, HJacobian, Hx)`` with the rig's model (:meth:`MotionModelEkf.update`), then P symmetrised."""
         rig = self.rig
         self.kf.update(np.asarray(z, dtype=np.float64), lambda x: measurement_jacobian(rig, x), lambda x: measurement(rig, x))
         self.kf.P = 0.5 * (self.kf.P + self.kf.P.T)

@@ -11,7 +11,7 @@ Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
    least ``min_points`` points is updated with their mean ``[u v d]`` and its extent by eq. (7),
    else it only predicts.
 5. Groups without an update for more than ``tracks.max_empty_frames`` frames are deleted (ours:
-   the paper states no rule).
+   the paper states no rule; the groups' life is :mod:`trackreplay.trackers.lifecycle`'s).
 6. §3.4 initial grouping of the unassigned points (:mod:`.grouping`).
 7. §3.5 merging of groups whose position and velocity regions overlap (:mod:`.merging`; eqs. 14–15
    by :func:`trackreplay.trackers.filters.gaussians.merge_gaussians`) and, ours, whose member points'
@@ -31,16 +31,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
+from trackreplay.trackers.appearance.color import to_grey
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.filters.gaussians import merge_gaussians
 from trackreplay.trackers.filters.gating import mahalanobis_sq
 from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.stereo import StereoRig
-from trackreplay.trackers.geometry.subtraction_stereo import make_matcher, subtraction_stereo
+from trackreplay.trackers.geometry.subtraction_stereo import SubtractionStereo, make_matcher, subtraction_stereo
 from trackreplay.trackers.groups.association import associate
 from trackreplay.trackers.groups.config import GroupsConfig
 from trackreplay.trackers.groups.ekf import POS, VEL, GroupEkf, state_from
@@ -48,6 +48,7 @@ from trackreplay.trackers.groups.features import KltFeatures, ObservationPoints
 from trackreplay.trackers.groups.grouping import initial_groups
 from trackreplay.trackers.groups.intermediates import GroupsIntermediates, GroupSnapshot
 from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap, merge_sets
+from trackreplay.trackers.lifecycle import TrackLife
 
 NO_STEREO = "the log has no stereo pair with calibration (/stereo/{left,right}/image and calibration): groups tracker idle"
 
@@ -59,7 +60,7 @@ class Group:
     extent: np.ndarray  # Σ, 3×3 position extent (eq. 7)
     velocity_spread: np.ndarray  # the same on the points' velocities
     members: int
-    empty: int = 0
+    life: TrackLife  # its frames without an update (trackers.lifecycle): deleted once lost
     status: str = "measured"
     merged_from: str = ""
     box: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
@@ -81,10 +82,9 @@ def _cov(values: np.ndarray) -> np.ndarray:
 
 
 class GroupTracker(TrackerBase):
-    """Seed 003 (SPEC Tracker 3). ``step(frame)`` returns one state per live or just-ended group."""
+    """Seed 003 (docs/papers.md §4). ``step(frame)`` returns one state per live or just-ended group."""
 
-    name = "groups"
-    needs = "stereo"  # the engine refuses a log without a calibrated stereo pair (replay.marks.check_can_track)
+    name = "groups"  # what the replay needs of it (a stereo pair) is declared in trackers/groups/__init__.py
 
     def __init__(self, config: GroupsConfig, rng: np.random.Generator) -> None:
         self.user_config = config
@@ -110,37 +110,24 @@ class GroupTracker(TrackerBase):
     # --- the pipeline -------------------------------------------------------------------------
 
     def step(self, frame: Frame) -> list[TrackState]:
-        cfg = self.config
+        """Per stereo pair (Fig. 2): §2 the background is learnt first; then foreground, subtraction
+        stereo and observation points (§2-§3.1), predict (§3.2), associate and update (§3.3), delete the
+        lost, start groups (§3.4), merge (§3.5), the groups' image boxes and the rows."""
         shape = frame.image.shape[:2]
         rig = frame.stereo
         if frame.right is None or rig is None:
-            self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, cfg.klt.window)
+            self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, self.config.klt.window)
             return []
         self.position_frame = "world" if rig.pose is not None else "camera"
         self.pose = rig.pose
         dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
         self.prev_t = frame.t_ns
         if self.models is None:  # §2: learn the background of both views
-            self.bg[0].add(frame.image)
-            self.bg[1].add(frame.right)
-            self.learn_t.append(frame.t_ns)
-            if self.bg[0].full:
-                self.models = (self.bg[0].model(), self.bg[1].model())
-                self.bg[0].clear()
-                self.bg[1].clear()
-                self._set_rate()
-            self.intermediates = GroupsIntermediates.idle("learning", shape, "", cfg.klt.window)
+            window = self.config.klt.window  # (the window before the rate is known, on the last such frame too)
+            self._learn(frame)
+            self.intermediates = GroupsIntermediates.idle("learning", shape, "", window)
             return []
-
-        bgc, stc = cfg.background, cfg.stereo
-        fg_left = foreground_mask(frame.image, self.models[0], bgc.threshold, open_px=bgc.open_px)
-        fg_right = foreground_mask(frame.right, self.models[1], bgc.threshold, open_px=bgc.open_px)
-        stereo = subtraction_stereo(frame.image, frame.right, fg_left, stc.sgbm, right_mask=fg_right,
-                                    margin=stc.margin_px, right_tolerance_px=stc.right_tolerance_px, matcher=self.matcher)
-        grey = frame.image if frame.image.ndim == 2 else cv2.cvtColor(frame.image, cv2.COLOR_BGR2GRAY)
-        self.klt.step(grey, fg_left, stereo.disparity)
-        points = self.klt.observation_points(rig)
-
+        fg_left, fg_right, stereo, points = self._observe(frame, rig)
         for g in self.groups:  # §3.2
             g.ekf.predict()
         labels = self._associate_and_update(points, rig)  # §3.3
@@ -149,7 +136,6 @@ class GroupTracker(TrackerBase):
         labels, merged = self._merge(labels, events, points)  # §3.5
         ended = np.array(sorted(ended + merged), np.int64)
         self._boxes(stereo.disparity, rig)
-
         point_ids = np.array([self.groups[j].gid if j >= 0 else -1 for j in labels.tolist()], np.int64)
         snapshot = self._snapshot()
         self.intermediates = GroupsIntermediates(
@@ -158,6 +144,30 @@ class GroupTracker(TrackerBase):
         states = [self._state(g, rig) for g in self.groups]
         states += [TrackState(int(gid), status="lost") for gid in ended.tolist()]
         return sorted(states, key=lambda s: s.track_id)
+
+    def _learn(self, frame: Frame) -> None:
+        """§2: both views' frames into the median backgrounds; once full, the models and the log's rate."""
+        assert frame.right is not None
+        self.bg[0].add(frame.image)
+        self.bg[1].add(frame.right)
+        self.learn_t.append(frame.t_ns)
+        if self.bg[0].full:
+            self.models = (self.bg[0].model(), self.bg[1].model())
+            self.bg[0].clear()
+            self.bg[1].clear()
+            self._set_rate()
+
+    def _observe(self, frame: Frame, rig: StereoRig) -> tuple[np.ndarray, np.ndarray, SubtractionStereo, ObservationPoints]:
+        """§2 background subtraction in both views and subtraction stereo; §3.1 KLT on the left
+        foreground and the observation points."""
+        assert self.models is not None and frame.right is not None
+        bgc, stc = self.config.background, self.config.stereo
+        fg_left = foreground_mask(frame.image, self.models[0], bgc.threshold, open_px=bgc.open_px)
+        fg_right = foreground_mask(frame.right, self.models[1], bgc.threshold, open_px=bgc.open_px)
+        stereo = subtraction_stereo(frame.image, frame.right, fg_left, stc.sgbm, right_mask=fg_right,
+                                    margin=stc.margin_px, right_tolerance_px=stc.right_tolerance_px, matcher=self.matcher)
+        self.klt.step(to_grey(frame.image), fg_left, stereo.disparity)
+        return fg_left, fg_right, stereo, self.klt.observation_points(rig)
 
     def _set_rate(self) -> None:
         """The log's frame rate from the background frames' times; the per-frame parameters rescaled to it."""
@@ -188,19 +198,19 @@ class GroupTracker(TrackerBase):
                 g.ekf.update(points.uvd[idx].mean(axis=0))
                 g.extent = a * g.extent + (1.0 - a) * _cov(points.xyz[idx])  # eq. (7)
                 g.velocity_spread = a * g.velocity_spread + (1.0 - a) * _cov(points.velocity[idx])
-                g.empty, g.status = 0, "measured"
+                g.status = g.life.supported()
             else:
-                g.empty, g.status = g.empty + 1, "predicted"
+                g.status = g.life.missed()  # "lost" from tracks.max_empty_frames + 1 on: deleted next
         return assoc.labels
 
     def _delete(self, labels: np.ndarray) -> tuple[np.ndarray, list[int], list[str]]:
-        limit = self.config.tracks.max_empty_frames
-        alive = np.array([g.empty <= limit for g in self.groups], bool)
+        alive = np.array([not g.life.lost for g in self.groups], bool)
         ended = [g.gid for g, a in zip(self.groups, alive) if not a]
         self.groups = [g for g, a in zip(self.groups, alive) if a]
         index_map = np.where(alive, np.cumsum(alive) - 1, -1) if len(alive) else np.zeros(0, np.int64)
         labels = np.where(labels >= 0, index_map[np.maximum(labels, 0)] if len(alive) else -1, -1)
-        return labels.astype(np.int64), ended, [f"group {gid} deleted: no update for {limit + 1} frames" for gid in ended]
+        frames = self.config.tracks.lifecycle.lost_after
+        return labels.astype(np.int64), ended, [f"group {gid} deleted: no update for {frames} frames" for gid in ended]
 
     def _start_groups(self, points: ObservationPoints, labels: np.ndarray, rig: StereoRig, events: list[str]) -> np.ndarray:
         gcfg, ecfg = self.config.grouping, self.config.ekf
@@ -213,7 +223,8 @@ class GroupTracker(TrackerBase):
             P0 = np.zeros((6, 6))
             P0[np.ix_(POS, POS)] = extent / len(idx) + np.eye(3) * 0.05**2
             P0[np.ix_(VEL, VEL)] = np.eye(3) * ecfg.init_velocity_sigma**2
-            g = Group(self.next_id, GroupEkf(ecfg, rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx))
+            g = Group(self.next_id, GroupEkf(ecfg, rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx),
+                      TrackLife(self.config.tracks.lifecycle))
             self.next_id += 1
             labels[idx] = len(self.groups)
             self.groups.append(g)
@@ -221,10 +232,39 @@ class GroupTracker(TrackerBase):
         return labels
 
     def _merge(self, labels: np.ndarray, events: list[str], points: ObservationPoints) -> tuple[np.ndarray, list[int]]:
+        """§3.5: the groups whose regions have overlapped on ``merge.frames`` frames in a row become one
+        (:meth:`_merged`); the points' labels follow the new order; the ids merged away are returned."""
+        sets = merge_sets(self._ready_to_merge(labels, points))
+        if not sets:
+            return labels, []
+        merged_ids: list[int] = []
+        new_groups: list[Group] = []
+        index_map = np.arange(len(self.groups))
+        gone = set()
+        for s in sets:
+            parts = [self.groups[k] for k in s.tolist()]
+            g, absorbed = self._merged(parts)
+            merged_ids += [p.gid for p in parts if p.gid != g.gid]
+            verb = "absorbed by" if absorbed else "merged into"
+            events.append(f"groups {g.merged_from} {verb} group {g.gid}")
+            gone.update(s.tolist())
+            new_groups.append(g)
+        keep = [k for k in range(len(self.groups)) if k not in gone]
+        for t, s in enumerate(sets):
+            index_map[s] = len(keep) + t
+        for rank, k in enumerate(keep):
+            index_map[k] = rank
+        self.groups = [self.groups[k] for k in keep] + new_groups
+        labels = np.where(labels >= 0, index_map[np.maximum(labels, 0)], -1)
+        return labels, merged_ids
+
+    def _ready_to_merge(self, labels: np.ndarray, points: ObservationPoints) -> np.ndarray:
+        """The pairs of groups whose position and velocity regions overlap (:func:`.merging.merge_overlap`)
+        on this frame and on ``merge.frames`` frames in a row so far (a symmetric boolean matrix)."""
         mcfg, floor = self.config.merge, np.eye(3) * self.config.association.min_extent_m**2
         if len(self.groups) < 2:
             self.pair_frames = {}
-            return labels, []
+            return np.zeros((len(self.groups), len(self.groups)), bool)
         centres = np.array([g.position for g in self.groups])
         extents = np.array([g.extent + floor for g in self.groups])
         vel = np.array([g.velocity for g in self.groups])
@@ -242,42 +282,27 @@ class GroupTracker(TrackerBase):
             counts[key] = self.pair_frames.get(key, 0) + 1
             ready[i, j] = ready[j, i] = counts[key] >= mcfg.frames
         self.pair_frames = counts
-        sets = merge_sets(ready)
-        if not sets:
-            return labels, []
-        merged_ids: list[int] = []
-        new_groups: list[Group] = []
-        index_map = np.arange(len(self.groups))
-        gone = set()
-        for s in sets:
-            parts = [self.groups[k] for k in s.tolist()]
-            n = np.array([max(p.members, 1) for p in parts], np.float64)
-            x, P = merge_gaussians(n, np.array([p.ekf.x for p in parts]), np.array([p.ekf.P for p in parts]))  # eqs. 14-15
-            _, extent = merge_gaussians(n, np.array([p.position for p in parts]), np.array([p.extent for p in parts]))
-            _, vspread = merge_gaussians(n, np.array([p.velocity for p in parts]), np.array([p.velocity_spread for p in parts]))
-            big = int(np.argmax(n))
-            absorbed = n[big] >= mcfg.keep_id_share * n.sum()
-            gid = parts[big].gid if absorbed else self.next_id
-            g = Group(gid, parts[big].ekf, extent, vspread, int(sum(p.members for p in parts)),
-                      status="measured" if any(p.status == "measured" for p in parts) else "predicted",
-                      merged_from=",".join(str(p.gid) for p in parts))
-            g.empty = min(p.empty for p in parts)
-            g.ekf.set(x, P)
-            if not absorbed:
-                self.next_id += 1
-            merged_ids += [p.gid for p in parts if p.gid != gid]
-            verb = "absorbed by" if absorbed else "merged into"
-            events.append(f"groups {g.merged_from} {verb} group {g.gid}")
-            gone.update(s.tolist())
-            new_groups.append(g)
-        keep = [k for k in range(len(self.groups)) if k not in gone]
-        for t, s in enumerate(sets):
-            index_map[s] = len(keep) + t
-        for rank, k in enumerate(keep):
-            index_map[k] = rank
-        self.groups = [self.groups[k] for k in keep] + new_groups
-        labels = np.where(labels >= 0, index_map[np.maximum(labels, 0)], -1)
-        return labels, merged_ids
+        return ready
+
+    def _merged(self, parts: list[Group]) -> tuple[Group, bool]:
+        """Eqs. 14-15: one group from ``parts`` (member-weighted Gaussians of state, extent and velocity
+        spread); it keeps the largest part's id when that part holds ``merge.keep_id_share`` of the members
+        (True: absorbed), else it takes a new one."""
+        n = np.array([max(p.members, 1) for p in parts], np.float64)
+        x, P = merge_gaussians(n, np.array([p.ekf.x for p in parts]), np.array([p.ekf.P for p in parts]))  # eqs. 14-15
+        _, extent = merge_gaussians(n, np.array([p.position for p in parts]), np.array([p.extent for p in parts]))
+        _, vspread = merge_gaussians(n, np.array([p.velocity for p in parts]), np.array([p.velocity_spread for p in parts]))
+        big = int(np.argmax(n))
+        absorbed = n[big] >= self.config.merge.keep_id_share * n.sum()
+        gid = parts[big].gid if absorbed else self.next_id
+        g = Group(gid, parts[big].ekf, extent, vspread, int(sum(p.members for p in parts)),
+                  TrackLife.merged(p.life for p in parts),
+                  status="measured" if any(p.status == "measured" for p in parts) else "predicted",
+                  merged_from=",".join(str(p.gid) for p in parts))
+        g.ekf.set(x, P)
+        if not absorbed:
+            self.next_id += 1
+        return g, bool(absorbed)
 
     def _boxes(self, disparity: np.ndarray, rig: StereoRig) -> None:
         """Each group's image box: the foreground pixels whose 3-D point it gates best (every 2nd pixel)."""

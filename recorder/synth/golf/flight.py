@@ -3,53 +3,30 @@
 World frame as everywhere in PTZ scenes: metres, Z up, ground plane Z = 0. Positions are the
 ball's centre, so the ball touches the ground when Z = radius.
 
-In the air the ball feels gravity, quadratic drag ``-½ρ C_d A |v| v`` and Magnus lift
-``½ρ C_L A |v|² (ω̂ × v̂)`` with ``C_L = S / (1 + 2S)`` (spin factor ``S = r|ω|/|v|``); the spin
-decays exponentially. The state is integrated with classical Runge–Kutta at a fine fixed step
-(1 ms); ground contacts are located inside a step by secant refinement.
-
-At a contact the normal velocity reverses with restitution ``e``; a Coulomb friction impulse
-(``μ`` times the normal impulse, capped at the impulse that stops the contact point slipping) slows
-the tangential velocity and changes the spin. Once a hop would rise less than ``min_hop`` the ball
-rolls: it starts rolling without slipping and decelerates with rolling resistance ``μ_r g`` until
-it rests. Time 0 is the moment of launch; before it the ball sits at the launch position.
+The physics is the shared model of :mod:`trackreplay.trackers.golf.ball_flight` (the ball's constants
+:class:`BallModel`, equations (B1)-(B5)): in the air gravity, quadratic drag and Magnus lift with
+``C_L = S / (1 + 2S)`` of a spin that decays exponentially (B1, B2), integrated here with classical
+Runge–Kutta at a fine fixed step (1 ms); ground contacts are located inside a step by secant
+refinement. At a contact the normal velocity reverses with restitution and a Coulomb friction
+impulse, capped at the one that stops the contact point slipping, slows the ball and changes its
+spin (B4). Once a hop would rise less than ``min_hop`` the ball rolls without slipping and
+decelerates with rolling resistance ``μ_r g`` until it rests (B5). Time 0 is the moment of launch;
+before it the ball sits at the launch position.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-PHASES = ("tee", "air", "bounce", "roll", "rest")
-"""Phase codes of a sampled flight: index into this tuple."""
-TEE, AIR, BOUNCE, ROLL, REST = range(5)
+from trackreplay.trackers.golf.ball_flight import (
+    AIR, BOUNCE, PHASES, REST, ROLL, TEE, BallModel, SpinLift, acceleration, hop_height, impact, no_slip, roll_distance,
+)
 
-
-@dataclass(frozen=True)
-class BallModel:
-    """A golf ball and its surroundings (SI units)."""
-
-    mass: float = 0.04593  # kg (rules: at most 45.93 g)
-    diameter: float = 0.04267  # m (rules: at least 42.67 mm)
-    drag_cd: float = 0.25
-    lift: bool = True  # Magnus lift from backspin/sidespin
-    spin_decay_s: float = 25.0  # e-folding time of the spin
-    air_density: float = 1.2  # kg/m^3
-    gravity: float = 9.81  # m/s^2
-    restitution: float = 0.4  # normal coefficient of restitution at a bounce
-    friction: float = 0.4  # Coulomb friction coefficient at a bounce
-    rolling_resistance: float = 0.2  # rolling deceleration = this * g
-    min_hop: float = 0.01  # m: a bounce rising less than this becomes a roll
-
-    @property
-    def radius(self) -> float:
-        return self.diameter / 2.0
-
-    @property
-    def area(self) -> float:
-        return math.pi * self.radius**2
+__all__ = ["AIR", "BOUNCE", "PHASES", "REST", "ROLL", "TEE", "BallModel", "Flight", "Launch", "Trajectory", "simulate_shot"]
 
 
 @dataclass(frozen=True)
@@ -157,7 +134,7 @@ class Trajectory:
                 sel = ~done & (t >= seg.t0)
                 if sel.any():
                     dt = np.minimum(t[sel] - seg.t0, seg.t_rest - seg.t0)
-                    dist = seg.speed0 * dt - 0.5 * seg.decel * dt * dt
+                    dist = roll_distance(seg.speed0, seg.decel, dt)
                     pos[sel] = seg.p0 + dist[:, None] * seg.direction
                     speed = np.maximum(seg.speed0 - seg.decel * dt, 0.0)
                     vel[sel] = speed[:, None] * seg.direction
@@ -183,42 +160,34 @@ def _hermite(seg: _AirSegment, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return pos, dpos / h
 
 
-def _acceleration(ball: BallModel, v: tuple[float, float, float], w: tuple[float, float, float]) -> tuple[float, float, float]:
-    """Gravity + drag + Magnus lift per unit mass (plain floats: this runs 4x per 1 ms step)."""
-    vx, vy, vz = v
-    speed = math.sqrt(vx * vx + vy * vy + vz * vz)
-    if speed < 1e-9:
-        return 0.0, 0.0, -ball.gravity
-    k = 0.5 * ball.air_density * ball.area / ball.mass
-    d = k * ball.drag_cd * speed
-    ax, ay, az = -d * vx, -d * vy, -d * vz - ball.gravity
-    wx, wy, wz = w
-    spin = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if ball.lift and spin > 1e-9:
-        s = ball.radius * spin / speed
-        c = k * (s / (1.0 + 2.0 * s)) * speed / spin  # |v|^2 (w_hat x v_hat) = |v| (w x v) / |w|
-        ax += c * (wy * vz - wz * vy)
-        ay += c * (wz * vx - wx * vz)
-        az += c * (wx * vy - wy * vx)
-    return ax, ay, az
+@functools.lru_cache(maxsize=16)
+def _air_terms(ball: BallModel) -> tuple[float, SpinLift | None]:
+    """(B1)'s drag factor ``k C_d`` and (B2)'s lift of ``ball`` (None: no lift)."""
+    k = ball.k
+    return k * ball.drag_cd, SpinLift(k, ball.radius) if ball.lift else None
 
 
 def _rk4(ball: BallModel, p: np.ndarray, v: np.ndarray, w0: np.ndarray, t: float, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """One Runge–Kutta step from time ``t`` (since the spin was ``w0``); the spin decays exactly."""
+    """One classical Runge–Kutta step of (B1)+(B2) (:mod:`trackreplay.trackers.golf.ball_flight`) from time
+    ``t`` (since the spin was ``w0``); the spin decays exactly. Hand-written rather than scipy's
+    ``solve_ivp``: a fixed 1 ms step with a secant-refined contact inside it is the synthetic truth
+    every golden log was rendered from (an adaptive scipy step would move it)."""
     def spin(tt: float) -> tuple[float, float, float]:
         f = math.exp(-tt / ball.spin_decay_s)
         return w0[0] * f, w0[1] * f, w0[2] * f
 
+    drag, lift = _air_terms(ball)
+    g = ball.gravity
     px, py, pz = float(p[0]), float(p[1]), float(p[2])
     v1 = (float(v[0]), float(v[1]), float(v[2]))
     wm = spin(t + 0.5 * h)
-    a1 = _acceleration(ball, v1, spin(t))
+    a1 = acceleration(v1, drag, g, spin(t), lift)
     v2 = tuple(v1[i] + 0.5 * h * a1[i] for i in range(3))
-    a2 = _acceleration(ball, v2, wm)
+    a2 = acceleration(v2, drag, g, wm, lift)
     v3 = tuple(v1[i] + 0.5 * h * a2[i] for i in range(3))
-    a3 = _acceleration(ball, v3, wm)
+    a3 = acceleration(v3, drag, g, wm, lift)
     v4 = tuple(v1[i] + h * a3[i] for i in range(3))
-    a4 = _acceleration(ball, v4, spin(t + h))
+    a4 = acceleration(v4, drag, g, spin(t + h), lift)
     p_new = np.array([q + h / 6.0 * (v1[i] + 2 * v2[i] + 2 * v3[i] + v4[i]) for i, q in enumerate((px, py, pz))])
     v_new = np.array([v1[i] + h / 6.0 * (a1[i] + 2 * a2[i] + 2 * a3[i] + a4[i]) for i in range(3)])
     return p_new, v_new
@@ -266,26 +235,6 @@ def _fly(ball: BallModel, p: np.ndarray, v: np.ndarray, w0: np.ndarray, t0: floa
     return _AirSegment(np.array(ts), np.array(ps), np.array(vs), phase), False
 
 
-def _impact(ball: BallModel, v: np.ndarray, w: np.ndarray, restitution: float) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity and spin after a ground impact (solid-sphere moment of inertia 2/5 m r²)."""
-    r = ball.radius
-    vz = v[2]
-    jn = (1.0 + restitution) * abs(vz)  # normal impulse per unit mass
-    # Horizontal velocity of the contact point: v + w x (-r e_z) = v + (-r w_y, r w_x).
-    slip = v[:2] + np.array([-r * w[1], r * w[0]])
-    s = float(np.hypot(*slip))
-    v_new = np.array([v[0], v[1], -restitution * vz])
-    w_new = w.copy()
-    if s > 1e-12:
-        jt = min(ball.friction * jn, (2.0 / 7.0) * s)  # per unit mass; 2/7 stops the slip exactly
-        u = slip / s
-        v_new[:2] -= jt * u
-        # Torque of the friction impulse about the centre: (-r e_z) x (-jt u) m = r jt (e_z x u) m.
-        inertia = 0.4 * r * r  # per unit mass
-        w_new += r * jt * np.array([-u[1], u[0], 0.0]) / inertia
-    return v_new, w_new
-
-
 def simulate_shot(launch: Launch, ball: BallModel = BallModel(), *, bounce: bool = True, dt: float = 1e-3,
                   t_max: float = 60.0) -> Trajectory:
     """Integrate a shot from launch until the ball rests (or ``t_max`` seconds).
@@ -319,9 +268,9 @@ def simulate_shot(launch: Launch, ball: BallModel = BallModel(), *, bounce: bool
     first = True
     while contacted:
         e = ball.restitution if (bounce or not first) else 0.0
-        v, w = _impact(ball, v, w, e)
+        v, w = impact(ball, v, w, e)
         first = False
-        hop = v[2] * v[2] / (2.0 * ball.gravity)
+        hop = hop_height(v[2], ball.gravity)
         if v[2] <= 0.0 or hop < ball.min_hop or t >= t_max:
             break
         bounce_times.append(t)
@@ -336,7 +285,7 @@ def simulate_shot(launch: Launch, ball: BallModel = BallModel(), *, bounce: bool
         # Roll without slipping from here: the friction impulse that stops the slip.
         vh = np.array([v[0], v[1]])
         slip = vh + np.array([-r * w[1], r * w[0]])
-        vh = vh - (2.0 / 7.0) * slip
+        vh = no_slip(vh, slip)
         speed = float(np.hypot(*vh))
         direction = np.array([vh[0] / speed, vh[1] / speed, 0.0]) if speed > 1e-9 else np.array([1.0, 0.0, 0.0])
         p0 = np.array([p[0], p[1], r])

@@ -10,9 +10,9 @@ from trackreplay.recorder.synth.golf.flight import AIR, BOUNCE
 from trackreplay.recorder.synth.golf.lens import COUNTS, BroadcastLens
 from trackreplay.recorder.synth.golf.operator import EncoderModel, encoder_readings
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, logged_readings, plan_shot, write_golf_teeshot
-from trackreplay.replay.frames import FrameTopics, iter_frames
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.log.frames import FrameTopics, iter_frames
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.trackers.geometry.ptz import intrinsics_at
 
 

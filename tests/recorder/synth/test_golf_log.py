@@ -10,10 +10,10 @@ from trackreplay.recorder.synth.flow_sims import FlowSimConfig, write_flow_sim
 from trackreplay.recorder.synth.golf.flight import AIR, REST, ROLL, TEE
 from trackreplay.recorder.synth.golf.scene import GolfSceneConfig, SceneConfigError, logged_readings, plan_shot, write_golf_teeshot
 from trackreplay.recorder.synth.golf.truth import choose_annotations
-from trackreplay.replay.cli import main
-from trackreplay.replay.frames import read_hints
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.log.frames import read_hints
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.records import LensTable, PtzReading
 

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.colorpf.camera import (IDENTITY, LK, CameraMotion, apply, fit_similarity, median, scale_of,
+from trackreplay.trackers.colorpf.camera import (FIT_ROUNDS, IDENTITY, LK, MIN_BASELINE, CameraMotion, scale_of,
                                                  shift_image, snap)
 from trackreplay.trackers.colorpf.config import CameraConfig, ColorPfConfig
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker
 from trackreplay.trackers.frame import Frame
+from trackreplay.trackers.geometry.view_change import apply, fit_similarity, least_squares_similarity
 
 FRAMES, W, H = 70, 240, 160
 
@@ -73,8 +74,10 @@ def test_a_zoom_is_a_scale_and_other_movers_do_not_bend_the_fit():
     p0 = rng.uniform(0, 200, (60, 2))
     p1 = 1.1 * (p0 - 100) + 100 + [3.0, -2.0]
     p1[:15] += [25.0, 0.0]  # a quarter of the corners on a passing car
-    t = fit_similarity(p0, p1)
+    fit = fit_similarity(p0, p1, rounds=FIT_ROUNDS, min_baseline=MIN_BASELINE)
+    t = fit.transform
     assert abs(scale_of(t) - 1.1) < 1e-6 and np.allclose(t[:2, 2], [-10 + 3, -10 - 2], atol=1e-6)
+    assert not fit.inliers[:15].any() and fit.inliers[15:].all()  # refitted without the car
 
 
 def test_shift_image_moves_content_by_whole_pixels():
@@ -114,8 +117,6 @@ def test_a_wide_frame_is_measured_at_half_size_and_scaled_back():
 
 
 def test_the_closed_form_similarity_is_the_least_squares_fit():
-    from trackreplay.trackers.colorpf.camera import _similarity
-
     rng = np.random.default_rng(5)
     p0 = rng.uniform(0, 300, (40, 2))
     p1 = p0 @ np.array([[0.97, -0.08], [0.08, 0.97]]).T + [4.0, -2.5] + rng.normal(0, 0.7, p0.shape)
@@ -123,8 +124,8 @@ def test_the_closed_form_similarity_is_the_least_squares_fit():
     design[0::2] = np.column_stack([p0[:, 0], -p0[:, 1], np.ones(40), np.zeros(40)])
     design[1::2] = np.column_stack([p0[:, 1], p0[:, 0], np.zeros(40), np.ones(40)])
     a, b, tx, ty = np.linalg.lstsq(design, p1.reshape(-1), rcond=None)[0]
-    assert np.allclose(_similarity(p0, p1), [[a, -b, tx], [b, a, ty], [0, 0, 1]], atol=1e-9)
-    assert np.array_equal(_similarity(np.ones((3, 2)), np.ones((3, 2)) + 2.0)[:2, 2], [2.0, 2.0])  # one spot: a shift
+    assert np.allclose(least_squares_similarity(p0, p1), [[a, -b, tx], [b, a, ty], [0, 0, 1]], atol=1e-9)
+    assert np.array_equal(least_squares_similarity(np.ones((3, 2)), np.ones((3, 2)) + 2.0)[:2, 2], [2.0, 2.0])  # one spot: a shift
 
 
 def test_a_still_view_is_checked_by_the_probe_alone_and_a_drift_is_caught_within_a_fifth_of_a_pixel(monkeypatch):
@@ -155,21 +156,8 @@ def test_a_still_view_is_checked_by_the_probe_alone_and_a_drift_is_caught_within
     assert np.max(np.abs(np.array(shifts) - 0.05 * np.arange(1, 21))) < camera_module.STILL_PX + 0.05
 
 
-def test_median_is_numpys_median():
-    rng = np.random.default_rng(9)
-    for n in range(1, 60):
-        values = rng.normal(0, 10, n)
-        if n % 3 == 0:
-            values = np.round(values)  # ties
-        assert median(values) == float(np.median(values))
-        assert median(values.astype(np.float32)) == float(np.median(values.astype(np.float32)))  # float32's own mean
-        assert np.isnan(median(np.append(values, np.nan)))
-    assert np.isnan(median(np.zeros(0)))
-
-
 def _plain_fit(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarray:
     """fit_similarity with np.median throughout (the form it replaced)."""
-    from trackreplay.trackers.colorpf.camera import MIN_BASELINE, _similarity
     p0, p1 = np.asarray(p0, np.float64).reshape(-1, 2), np.asarray(p1, np.float64).reshape(-1, 2)
     v0, v1 = p0 - np.median(p0, axis=0), p1 - np.median(p1, axis=0)
     n0, n1 = np.hypot(*v0.T), np.hypot(*v1.T)
@@ -187,7 +175,7 @@ def _plain_fit(p0: np.ndarray, p1: np.ndarray, rounds: int = 3) -> np.ndarray:
         keep = r <= max(3.0 * float(np.median(r)), 1.0)
         if keep.sum() < 3 or (kept is not None and np.array_equal(keep, kept)):
             break
-        transform, kept = _similarity(p0[keep], p1[keep]), keep
+        transform, kept = least_squares_similarity(p0[keep], p1[keep]), keep
     return transform
 
 
@@ -198,7 +186,8 @@ def test_fit_similarity_is_its_plain_form_bit_for_bit():
         t = np.array([[1.01, -0.02, 3.3], [0.02, 1.01, -1.7], [0, 0, 1]])
         p1 = (apply(t, p0) + rng.normal(0, 0.3, (n, 2))).astype(np.float32).reshape(-1, 1, 2)
         p1[: n // 5] += 15.0  # other movers
-        assert np.array_equal(fit_similarity(p0, p1), _plain_fit(p0, p1))
+        fit = fit_similarity(p0, p1, rounds=FIT_ROUNDS, min_baseline=MIN_BASELINE).transform
+        assert np.array_equal(fit, _plain_fit(p0, p1, FIT_ROUNDS))
 
 
 class _PlainCameraMotion(CameraMotion):

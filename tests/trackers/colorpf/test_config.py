@@ -4,7 +4,7 @@ import dataclasses
 
 import pytest
 
-from trackreplay.replay.config import config_from_dict
+from trackreplay.replay.core.config import config_from_dict
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.colorpf.config import PAPER, ColorPfConfig
 
@@ -43,3 +43,13 @@ def test_paper_overrides_change_only_the_default_departures():
 def test_bad_switch_values_are_named(table, values):
     with pytest.raises(TrackreplayError, match=f"invalid {table} .*{next(iter(values))}"):
         config_from_dict(ColorPfConfig, {table: values})
+
+
+def test_the_tracks_life_takes_lost_after_and_reacquire_frames():
+    import numpy as np
+
+    from trackreplay.trackers.colorpf.tracker import ColorPfTracker
+
+    life = ColorPfTracker(ColorPfConfig(lost_after=2, reacquire_frames=4), np.random.default_rng(0)).life
+    assert (life.config.lost_after, life.config.reacquire_frames) == (2, 4)
+    assert [life.missed(), life.missed()] == ["predicted", "lost"]

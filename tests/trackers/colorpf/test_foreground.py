@@ -50,19 +50,12 @@ def test_a_changed_scene_is_noticed_and_a_brightness_step_is_not():
     assert scene_changed(moved, background, 25.0, brightness_gain(moved, background))
 
 
-def test_grey_is_the_float32_mean_of_the_channels():
-    from trackreplay.trackers.colorpf.foreground import _grey
-
-    image = np.random.default_rng(3).integers(0, 256, (37, 53, 3), dtype=np.uint8)
-    for view in (image, image[::4, ::3], image[5:20, 7:40]):
-        assert np.array_equal(_grey(view), view.astype(np.float32).mean(axis=-1))
-
-
 def test_brightness_gain_is_its_np_median_form():
-    from trackreplay.trackers.colorpf.foreground import SCENE_STEP, _grey, brightness_gain
+    from trackreplay.trackers.appearance.color import to_grey
+    from trackreplay.trackers.colorpf.foreground import SCENE_STEP, brightness_gain
     rng = np.random.default_rng(12)
     for shape in ((240, 360, 3), (61, 83, 3), (40, 40)):
         image, background = rng.integers(0, 256, shape, dtype=np.uint8), rng.integers(0, 256, shape, dtype=np.uint8)
-        gi, gb = _grey(image[::SCENE_STEP, ::SCENE_STEP]), _grey(background[::SCENE_STEP, ::SCENE_STEP])
+        gi, gb = to_grey(image[::SCENE_STEP, ::SCENE_STEP], "mean"), to_grey(background[::SCENE_STEP, ::SCENE_STEP], "mean")
         ok = gb > 8
         assert brightness_gain(image, background) == float(np.median(gi[ok] / gb[ok]))

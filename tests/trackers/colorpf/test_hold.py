@@ -63,9 +63,9 @@ def _tracker(enabled: bool = True, **hold) -> ColorPfTracker:
     rng = np.random.default_rng(1)
     tracker.pf.particles = np.column_stack([rng.normal(100.0, 2.0, 40), rng.normal(90.0, 2.0, 40),
                                             np.full(40, 12.0), np.full(40, 36.0)])
-    tracker.track_velocity = np.array([-1.0, 0.5])
-    tracker._velocity_steps = 3  # a velocity measured between vouched estimates
-    tracker._vouched = (10, np.array([98.0, 91.0]))  # the last of them: frame 10
+    tracker.motion.velocity = np.array([-1.0, 0.5])
+    tracker.motion.steps = 3  # a velocity measured between vouched estimates
+    tracker.motion.last = (10, np.array([98.0, 91.0]))  # the last of them: frame 10
     return tracker
 
 
@@ -78,7 +78,7 @@ def test_no_hold_before_a_velocity_is_measured():
     image[72:108, 94:106] = 20
     image[30:72, 60:160] = 20  # a larger region beside it: the hold's condition
     tracker = _tracker()
-    tracker._velocity_steps = 0
+    tracker.motion.steps = 0
     estimate = tracker.pf.estimate()
     out, held = tracker._hold(image, background, 1.0, np.array([98.0, 91.0, 12.0, 36.0]), estimate, 11)
     assert not held and np.array_equal(out, estimate)
@@ -98,8 +98,8 @@ def test_the_estimate_is_the_prediction_only_beside_a_larger_region():
     out, held = tracker._hold(image, background, 1.0, prev, estimate, 11)
     assert held and np.allclose(out[:2], prev[:2] + [-1.0, 0.5])  # the last estimate plus the velocity
     assert np.allclose(tracker.pf.particles[:, :2] - before[:, :2], out[:2] - estimate[:2])  # the cloud with it
-    assert tracker.hold_run == 1
-    tracker.hold_run = tracker.config.hold.max_frames
+    assert tracker.motion.held.count == 1
+    tracker.motion.held.count = tracker.config.hold.max_frames
     assert not tracker._hold(image, background, 1.0, prev, tracker.pf.estimate(), 12)[1]  # at most max_frames in a row
 
 
@@ -127,12 +127,12 @@ def test_the_prediction_starts_from_the_last_vouched_estimate():
 
 def test_the_velocity_comes_from_vouched_estimates_only():
     tracker = _tracker()
-    tracker.track_velocity, tracker._vouched = np.zeros(2), None
+    tracker.motion.velocity, tracker.motion.last = np.zeros(2), None
     tracker._vouch(10, np.array([100.0, 50.0, 12.0, 36.0]), True)
     tracker._vouch(11, np.array([0.0, 0.0, 12.0, 36.0]), False)  # not vouched for: ignored
     tracker._vouch(12, np.array([96.0, 52.0, 12.0, 36.0]), True)  # 2 frames later: (-2, 1) per frame
     s = tracker.config.hold.smoothing
-    assert np.allclose(tracker.track_velocity, (1.0 - s) * np.array([-2.0, 1.0]))
+    assert np.allclose(tracker.motion.velocity, (1.0 - s) * np.array([-2.0, 1.0]))
 
 
 def _early_walk(k: int) -> tuple[float, float]:
@@ -160,7 +160,7 @@ def _revouched(early: str) -> ColorPfTracker:
     tracker.layout = IDENTITY  # the marked box is its foreground's extent
     for k, box in rows:  # as the tracker vouches colour's "measured" rows before the background
         tracker._vouch(k, box, True)
-        tracker._early_rows.append((k, box))
+        tracker.motion.early_rows.append((k, box))
     if early == "region":
         tracker._revouch(dict(enumerate(frames)))  # by frame index, as BackgroundFrames.early_frames gives them
     return tracker
@@ -190,12 +190,12 @@ def test_rows_before_the_background_are_vouched_for_by_the_region_once_it_exists
     for _ in range(9):  # nine displacements of (-1, -1), smoothed from zero
         truth = s * truth + (1.0 - s) * np.array([-1.0, -1.0])
     region = _revouched("region")
-    assert region._velocity_steps == 9
-    assert np.allclose(region.track_velocity, truth, atol=0.05), region.track_velocity
-    assert region._vouched[0] == 9 and np.allclose(region._vouched[1], _early_walk(9), atol=0.6)
+    assert region.motion.steps == 9
+    assert np.allclose(region.motion.velocity, truth, atol=0.05), region.motion.velocity
+    assert region.motion.last[0] == 9 and np.allclose(region.motion.last[1], _early_walk(9), atol=0.6)
     colour = _revouched("colour")  # the previous behaviour: colour's rows stand
-    assert np.abs(colour.track_velocity - truth).max() > 0.2
-    assert np.allclose(colour._vouched[1], np.array(_early_walk(9)) + [4.0, -4.0])
+    assert np.abs(colour.motion.velocity - truth).max() > 0.2
+    assert np.allclose(colour.motion.last[1], np.array(_early_walk(9)) + [4.0, -4.0])
 
 
 def test_a_held_frame_is_never_measured():
@@ -209,9 +209,23 @@ def test_a_held_frame_is_never_measured():
                              np.random.default_rng(0))  # (any colour score "matches")
     held = []
     for i, image in enumerate(images):
-        run = tracker.hold_run
+        run = tracker.motion.held.count
         states = tracker.step(Frame(index=i, t_ns=i * 33_333_333, image=image, all_hints=(mark,),
                                     hints=(mark,) if i == EMPTY else ()))
-        if tracker.hold_run > run:  # held on this frame
+        if tracker.motion.held.count > run:  # held on this frame
             held.append(states[0].status)
     assert held and "measured" not in held, held
+
+
+def test_vouched_motion_measures_over_the_frames_between_and_forgets_on_request():
+    from trackreplay.trackers.colorpf.hold import VouchedMotion
+
+    motion = VouchedMotion()
+    motion.vouch(4, np.array([10.0, 20.0, 5.0, 9.0]), 0.5)
+    assert motion.steps == 0 and np.array_equal(motion.velocity, [0.0, 0.0])  # one estimate: no displacement yet
+    motion.vouch(7, np.array([16.0, 17.0, 5.0, 9.0]), 0.5)  # 3 frames on: (2, -1) per frame, half of it kept
+    assert motion.steps == 1 and np.allclose(motion.velocity, [1.0, -0.5]) and motion.last[0] == 7
+    motion.early_rows.append((3, np.zeros(4)))
+    assert [k for k, _ in motion.take_early_rows()] == [3] and motion.early_rows == []
+    motion.forget()
+    assert motion.last is None and motion.steps == 0 and not motion.velocity.any()

@@ -4,11 +4,11 @@ from pathlib import Path
 
 import pytest
 
-from trackreplay.replay.cli import main
-from trackreplay.replay.engine import ReplayRequest, replay
-from trackreplay.replay.eval import evaluate
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.core.engine import ReplayRequest, replay
+from trackreplay.replay.analysis.eval import evaluate
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.log.reader import LogReader
 
 OTB = Path(__file__).resolve().parents[4] / "shared" / "data" / "real" / "otb_crossing"
 pytestmark = pytest.mark.skipif(not OTB.is_dir(), reason="../shared/data/real/otb_crossing is absent")

@@ -1,4 +1,4 @@
-"""Eq. (7) with SPEC's fix on a crafted image, and the fallback without a background."""
+"""Eq. (7) as corrected in docs/papers.md §3, on a crafted image, and the fallback without a background."""
 
 import numpy as np
 import pytest

@@ -5,7 +5,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.core.engine import ReplayRequest, replay
 from trackreplay.trackers.colorpf.aspect import AspectEstimate
 from trackreplay.trackers.colorpf.config import AspectConfig, ColorPfConfig, RefineConfig
 from trackreplay.trackers.colorpf.foreground import IDENTITY, foreground_region, region_layout

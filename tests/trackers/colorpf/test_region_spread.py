@@ -4,7 +4,7 @@ import cv2
 import numpy as np
 import pytest
 
-from trackreplay.replay.config import config_from_dict
+from trackreplay.replay.core.config import config_from_dict
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.colorpf.config import ColorPfConfig, RefineConfig
 from trackreplay.trackers.colorpf.foreground import (IDENTITY, _spread, clipped_spread, foreground_region,

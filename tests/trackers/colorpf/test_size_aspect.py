@@ -60,4 +60,4 @@ def test_aspect_from_a_crafted_likelihood_field():
     jumped = est.update(xy, flat, np.array([100.0, 200.0]), area=100.0)
     assert jumped.kept and jumped.ratio == pytest.approx(r) and jumped.measured < 0.5
     w, h = box_from_area(1200.0, 3.0)
-    assert w == pytest.approx(20.0) and h == pytest.approx(60.0)  # SPEC's fix: w h = S'
+    assert w == pytest.approx(20.0) and h == pytest.approx(60.0)  # docs/papers.md §3's correction: w h = S'

@@ -3,9 +3,10 @@
 import numpy as np
 import pytest
 
-from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.core.engine import ReplayRequest, replay
 from trackreplay.trackers.colorpf.config import LikelihoodConfig
-from trackreplay.trackers.colorpf.template import TemplateModel, epanechnikov, grey, template_scores
+from trackreplay.trackers.appearance.color import to_grey
+from trackreplay.trackers.colorpf.template import TemplateModel, epanechnikov, template_scores
 
 
 def _texture(seed: int = 0, shape=(120, 160)) -> np.ndarray:
@@ -28,7 +29,7 @@ def test_ncc_is_one_where_the_template_was_cut_and_lower_elsewhere(max_side, lea
     """(Scaled, the window's samples fall between the template's: ~0.9 rather than ~1.)"""
     image = _texture()
     x0, y0, w, h = 70, 40, 20, 30
-    template = grey(image[y0:y0 + h, x0:x0 + w])
+    template = to_grey(image[y0:y0 + h, x0:x0 + w], "mean")
     cx, cy = _centre(x0, y0, w, h)
     xy = np.array([[cx, cy], [cx + 6, cy], [cx, cy - 8], [cx - 30, cy + 20]])
     s = template_scores(image, template, xy, np.array([w, h], float), max_side)
@@ -40,7 +41,7 @@ def test_ncc_is_one_where_the_template_was_cut_and_lower_elsewhere(max_side, lea
 def test_ncc_ignores_a_uniform_gain_and_offset():
     image = _texture(1)
     x0, y0, w, h = 30, 50, 16, 24
-    template = grey(image[y0:y0 + h, x0:x0 + w])
+    template = to_grey(image[y0:y0 + h, x0:x0 + w], "mean")
     darker = (image.astype(np.float32) * 0.5 + 20).astype(np.uint8)
     s = template_scores(darker, template, np.array([_centre(x0, y0, w, h)]), np.array([w, h], float), 64)
     assert s[0] > 0.97, s
@@ -48,7 +49,7 @@ def test_ncc_ignores_a_uniform_gain_and_offset():
 
 def test_a_box_outside_the_image_scores_zero():
     image = _texture(2)
-    template = grey(image[10:40, 10:30])
+    template = to_grey(image[10:40, 10:30], "mean")
     size = np.array([20.0, 30.0])
     xy = np.array([[-30.0, 60.0], [155.0, 60.0], [80.0, 110.0], [80.0, 5.0]])  # past each edge (in part)
     assert np.array_equal(template_scores(image, template, xy, size, 64), np.zeros(4))
@@ -108,7 +109,7 @@ def test_blend_moves_the_template_towards_the_box_and_skips_boxes_leaving_the_im
     image = _texture(6)
     model = TemplateModel(image, np.array([40, 30, 60, 70]), "none")
     before = model.template.copy()
-    other = grey(image[50:90, 100:120])
+    other = to_grey(image[50:90, 100:120], "mean")
     model.blend(image, np.array([109.5, 69.5, 20.0, 40.0]), 0.25)
     assert np.allclose(model.template, 0.75 * before + 0.25 * other, atol=1e-3)
     kept = model.template.copy()

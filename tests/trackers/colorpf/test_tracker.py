@@ -12,9 +12,9 @@ import numpy as np
 import polars as pl
 import pytest
 
-from trackreplay.replay.engine import ReplayRequest, replay
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.core.engine import ReplayRequest, replay
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.colorpf.config import ColorPfConfig, ReferenceConfig
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker, start_mark
@@ -144,7 +144,7 @@ def test_two_replays_and_two_processes_agree(scene_log, tmp_path):
     a = replay(ReplayRequest(log=log, tracker="colorpf", seed=3))
     b = replay(ReplayRequest(log=log, tracker="colorpf", seed=3))
     assert a.digest == b.digest and a.trajectory.equals(b.trajectory)
-    code = ("import sys; from trackreplay.replay.engine import ReplayRequest, replay; "
+    code = ("import sys; from trackreplay.replay.core.engine import ReplayRequest, replay; "
             f"print(replay(ReplayRequest(log={str(log)!r}, tracker='colorpf', seed=3)).digest)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()[-1]
     assert out == a.digest
@@ -203,7 +203,7 @@ def test_paper_overrides_reproduce_the_paper_pipeline_digest():
     (the golden digest of that version)."""
     from pathlib import Path
 
-    from trackreplay.replay.engine import ReplayRequest, replay
+    from trackreplay.replay.core.engine import ReplayRequest, replay
     from trackreplay.trackers.colorpf.config import PAPER
 
     log = Path(__file__).resolve().parents[2] / "golden" / "colorpf-approach-320x240.mcap"
@@ -213,10 +213,10 @@ def test_paper_overrides_reproduce_the_paper_pipeline_digest():
 
 def test_switches_run_and_stay_deterministic(scene_log):
     """Every switch of ours on, twice from the same seed: the same digest; the box stays on the walker."""
-    from trackreplay.replay.engine import ReplayRequest, replay
-    from trackreplay.replay.eval import evaluate
-    from trackreplay.replay.groundtruth import read_groundtruth
-    from trackreplay.replay.reader import LogReader
+    from trackreplay.replay.core.engine import ReplayRequest, replay
+    from trackreplay.replay.analysis.eval import evaluate
+    from trackreplay.replay.log.groundtruth import read_groundtruth
+    from trackreplay.replay.log.reader import LogReader
 
     log = scene_log("colorpf-background")
     cfg = {"likelihood": {"parts": 2}, "motion": {"model": "constant_velocity"}, "refine": {"mode": "meanshift"},
@@ -248,7 +248,7 @@ def test_adaptive_reference_only_with_a_background_built_reference(scene_log):
         tracker.step(f)
     assert tracker.intermediates.reference_kind == "box" and tracker.adapted is None
     log = scene_log("colorpf-approach")
-    from trackreplay.replay.frames import FrameTopics, iter_frames
+    from trackreplay.replay.log.frames import FrameTopics, iter_frames
 
     tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
     for f in iter_frames(LogReader(log), FrameTopics()):

@@ -1,6 +1,6 @@
 """The colour-PF Rerun view logs a replay's every intermediate."""
 
-from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.core.engine import ReplayRequest, replay
 
 
 def test_view_writes_an_rrd(scene_log, tmp_path, monkeypatch):

@@ -45,9 +45,11 @@ def test_gaussian_density_integrates_to_one() -> None:
     assert abs(total - 1.0) < 1e-3
 
 
-def test_update_linearised_is_filterpys_update_bit_for_bit() -> None:
-    """The golf EKF's update: filterpy's Joseph-form update, with ``P Hᵀ`` and ``S`` from the gate or not."""
+def test_update_is_filterpys_update_bit_for_bit() -> None:
+    """Every EKF's update (the groups' and golf's): filterpy's Joseph-form ``update(z, HJacobian, Hx,
+    R=)``, with ``P Hᵀ`` and ``S`` from the gate or not, R per call or the filter's own."""
     import scipy.linalg
+    from filterpy.kalman import ExtendedKalmanFilter
 
     from trackreplay.trackers.filters.kalman import inverse
 
@@ -60,18 +62,34 @@ def test_update_linearised_is_filterpys_update_bit_for_bit() -> None:
         x, z, hx = rng.normal(0, 30, 6), rng.normal(0, 500, 3), rng.normal(0, 500, 3)
         plain, fast = MotionModelEkf(6, 3, lambda s, dt: s), MotionModelEkf(6, 3, lambda s, dt: s)
         for f in (plain, fast):
-            f.x, f.P = x.copy(), P.copy()
-        plain.update(z, lambda _x: H, lambda _x: hx, R=R)
+            f.x, f.P, f.R = x.copy(), P.copy(), R
+        ExtendedKalmanFilter.update(plain, z, lambda _x: H, lambda _x: hx, R=R if trial % 3 else None)
         if trial % 2:
-            fast.update_linearised(z, H, hx, R)
+            fast.update(z, lambda _x: H, lambda _x: hx, R=R if trial % 3 else None)
         else:
             PHT = np.dot(P, H.T)
             S = np.dot(H, PHT) + R
             assert S.tobytes() == innovation(P, H, R, z, hx).S.tobytes()  # the gate's S is filterpy's
-            fast.update_linearised(z, H, hx, R, PHT, S)
-        for name in ("x", "P", "S", "SI", "K", "y"):
+            fast.update(z, lambda _x: H, lambda _x: hx, R=R, PHT=PHT, S=S)
+        for name in ("x", "P", "S", "SI", "K", "y", "x_post", "P_post", "z"):
             assert getattr(fast, name).tobytes() == getattr(plain, name).tobytes(), name
         assert inverse(plain.S).tobytes() == scipy.linalg.inv(plain.S).tobytes()
+
+
+def test_update_takes_filterpys_scalar_forms() -> None:
+    from filterpy.kalman import ExtendedKalmanFilter
+
+    plain, fast = MotionModelEkf(2, 1, lambda s, dt: s), MotionModelEkf(2, 1, lambda s, dt: s)
+    H = np.array([[1.0, 0.0]])
+    for f in (plain, fast):
+        f.x, f.P = np.array([1.0, 2.0]), np.diag([4.0, 1.0])
+    ExtendedKalmanFilter.update(plain, 3.0, lambda _x: H, lambda x: H @ x, R=0.5)
+    fast.update(3.0, lambda _x: H, lambda x: H @ x, R=0.5)  # a scalar z and a scalar R, as filterpy's
+    assert fast.x.tobytes() == plain.x.tobytes() and fast.P.tobytes() == plain.P.tobytes()
+    assert fast.x[0] == 1.0 + 4.0 / 4.5 * 2.0
+    before = fast.x
+    fast.update(None, lambda _x: H, lambda x: H @ x)  # no measurement: the state stands
+    assert fast.x is before and fast.x_post is before
 
 
 def test_inverse_of_a_non_finite_matrix_raises_as_scipys() -> None:

@@ -2,7 +2,7 @@ import pytest
 
 from trackreplay.trackers.flow.config import FlowConfig
 
-# Reading a FlowConfig from TOML or a dict is tested with the reader, in tests/replay/test_config.py.
+# Reading a FlowConfig from TOML or a dict is tested with the reader, in tests/replay/core/test_config.py.
 
 
 def test_defaults_are_the_papers() -> None:
@@ -15,3 +15,10 @@ def test_defaults_are_the_papers() -> None:
 def test_invalid_values_are_rejected(values) -> None:
     with pytest.raises(ValueError):
         FlowConfig(**values)
+
+
+def test_the_track_is_lost_on_the_lost_after_th_frame_without_moving_pixels() -> None:
+    from trackreplay.trackers.lifecycle import TrackLife
+
+    life = TrackLife(FlowConfig(lost_after=3).lifecycle)
+    assert [life.missed() for _ in range(3)] == ["predicted", "predicted", "lost"]

@@ -61,8 +61,8 @@ def test_a_malformed_pose_message_is_one_log_error_naming_file_and_topic(tmp_pat
     from foxglove_schemas_protobuf.Vector3_pb2 import Vector3
 
     from trackreplay.recorder.writer import LogWriter
-    from trackreplay.replay.frames import read_rig_pose
-    from trackreplay.replay.reader import LogReader
+    from trackreplay.replay.log.frames import read_rig_pose
+    from trackreplay.replay.log.reader import LogReader
     from trackreplay.schemas import messages as m
     from trackreplay.schemas.errors import LogError
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import cv2
 import numpy as np
+import pytest
 
 from trackreplay.trackers.geometry.homography import apply_homography
 from trackreplay.trackers.geometry.view_change import view_change
@@ -31,3 +32,26 @@ def test_a_pan_and_zoom_is_measured_and_unrelated_pictures_are_not():
     assert np.abs(apply_homography(H, points) - truth).max() < 1.5
     assert np.array_equal(H, view_change(before, after))  # deterministic
     assert view_change(before, _scene(seed=7)) is None  # another scene: no agreement
+
+
+def test_both_fits_of_the_one_fitter():
+    from trackreplay.trackers.geometry.view_change import at_full_size, fit_similarity
+
+    rng = np.random.default_rng(1)
+    p0 = rng.uniform(0, 400, (80, 2)).astype(np.float32)
+    turn = np.array([[0.98, -0.05], [0.05, 0.98]])
+    p1 = (p0 @ turn.T + [6.0, -4.0]).astype(np.float32)
+    p1[:48] = rng.uniform(0, 400, (48, 2))  # 60 % wrong matches: RANSAC stands them, the medians do not
+    cv2.setRNGSeed(0)
+    fit = fit_similarity(p0, p1, method="ransac", ransac_px=3.0)
+    cv2.setRNGSeed(0)
+    M, inliers = cv2.estimateAffinePartial2D(p0, p1, method=cv2.RANSAC, ransacReprojThreshold=3.0)
+    assert np.array_equal(fit.transform[:2], M) and np.array_equal(fit.inliers, inliers.ravel() == 1)
+    assert np.allclose(fit.transform[:2, :2], turn, atol=1e-4) and fit.inliers[48:].all()
+    clean = fit_similarity(p0[48:], p1[48:])  # the medians, on right matches
+    assert np.allclose(clean.transform[:2], np.column_stack([turn, [6.0, -4.0]]), atol=1e-4) and clean.inliers.all()
+    # a fit measured at a third of the size, in full-size pixels
+    scaled = at_full_size(fit.transform, 1.0 / 3.0)
+    assert np.allclose(scaled, np.linalg.inv(np.diag([1 / 3, 1 / 3, 1.0])) @ fit.transform @ np.diag([1 / 3, 1 / 3, 1.0]))
+    with pytest.raises(ValueError, match="medians, ransac"):
+        fit_similarity(p0, p1, method="lmeds")

@@ -6,7 +6,8 @@ import numpy as np
 from trackreplay.trackers.appearance.color import to_ycbcr
 from trackreplay.trackers.foreground.blobs import measure_blobs
 from trackreplay.trackers.golf.blobs import _disc_table
-from trackreplay.trackers.golf.silhouette import median_and_mad, previous_in_pose
+from trackreplay.trackers.golf.silhouette import previous_in_pose
+from trackreplay.trackers.median import median_and_mad
 
 
 def test_median_and_mad_from_counts_are_numpys():

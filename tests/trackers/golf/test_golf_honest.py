@@ -311,7 +311,7 @@ def test_a_speck_seen_still_then_missed_opens_no_strike_search(backdrop):
     tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
     results = [(tracker.step(f), tracker.intermediates) for f in frames[:10]]
     assert statuses(results).count("measured") >= 8, statuses(results)
-    assert tracker.targets.area < GolfConfig().particles.strike_min_area_px  # the ball is a speck
+    assert tracker.look.targets.area < GolfConfig().particles.strike_min_area_px  # the ball is a speck
     results += [(tracker.step(f), tracker.intermediates) for f in frames[10:]]
     assert "measured" not in statuses(results)[10:], statuses(results)
     struck = GolfTracker(GolfConfig(particles=ParticleConfig(strike_min_area_px=0.0)), np.random.default_rng(0))
@@ -402,7 +402,7 @@ def test_the_pixel_scale_follows_the_ball_as_it_shrinks_never_past_the_marked_si
         image = np.clip(draw_ball(base, (320.0, 200.0), r) + noise.normal(0.0, 2.0, base.shape), 0, 255).astype(np.uint8)
         tracker.step(Frame(k, k * NS, image, hints=mark if k == 0 else (), all_hints=mark))
         scales.append(tracker._scale(360))
-    marked = tracker._marked_diameter / GolfConfig().reference_ball_px
+    marked = tracker.look.marked_diameter / GolfConfig().reference_ball_px
     assert 1.1 < marked < 1.35 and abs(scales[0] - marked) < 1e-9
     assert scales[11] < 0.7 * marked  # followed down as the ball shrinks
     assert max(scales) <= marked + 1e-9 and scales[-1] == max(scales)  # grown back larger than marked: capped

@@ -191,7 +191,7 @@ def test_predicted_landing_is_integrated_when_read_and_not_hashed(monkeypatch):
     assert np.isnan(no_pose.landing_image).all() and no_pose.landing_world.tolist() == world.tolist()
     # what it is drawn from is a field the digest skips: dataclasses.replace keeps it (a review: it was an
     # attribute outside the fields, and a replaced state drew a NaN landing), the digest does not see it
-    from trackreplay.replay.digest import _field_names
+    from trackreplay.replay.core.digest import _field_names
 
     assert dataclasses.replace(state, nis=1.0).landing_world.tolist() == world.tolist()
     assert _field_names(EkfState) == ("x", "P", "nis")

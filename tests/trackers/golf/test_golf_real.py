@@ -6,8 +6,8 @@ import numpy as np
 import polars as pl
 import pytest
 
-from trackreplay.replay.cli import main as cli
-from trackreplay.replay.engine import ReplayRequest, replay
+from trackreplay.replay.cli.main import main as cli
+from trackreplay.replay.core.engine import ReplayRequest, replay
 
 ROOT = Path(__file__).resolve().parents[3]
 REAL = ROOT.parent / "shared" / "data" / "real"

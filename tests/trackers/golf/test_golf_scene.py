@@ -12,11 +12,11 @@ scene = pytest.importorskip("trackreplay.recorder.synth.golf.scene")
 
 from trackreplay.recorder.synth.golf.flight import Launch  # noqa: E402
 from trackreplay.recorder.synth.golf.operator import OperatorConfig  # noqa: E402
-from trackreplay.replay import registry  # noqa: E402
-from trackreplay.replay.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.frames import FrameTopics, iter_frames  # noqa: E402
-from trackreplay.replay.groundtruth import read_groundtruth  # noqa: E402
-from trackreplay.replay.reader import LogReader  # noqa: E402
+from trackreplay.replay.core import registry  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
+from trackreplay.replay.log.frames import FrameTopics, iter_frames  # noqa: E402
+from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
 from trackreplay.trackers.golf import GolfConfig, GolfTracker  # noqa: E402
 
 # A short shot at 640x360, the operator zoomed in twice as far as his 720p default so the ball has
@@ -109,7 +109,7 @@ def test_without_encoders_it_still_tracks_in_the_image(teeshot):
 
 @pytest.mark.skipif("golf" not in registry.NAMES, reason="the golf tracker is not registered with the engine yet")
 def test_engine_replay_is_deterministic_and_prints_no_notice(teeshot, capsys):
-    from trackreplay.replay.engine import ReplayRequest, replay
+    from trackreplay.replay.core.engine import ReplayRequest, replay
 
     path, summary = teeshot
     a = replay(ReplayRequest(log=path, tracker="golf", seed=5, end_s=4.0))

@@ -63,13 +63,13 @@ def test_the_track_starts_on_the_ball_from_a_loose_box(backdrop, draw_ball):
     def first(config):
         tracker = GolfTracker(config, np.random.default_rng(0))
         states = [tracker.step(f)[0] for f in frames]
-        return states, tracker.targets.area
+        return states, tracker.look.targets.area
 
     states, area = first(GolfConfig())
     assert all(s.status == "measured" and np.hypot(s.x - BALL[0], s.y - BALL[1]) < 1.0 for s in states)
     assert area == pytest.approx(np.pi * 25, rel=0.25)
     # without the snap the box's grass is learned as ball: what the LUT picks out runs past twice the box,
-    # and the mark is refused rather than tracked (tracker._start, blobs.spills_over)
+    # and the mark is refused rather than tracked (tracker._marked_ball, blobs.spills_over)
     from trackreplay.schemas.errors import LogError
 
     with pytest.raises(LogError, match="holds no ball the golf tracker can tell from its surroundings"):

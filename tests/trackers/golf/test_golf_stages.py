@@ -12,6 +12,7 @@ from trackreplay.trackers.golf.notices import ENCODER_GAP_NOTICE, NO_ENCODER_NOT
 from trackreplay.trackers.golf.reinit import ReinitPolicy
 from trackreplay.trackers.golf.search_region import filling_sigma, search_region
 from trackreplay.trackers.golf.trail import Ring, Trail, TrailPoints
+from trackreplay.trackers.lifecycle import TrackLife
 
 LENS = LensTable(1280, 720, (LensEntry(0, 0, 2000, 2000, 640, 360), LensEntry(100, 0, 4000, 4000, 640, 360)), (0.0, 0.0, 3.0))
 
@@ -33,7 +34,15 @@ def camera_at(point):
 
 
 def policy(**kw):
-    return ReinitPolicy(ReinitConfig(**kw), SearchConfig(), lost_after=5)
+    return ReinitPolicy(ReinitConfig(**kw), SearchConfig())
+
+
+def missed(n, max_predicted_frames=5):
+    """A track's life after ``n`` misses in a row (lost after ``max_predicted_frames``, as the tracker's)."""
+    life = TrackLife(GolfConfig(max_predicted_frames=max_predicted_frames).lifecycle)
+    for _ in range(n):
+        life.missed()
+    return life
 
 
 def test_ekf_landing_first_at_the_projected_contact():
@@ -41,13 +50,13 @@ def test_ekf_landing_first_at_the_projected_contact():
     cam = camera_at(point)
     ekf = BallisticEkf(EkfConfig(), 0.02)
     ekf.update(cam, cam.project_points(point.reshape(1, 3))[0], 50.0, 0.05)
-    r = policy().choose(index=10, size=(1280, 720), scale=1.0, misses=9, landing=point, camera=cam,
+    r = policy().choose(index=10, size=(1280, 720), scale=1.0, life=missed(9), landing=point, camera=cam,
                         previous=cam, ekf=ekf, estimate=np.array([640.0, 300.0]))
     assert r.kind == "ekf_landing" and r.point == pytest.approx([640.0, 360.0])
     assert (r.sigma >= 12.0).all() and r.sigma[1] >= 30.0 - 1e-9  # covers where the samples had the ball
     assert (r.sigma <= filling_sigma(480.0, SearchConfig())).all()
     panned = camera_at(point + np.array([0.0, 3.0, 0.0]))  # the operator follows: the pose moved
-    off = policy(landing=False).choose(index=10, size=(1280, 720), scale=1.0, misses=9, landing=point, camera=cam,
+    off = policy(landing=False).choose(index=10, size=(1280, 720), scale=1.0, life=missed(9), landing=point, camera=cam,
                                        previous=panned, ekf=ekf, estimate=np.zeros(2))
     assert off.kind == "lost_centre"  # no landing re-init: after 5 misses the lost policy applies
 
@@ -71,14 +80,14 @@ def test_image_parabola_once_per_loss_then_lost_centre():
         p.measured(k, 100.0 + 5 * k, 300.0 - 20 * k + 2.5 * k * k)
     args = dict(size=(1280, 720), scale=1.0, landing=None, camera=None, previous=None, ekf=BallisticEkf(EkfConfig(), 0.02),
                 estimate=np.zeros(2))
-    assert p.choose(index=10, misses=1, **args).kind == ""  # not yet: parabola_misses = 2
-    r = p.choose(index=11, misses=2, **args)
+    assert p.choose(index=10, life=missed(1), **args).kind == ""  # not yet: parabola_misses = 2
+    r = p.choose(index=11, life=missed(2), **args)
     assert r.kind == "image_parabola" and r.point[0] == pytest.approx(0.5 * (145.0 + 155.0))
-    assert p.choose(index=12, misses=3, **args).kind == ""  # once per loss
-    lost = p.choose(index=15, misses=6, **args)
+    assert p.choose(index=12, life=missed(3), **args).kind == ""  # once per loss
+    lost = p.choose(index=15, life=missed(6), **args)
     assert lost.kind == "lost_centre" and lost.point.tolist() == [639.5, 359.5]
     assert lost.sigma.tolist() == [filling_sigma(480.0, SearchConfig())] * 2
-    assert policy(lost="stay").choose(index=15, misses=6, **args).kind == ""
+    assert policy(lost="stay").choose(index=15, life=missed(6), **args).kind == ""
     p.measured(16, 0.0, 0.0)  # measured again: the parabola may fire at the next loss
     assert not p.parabola_used
 
@@ -120,7 +129,7 @@ def test_trail_ring_keeps_the_last_rows_oldest_first():
     # the pose the trail is drawn into survives dataclasses.replace (a review: it was kept outside the fields)
     import dataclasses
 
-    from trackreplay.replay.digest import _field_names
+    from trackreplay.replay.core.digest import _field_names
     from trackreplay.trackers.geometry.ptz import PtzCamera
 
     points = TrailPoints.of(np.array([[10.0, 20.0, np.nan, np.nan, np.nan]]), np.zeros((1, 3)), object.__new__(PtzCamera))
@@ -134,11 +143,11 @@ def test_lost_auto_centre_only_when_the_camera_followed_the_ball():
     crossing = policy()  # "auto": the ball crossed a fixed picture -> stay where it was predicted
     for k in range(6):
         crossing.measured(k, 100.0 + 50 * k, 650.0 - 60 * k)
-    assert crossing.choose(index=20, misses=6, camera=None, **args).kind == ""
+    assert crossing.choose(index=20, life=missed(6), camera=None, **args).kind == ""
     followed = policy()  # kept mid-picture by an operator -> search the centre
     for k in range(6):
         followed.measured(k, 630.0 + k, 350.0 - k)
-    assert followed.choose(index=20, misses=6, camera=None, **args).kind == "lost_centre"
+    assert followed.choose(index=20, life=missed(6), camera=None, **args).kind == "lost_centre"
 
 
 def test_a_ball_seen_twice_in_one_place_in_flight_is_not_at_rest():
@@ -147,16 +156,16 @@ def test_a_ball_seen_twice_in_one_place_in_flight_is_not_at_rest():
     was measured (the iron shot re-encoded at JPEG quality 50). Still twice after coming in at 24 px
     a frame is no ball at rest; still on the tee, or rolling to a stop, is."""
     cfg = GolfConfig()
-    flying = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)
+    flying = ReinitPolicy(cfg.reinit, cfg.search)
     for frame, y in ((0, 650.0), (1, 626.0), (2, 602.0), (3, 602.0)):  # 24 px a frame, then the same picture twice
         flying.measured(frame, 640.0, y)
     assert not flying.at_rest(2, 1.5)
     for start, steps in ((0, (0.0, 0.0, 0.0, 0.0)), (10, (0.0, 3.0, 4.0, 4.2))):  # on the tee; rolling to a stop
-        still = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)
+        still = ReinitPolicy(cfg.reinit, cfg.search)
         for k, y in enumerate(steps):
             still.measured(start + k, 640.0, 650.0 + y)
         assert still.at_rest(2, 1.5)
-    marked = ReinitPolicy(cfg.reinit, cfg.search, cfg.max_predicted_frames)  # two sightings only: nothing came before
+    marked = ReinitPolicy(cfg.reinit, cfg.search)  # two sightings only: nothing came before
     marked.measured(5, 640.0, 650.0)
     marked.measured(6, 640.0, 650.5)
     assert marked.at_rest(2, 1.5)

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from trackreplay.replay.digest import ReplayDigest
+from trackreplay.replay.core.digest import ReplayDigest
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
 from trackreplay.trackers.golf.config import EkfConfig, ReinitConfig
@@ -95,7 +95,7 @@ def test_ptz_mode_lines_of_sight_ekf_and_landing(ptz_sequence):
 
 
 def test_config_loads_nested_from_a_dict_or_toml_and_rejects_nonsense(tmp_path):
-    from trackreplay.replay.config import config_from_dict, load_config
+    from trackreplay.replay.core.config import config_from_dict, load_config
     from trackreplay.schemas.errors import TrackreplayError
 
     cfg = config_from_dict(GolfConfig, {"particles": {"n": 500, "sigma_px": 4.0}, "reinit": {"lost": "stay"}})
@@ -114,7 +114,7 @@ def test_config_loads_nested_from_a_dict_or_toml_and_rejects_nonsense(tmp_path):
 
 
 def test_each_stage_gets_its_own_table():
-    """A stage never holds the whole config (ARCHITECTURE: shared parts take only their parameters)."""
+    """A stage never holds the whole config (docs/architecture.md §1 Layers: shared parts take only their parameters)."""
     tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
     cfg = tracker.config
     assert tracker.luts.config is cfg.lut and tracker.ekf.config is cfg.ekf and tracker.range.config is cfg.range

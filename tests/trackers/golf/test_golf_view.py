@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from trackreplay.replay.rerun_sink import RerunSink
+from trackreplay.replay.views.rerun_sink import RerunSink
 from trackreplay.replay.views import golf as view
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
 from trackreplay.trackers.golf.config import EkfConfig, ReinitConfig

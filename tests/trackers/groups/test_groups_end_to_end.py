@@ -7,11 +7,11 @@ import polars as pl
 import pytest
 
 from trackreplay.recorder.synth.groups.scene import GROUNDTRUTH_GROUPS, GroupSceneConfig, write_group_scene
-from trackreplay.replay.engine import ReplayRequest, replay
-from trackreplay.replay.group_table import replay_groups
-from trackreplay.replay.groundtruth import read_groundtruth
-from trackreplay.replay.mot import mot_metrics
-from trackreplay.replay.reader import LogReader
+from trackreplay.replay.core.engine import ReplayRequest, replay
+from trackreplay.replay.core.group_table import replay_groups
+from trackreplay.replay.log.groundtruth import read_groundtruth
+from trackreplay.replay.analysis.mot import mot_metrics
+from trackreplay.replay.log.reader import LogReader
 
 
 @pytest.fixture(scope="module")
@@ -118,7 +118,7 @@ def test_crossing_groups_keep_their_identities(crossing):
 def test_positions_are_world_z_up_with_the_rig_pose_and_camera_frame_without(passing, tmp_path):
     from trackreplay.recorder.filter import filter_log
     from trackreplay.recorder.synth.groups.people import TORSO_Z
-    from trackreplay.replay.frames import read_rig_pose
+    from trackreplay.replay.log.frames import read_rig_pose
 
     reader = LogReader(passing)
     pose = read_rig_pose(reader)

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import polars as pl
 
-from trackreplay.replay.cli import main as cli
-from trackreplay.replay.group_table import GROUP_SCHEMA
+from trackreplay.replay.cli.main import main as cli
+from trackreplay.replay.core.group_table import GROUP_SCHEMA
 
 GOLDEN = Path(__file__).parents[2] / "golden" / "groups-crossing-320x240.mcap"
 

@@ -1,0 +1,166 @@
+"""Trajectory vs ground truth: centre error, IoU (OTB success), velocity error."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import polars as pl
+
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.replay.core.trajectory import frame_time_mismatches
+from trackreplay.trackers.geometry.box import iou as box_iou
+
+IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
+PRECISION_PX = 20.0
+
+
+@dataclass(frozen=True)
+class EvalSummary:
+    tracker: str
+    track_id: int
+    gt_id: int
+    gt_frames: int  # frames where the object is visible with a known centre
+    tracked_frames: int  # of those, frames where the track has a position
+    coverage: float
+    centre_error_mean: float | None
+    centre_error_median: float | None
+    centre_error_rmse: float | None
+    precision_at_20px: float | None
+    iou_mean: float | None
+    success_auc: float | None
+    velocity_rmse_x: float | None
+    velocity_rmse_y: float | None
+    velocity_error_mean: float | None
+    velocity_frames: int
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def _pick_track(traj: pl.DataFrame, track_id: int | None) -> pl.DataFrame:
+    if traj.is_empty():
+        raise TrackreplayError("the trajectory has no rows to evaluate")
+    if track_id is None:
+        counts = traj.filter(pl.col("x").is_not_null()).group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
+        if counts.is_empty():
+            raise TrackreplayError("the trajectory has no positioned rows to evaluate")
+        track_id = int(counts["track_id"][0])
+    track = traj.filter(pl.col("track_id") == track_id)
+    if track.is_empty():
+        raise TrackreplayError(f"the trajectory has no track {track_id}")
+    return track
+
+
+def _pick_gt(gt: pl.DataFrame, gt_id: int | None) -> pl.DataFrame:
+    if gt.is_empty():
+        raise TrackreplayError("the log's ground truth holds no objects")
+    if gt_id is None:
+        counts = gt.filter(pl.col("x").is_not_null()).group_by("id").len().sort(["len", "id"], descending=[True, False])
+        if counts.is_empty():
+            raise TrackreplayError("the log's ground truth places no object on any frame (every row marks it absent)")
+        gt_id = int(counts["id"][0])
+    obj = gt.filter(pl.col("id") == gt_id)
+    if obj.is_empty():
+        raise TrackreplayError(f"the ground truth has no object {gt_id}")
+    return obj
+
+
+def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] = ("the trajectory", "the ground truth")) -> None:
+    """The trajectory and the ground truth number frames alike: a frame's time agrees in both (a log
+    cut or recovered by a tool that did not renumber would compare each estimate with another moment)."""
+    if "t_ns" not in track.columns or "t_ns" not in obj.columns:
+        return
+    both = frame_time_mismatches(track, obj)
+    if both.height:
+        f, t, g = both.row(0)
+        raise TrackreplayError(f"frame {f} is at t={t} ns in {names[0]} but at t={g} ns in {names[1]} "
+                               f"({both.height} frame(s) disagree): they come from different logs, or the log was cut or "
+                               "recovered without renumbering its ground truth")
+
+
+def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int], annotated: pl.DataFrame,
+                 log_name: str) -> None:
+    """The trajectory was replayed from this log: every row's frame is one of the log's images
+    (``log_times``, frame -> t_ns) and, where the row's time is the frame's own (measured,
+    predicted), at that time in the log and in its ground truth (``annotated``: frame, t_ns)."""
+    logged = pl.DataFrame({"frame": list(log_times), "t_ns": list(log_times.values())},
+                          schema={"frame": pl.Int64, "t_ns": pl.Int64})
+    bad = frame_time_mismatches(traj, logged, missing=True)
+    if bad.height:
+        f, t, lt = bad.row(0)
+        where = (f"is at t={lt} ns in {log_name}" if lt is not None
+                 else f"is not one of the {len(log_times)} frames of {log_name}")
+        raise TrackreplayError(f"{traj_name}: frame {f} (t={t} ns) {where} ({bad.height} frame(s) disagree): "
+                               "the trajectory was not replayed from this log")
+    _same_frames(traj, annotated, (traj_name, f"the ground truth of {log_name}"))
+
+
+def per_frame(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> pl.DataFrame:
+    """One row per ground-truth frame with the estimate beside it and the errors."""
+    track = _pick_track(traj, track_id)
+    obj = _pick_gt(gt, gt_id)
+    est = track.select("frame", "tracker", "track_id", "status",
+                       *(pl.col(c).alias(f"est_{c}") for c in ("x", "y", "w", "h", "vx", "vy")))
+    _same_frames(track, obj)
+    joined = obj.select("frame", "id", "visible", "x", "y", "w", "h", "vx", "vy").join(est, on="frame", how="left")
+    return joined.with_columns(
+        (((pl.col("est_x") - pl.col("x")) ** 2 + (pl.col("est_y") - pl.col("y")) ** 2).sqrt()).alias("centre_error"),
+        (pl.col("est_vx") - pl.col("vx")).alias("vx_error"),
+        (pl.col("est_vy") - pl.col("vy")).alias("vy_error"),
+    ).sort("frame")
+
+
+def _f(v) -> float | None:
+    return None if v is None or not np.isfinite(v) else float(v)
+
+
+def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> tuple[EvalSummary, pl.DataFrame]:
+    frames = per_frame(traj, gt, track_id=track_id, gt_id=gt_id)
+    visible = frames.filter(pl.col("x").is_not_null() & (pl.col("visible").fill_null(True)))
+    tracked = visible.filter(pl.col("est_x").is_not_null())
+    ce = tracked["centre_error"].to_numpy()
+    boxes = tracked.filter(pl.col("w").is_not_null() & pl.col("est_w").is_not_null())
+    ious = (box_iou(boxes.select("est_x", "est_y", "est_w", "est_h").to_numpy(), boxes.select("x", "y", "w", "h").to_numpy(),
+                    centred=True) if boxes.height else np.array([]))
+    # A frame the tracker missed counts as IoU 0 and as beyond the precision radius (OTB convention).
+    n = visible.height
+    ious_all = np.concatenate([ious, np.zeros(n - ious.size)]) if n else ious
+    vel = tracked.filter(pl.col("vx").is_not_null() & pl.col("est_vx").is_not_null())
+    ex, ey = vel["vx_error"].to_numpy(), vel["vy_error"].to_numpy()
+    summary = EvalSummary(
+        tracker=str(frames["tracker"].drop_nulls()[0]) if frames["tracker"].drop_nulls().len() else "",
+        track_id=int(frames["track_id"].drop_nulls()[0]) if frames["track_id"].drop_nulls().len() else -1,
+        gt_id=int(frames["id"][0]),
+        gt_frames=n,
+        tracked_frames=tracked.height,
+        coverage=tracked.height / n if n else 0.0,
+        centre_error_mean=_f(ce.mean()) if ce.size else None,
+        centre_error_median=_f(np.median(ce)) if ce.size else None,
+        centre_error_rmse=_f(np.sqrt(np.mean(ce**2))) if ce.size else None,
+        precision_at_20px=float(np.sum(ce <= PRECISION_PX) / n) if n else None,
+        iou_mean=_f(ious_all.mean()) if ious_all.size else None,
+        success_auc=_f(np.mean([(ious_all > t).mean() for t in IOU_THRESHOLDS])) if ious_all.size else None,
+        velocity_rmse_x=_f(np.sqrt(np.mean(ex**2))) if ex.size else None,
+        velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
+        velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
+        velocity_frames=int(ex.size),
+    )
+    return summary, frames
+
+
+def format_summary(s: EvalSummary) -> str:
+    def fmt(v, unit=""):
+        return "n/a" if v is None else (f"{v:.3f}{unit}" if isinstance(v, float) else f"{v}{unit}")
+
+    rows = [
+        ("tracker / track", f"{s.tracker} / {s.track_id} vs ground-truth object {s.gt_id}"),
+        ("frames tracked", f"{s.tracked_frames} of {s.gt_frames} visible ({100 * s.coverage:.1f}%)"),
+        ("centre error mean / median / RMSE", f"{fmt(s.centre_error_mean)} / {fmt(s.centre_error_median)} / {fmt(s.centre_error_rmse)} px"),
+        ("precision @ 20 px", fmt(s.precision_at_20px)),
+        ("IoU mean / success AUC", f"{fmt(s.iou_mean)} / {fmt(s.success_auc)}"),
+        ("velocity RMSE x / y", f"{fmt(s.velocity_rmse_x)} / {fmt(s.velocity_rmse_y)} px/frame ({s.velocity_frames} frames)"),
+        ("velocity error mean |dv|", f"{fmt(s.velocity_error_mean)} px/frame"),
+    ]
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)

@@ -1,0 +1,678 @@
+"""Offline fixed-interval smoothing of every track over the whole log (issue 13).
+
+The trackers are causal: a frame's estimate uses only the past. After the event the whole log is
+in hand, so every estimate may use the future as well. :func:`smooth_trajectory` runs, per track,
+a Rauch–Tung–Striebel smoother (filterpy's ``KalmanFilter.batch_filter`` forward, then its
+``rts_smoother`` backward) over the tracker's motion model, and fills the frames the tracker did
+not measure from the smoothed state, with a standard deviation.
+
+**Model.** Each tracker declares its own in its spec (``TrackerSpec.smoothing``,
+:mod:`trackreplay.trackers.smoothing`); a tracker that declares none, or a name no spec declares,
+gets the first. Constant velocity in the image (:class:`ImageSmoothing`), per track: state
+``(x, vx, y, vy)`` in px and px/frame, white-acceleration process noise of spectral density ``q``
+(px²/frame³), one step per frame (``F = [[1, 1], [0, 1]]`` per axis, ``Q = q [[1/3, 1/2], [1/2,
+1]]``). This is the motion model of the flow tracker's image-plane position (seed 004 §4.3, whose
+third state, a Gauss–Markov acceleration, is the white acceleration here) and of the colour
+particle filter (seed 002: ``x ← x + ω``). The golf tracker's image position follows a ball the
+operator keeps near the centre, so the same model is used for it; its 3-D flight has its own
+offline fit (:mod:`trackreplay.replay.analysis.flight`). Constant velocity in 3-D
+(:class:`SpaceSmoothing`): group tracks, with the group EKF's own transition and process noise at
+the config the replay used (``trackers/groups/smoothing.py``, seed 003 §3.2): state ``[X Ẋ Y Ẏ Z
+Ż]``, columns ``VX, VY, VZ`` (m/s) and ``X_std, Y_std, Z_std`` (m) added.
+
+**Raw observations.** A tracker's output is already filtered; smoothing it again gains little
+(flow-sim1 got slightly worse). Where the replay kept the trackers' raw measurements
+(``ReplayRequest(observations=True)``, :func:`observation_rows`: the flow tracker's centroid of the
+moving set, eq. 11; a group's mean ``[u v d]`` carried to 3-D with its covariance), those are the
+observations instead.
+
+**Observations.** ``measured`` rows are observations of ``(x, y)``; their noise is
+``σ₀ / √confidence`` (the tracker's own confidence, floored at ``min_confidence``; ``σ₀`` when the
+tracker gives none). ``predicted``, ``lost`` and absent frames between a track's first and last
+position are not observations: the smoother fills them (status ``interpolated``). ``q`` and
+``σ₀`` are chosen per track by maximum likelihood (the filter's innovations) over a fixed grid, so
+the smoother adapts to a slow square in a simulation and to a golf ball alike, with no tuning
+and no randomness. Measurements more than ``outlier_sigma`` standard deviations from the
+smoothed track (a wrong blob) are then dropped and the track smoothed again.
+
+**Output.** The trajectory table (★ columns, same rows plus the absent frames of each track's
+span) with smoothed ``x, y, vx, vy`` on every positioned row, and extra columns:
+
+- ``x_std``, ``y_std`` (px), ``vx_std``, ``vy_std`` (px/frame): the smoother's standard deviations;
+- ``fill``: how the row's image position was obtained — ``rts`` (an observation, smoothed),
+  ``rts_outlier`` (a measurement the smoother rejected; the row shows the smoothed track),
+  ``rts_gap`` (no observation: filled by the smoother, status ``interpolated``), or null for a
+  row left ``lost`` (a gap longer than ``max_gap`` frames, or before/after the track).
+  ``linear`` / ``cubic`` appear for rows filled by :func:`trackreplay.replay.core.export.fill_gaps`,
+  which the smoother replaces wherever a model exists (every tracker of the project has one).
+
+Box size ``w, h`` and the world position ``X, Y, Z`` of filled rows are linear interpolations of
+the tracker's neighbouring values (the image model says nothing about them). With a camera pose in
+the log (PTZ encoders and lens table) the lines of sight ``dx, dy, dz`` are recomputed from the
+smoothed ``x, y`` through the frame's camera; without one they are interpolated and renormalised.
+
+Measured against ground truth in ``docs/smoothing.md`` (``python docs/smoothing.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import polars as pl
+
+from trackreplay.replay.analysis import rts, rts_space
+from trackreplay.replay.core import registry
+from trackreplay.replay.core.observations import OBS_SCHEMA, observation_rows, observations_table  # noqa: F401 (re-exported)
+from trackreplay.replay.core.trajectory import COLUMNS, SCHEMA, interpolated_times
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.geometry.ptz import PtzCamera
+from trackreplay.trackers.smoothing import DEFAULT_SMOOTHING, ImageSmoothing, SmoothingModel, SpaceSmoothing
+
+EXTRA_SCHEMA: dict[str, pl.DataType] = {
+    "x_std": pl.Float64, "y_std": pl.Float64, "vx_std": pl.Float64, "vy_std": pl.Float64, "fill": pl.String,
+    # 3-D models (groups): smoothed velocity (m/s, the log's frame rate) and position std (m)
+    "VX": pl.Float64, "VY": pl.Float64, "VZ": pl.Float64, "X_std": pl.Float64, "Y_std": pl.Float64, "Z_std": pl.Float64,
+}
+SMOOTH_COLUMNS = (*COLUMNS, *EXTRA_SCHEMA)
+FILLS = ("rts", "rts_outlier", "rts_gap", "linear", "cubic")
+
+
+@dataclass(frozen=True)
+class SmoothConfig:
+    """Smoother settings (defaults used everywhere in the docs)."""
+
+    max_gap: int = 15  # longest run of frames without a position that is filled; longer stays lost
+    q_grid: tuple[float, ...] = (1e-4, 1e-3, 1e-2, 0.1, 1.0, 10.0, 100.0)  # px²/frame³
+    sigma_grid: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0, 10.0)  # px, measurement std at confidence 1
+    sigma_v_grid: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0)  # px/frame, velocity observations (where used)
+    min_confidence: float = 0.05
+    outlier_sigma: float = 5.0
+
+
+def smoothing_model(tracker: str, config: Any = None) -> SmoothingModel:
+    """The model ``tracker``'s tracks are smoothed with: its spec's (``TrackerSpec.smoothing``, at
+    ``config``, the config it was replayed with; None: the defaults), image constant velocity for a
+    tracker no spec declares."""
+    spec = registry.find(tracker)
+    return DEFAULT_SMOOTHING if spec is None else spec.smoothing_model(config)
+
+
+@dataclass(frozen=True)
+class TrackFit:
+    """What the smoother chose for one track (for reports and tests)."""
+
+    tracker: str
+    track_id: int
+    q: float
+    sigma: float
+    sigma_v: float
+    log_likelihood: float
+    observations: int
+    outliers: int
+    filled: int
+    noise: str = ""  # the chosen noise in words (the model's units)
+
+
+def _noise_grid(cfg: SmoothConfig, velocity: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(q, σ₀, σ_v)`` of every grid point, q outermost (the order ties are broken in: first wins);
+    one σ_v when no track observes a velocity (it then changes nothing)."""
+    sv = cfg.sigma_v_grid if velocity else cfg.sigma_v_grid[:1]
+    q, s, v = np.meshgrid(np.array(cfg.q_grid, float), np.array(cfg.sigma_grid, float), np.array(sv, float), indexing="ij")
+    return q.ravel(), s.ravel(), v.ravel()
+
+
+LANE_ELEMENTS = 1 << 14  # grid points × tracks filtered together: the working set (~20 arrays of this size)
+
+
+def _lanes(lengths: list[int], width: int) -> list[list[int]]:
+    """Tracks filtered together, longest first, at most ``width`` of them; a lane's tracks are at
+    least half as long as its first (padding at most doubles the work)."""
+    order = sorted(range(len(lengths)), key=lambda i: -lengths[i])
+    lanes: list[list[int]] = []
+    for i in order:
+        if lanes and 2 * lengths[i] >= lengths[lanes[-1][0]] and len(lanes[-1]) < width:
+            lanes[-1].append(i)
+        else:
+            lanes.append([i])
+    return lanes
+
+
+def _select(zs: list[np.ndarray], rs: list[np.ndarray], cfg: SmoothConfig) -> list[tuple[float, float, float, float]]:
+    """Per track, ``(q, σ₀, σ_v, log-likelihood)`` of the grid point with the highest likelihood
+    (first on ties; a NaN likelihood never wins); σ_v from its grid only for a track that observes
+    a velocity."""
+    best: list = [None] * len(zs)
+    velocity = [bool(np.isfinite(z[:, 2:]).any()) for z in zs]
+    for with_velocity in (False, True):
+        part = [i for i in range(len(zs)) if velocity[i] == with_velocity]
+        q, s, sv = _noise_grid(cfg, with_velocity)
+        for lane in _lanes([len(zs[i]) for i in part], max(1, LANE_ELEMENTS // len(q))):
+            tracks = [part[j] for j in lane]
+            cols = rts.Columns.pack([zs[i] for i in tracks], [rs[i] for i in tracks])
+            ll = rts.grid_loglik(cols, q, s * s, sv * sv, LANE_ELEMENTS)
+            ll = np.where(np.isnan(ll), -math.inf, ll)
+            for j, i in enumerate(tracks):
+                g = int(np.argmax(ll[:, j]))
+                best[i] = (float(q[g]), float(s[g]), float(sv[g]), float(ll[g, j]))
+    return best
+
+
+def _smooth_at(zs: list[np.ndarray], rs: list[np.ndarray], fits: list) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per track, the smoothed state ``(x, vx, y, vy)`` (n, 4) and its variances (n, 4) at its noise."""
+    out: list = [None] * len(zs)
+    for lane in _lanes([len(z) for z in zs], LANE_ELEMENTS):
+        cols = rts.Columns.pack([zs[i] for i in lane], [rs[i] for i in lane])
+        q, s, sv = (np.array([fits[i][k] for i in lane]) for k in range(3))
+        p, v, a, _, c = rts.smooth_columns(cols, q, s * s, sv * sv)
+        last = a.shape[1] - 1  # the y axis' covariance: its own, or shared with x
+        for j, i in enumerate(lane):
+            n = len(zs[i])
+            out[i] = (np.stack([p[:n, 0, j], v[:n, 0, j], p[:n, 1, j], v[:n, 1, j]], axis=1),
+                      np.stack([a[:n, 0, j], c[:n, 0, j], a[:n, last, j], c[:n, last, j]], axis=1))
+    return out
+
+
+def smooth_tracks(zs: list[np.ndarray], confidences: list[np.ndarray], cfg: SmoothConfig = SmoothConfig()) -> list[tuple]:
+    """Smooth image tracks over consecutive frames, all at once (:mod:`.rts`).
+
+    ``zs[i]`` (n, 2) or (n, 4): observed image positions (and velocities), NaN where a frame or a
+    component is not an observation; ``confidences[i]`` (n,): the tracker's confidence (NaN: none).
+    Per track ``(x, var, outliers, fit)``: ``x`` (n, 4) = (x, vx, y, vy), their variances (n, 4),
+    ``outliers`` (n,) bool and ``fit = (q, σ₀, σ_v, log-likelihood)``.
+    """
+    rs, obs = [], []
+    zs = [np.array(z, dtype=np.float64) for z in zs]
+    for i, (z, confidence) in enumerate(zip(zs, confidences)):
+        conf = np.where(np.isfinite(confidence), np.maximum(confidence, cfg.min_confidence), 1.0)
+        rs.append(1.0 / conf)
+        if z.shape[1] == 2:
+            zs[i] = z = np.concatenate([z, np.full_like(z, np.nan)], axis=1)
+        obs.append(np.isfinite(z[:, :2]).all(axis=1))
+        z[~obs[-1]] = np.nan
+    fits = _select(zs, rs, cfg)
+    smoothed = _smooth_at(zs, rs, fits)
+    outliers = [np.zeros(len(z), bool) for z in zs]
+    again = []
+    for i, (z, ok) in enumerate(zip(zs, obs)):
+        if ok.sum() > 4:
+            resid = z[:, :2] - smoothed[i][0][:, [0, 2]]
+            var = fits[i][1] ** 2 * rs[i]  # the measurement's own variance: a sound observation lies well inside it
+            bad = ok & (np.sqrt((resid**2).sum(axis=1) / (2.0 * var)) > cfg.outlier_sigma)
+            if bad.any() and (ok & ~bad).sum() >= 2:
+                outliers[i], z[bad] = bad, np.nan
+                again.append(i)
+    if again:
+        refits = _select([zs[i] for i in again], [rs[i] for i in again], cfg)
+        for i, fit, sm in zip(again, refits, _smooth_at([zs[i] for i in again], [rs[i] for i in again], refits)):
+            fits[i], smoothed[i] = fit, sm
+    return [(x, var, out, fit) for (x, var), out, fit in zip(smoothed, outliers, fits)]
+
+
+def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
+    runs, i, n = [], 0, missing.size
+    while i < n:
+        if missing[i]:
+            j = i
+            while j < n and missing[j]:
+                j += 1
+            runs.append((i, j))
+            i = j
+        else:
+            i += 1
+    return runs
+
+
+def _interp(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.ndarray:
+    ok = np.isfinite(values)
+    out = values.copy()
+    if ok.sum() >= 2:
+        out[where] = np.interp(frames[where], frames[ok], values[ok])
+    elif ok.sum() == 1:
+        out[where] = values[ok][0]
+    return out
+
+
+def _interp_rate(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """The slope (per frame) of :func:`_interp`'s line at the ``where`` frames: the segment between the
+    known values around each (0 with a single known value; NaN with none)."""
+    ok = np.isfinite(values)
+    out = np.full(len(values), np.nan)
+    if ok.sum() == 1:
+        out[where] = 0.0
+    if ok.sum() < 2:
+        return out
+    fk, vk = frames[ok], values[ok]
+    i = np.clip(np.searchsorted(fk, frames[where]), 1, len(fk) - 1)
+    out[where] = (vk[i] - vk[i - 1]) / (fk[i] - fk[i - 1])
+    return out
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """Which frames of a track's span the smoother sets, and how (the image and 3-D models alike).
+
+    Runs of frames without an observation (predicted, lost, absent, or rejected as an outlier) are
+    filled by the smoother when at most max_gap long and bracketed by observations: the smoother
+    interpolates there. Elsewhere (a run that ends the track or is too long) it would extrapolate,
+    so those rows keep the tracker's own values (predicted) or stay lost.
+    """
+
+    smoothed: np.ndarray  # bool (n,): the smoother's value (an observation, or a filled gap)
+    keep: np.ndarray  # bool (n,): the row keeps a position
+    filled: np.ndarray  # bool (n,): predicted and gap rows taken from the smoother: status interpolated
+    fill: np.ndarray  # object (n,): the fill column
+    status: np.ndarray  # object (n,): the new status column
+
+
+def _plan(observed: np.ndarray, measured: np.ndarray, has_pos: np.ndarray, status: np.ndarray, max_gap: int) -> _Plan:
+    n = len(observed)
+    fill_gap = np.zeros(n, bool)
+    for a, b in _gap_runs(~observed):
+        if a > 0 and b < n and b - a <= max_gap:
+            fill_gap[a:b] = True
+    smoothed = observed | fill_gap
+    keep = smoothed | has_pos
+    filled = fill_gap & ~measured
+    fill = np.full(n, None, dtype=object)
+    fill[observed] = "rts"
+    fill[fill_gap & measured] = "rts_outlier"
+    fill[filled] = "rts_gap"
+    new_status = np.where(filled, "interpolated", np.where(keep, status, "lost")).astype(object)
+    return _Plan(smoothed, keep, filled, fill, new_status)
+
+
+def _span(track: pl.DataFrame, positioned: pl.DataFrame) -> tuple[int, int, np.ndarray, pl.DataFrame]:
+    """The track's positioned span ``lo .. hi``: its frames and its rows on every one (absent: nulls)."""
+    lo, hi = int(positioned["frame"].min()), int(positioned["frame"].max())
+    frames = np.arange(lo, hi + 1, dtype=np.int64)
+    return lo, hi, frames, pl.DataFrame({"frame": frames}).join(track, on="frame", how="left")
+
+
+def _assemble(full: pl.DataFrame, cols: dict[str, np.ndarray], confidence: np.ndarray, plan: _Plan) -> pl.DataFrame:
+    return full.with_columns(
+        *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in cols.items()),
+        pl.Series("confidence", confidence, dtype=pl.Float64, nan_to_null=True),
+        pl.Series("status", plan.status, dtype=pl.String),
+        pl.Series("fill", plan.fill.tolist(), dtype=pl.String),
+    )
+
+
+def _no_extra(df: pl.DataFrame) -> pl.DataFrame:
+    return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items()))
+
+
+@dataclass(frozen=True)
+class _ImageTrack:
+    """An image track ready for the smoother: its positioned span ``lo .. hi`` and its observations."""
+
+    track: pl.DataFrame
+    tracker: str
+    track_id: int
+    lo: int
+    hi: int
+    frames: np.ndarray
+    full: pl.DataFrame  # the track's rows on every frame of the span (absent: nulls)
+    status: np.ndarray
+    conf: np.ndarray
+    has_pos: np.ndarray
+    z: np.ndarray  # (n, 4) = (x, y, vx, vy), NaN where not observed
+    measured: np.ndarray
+
+
+def _image_track(model: ImageSmoothing, track: pl.DataFrame, frame_times: Mapping[int, int] | None,
+                 raw: pl.DataFrame | None) -> _ImageTrack | tuple[pl.DataFrame, None]:
+    """The track's span and observations, or its finished rows when there is nothing to smooth."""
+    head = track.row(0, named=True)
+    tracker, track_id = head["tracker"], head["track_id"]
+    positioned = track.filter(pl.col("x").is_not_null() & pl.col("y").is_not_null() & (pl.col("status") != "lost"))
+    if positioned.height == 0:
+        return _no_extra(track).select(SMOOTH_COLUMNS), None
+    lo, hi, frames, full = _span(track, positioned)
+    status = full["status"].fill_null("lost").to_numpy().astype(object)
+    x = full["x"].to_numpy().astype(float)
+    y = full["y"].to_numpy().astype(float)
+    conf = full["confidence"].to_numpy().astype(float)
+    has_pos = np.isfinite(x) & np.isfinite(y) & (status != "lost")
+    z, measured = _image_observations(model, full, frames, raw, has_pos & (status == "measured"))
+    if not np.isfinite(z[:, :2]).all(axis=1).any():  # only predictions: nothing to smooth; keep the rows as they are
+        return _finish(_no_extra(full), tracker, track_id, frame_times), None
+    return _ImageTrack(track, tracker, track_id, lo, hi, frames, full, status, conf, has_pos, z, measured)
+
+
+def _image_result(model: ImageSmoothing, t: _ImageTrack, smoothed: tuple, cfg: SmoothConfig,
+                  frame_times: Mapping[int, int] | None,
+                  cameras: Mapping[int, PtzCamera] | None) -> tuple[pl.DataFrame, TrackFit]:
+    """An image track's rows: ``x, y, vx, vy`` smoothed, gaps filled, the other columns interpolated."""
+    xs, var, outliers, (q, s, sv, ll) = smoothed
+    plan = _plan(t.measured & ~outliers, t.measured, t.has_pos, t.status, cfg.max_gap)
+    cols = _image_columns(t.full, t.frames, xs, var, plan, t.has_pos, cameras)
+    out = _assemble(t.full, cols, np.where(plan.filled, np.nan, t.conf), plan)
+    fit = TrackFit(t.tracker, int(t.track_id), q, s, sv, ll, int(t.measured.sum()), int(outliers.sum()),
+                   int(plan.filled.sum()), model.describe(q, s))
+    # Rows of the track outside its positioned span (lost before the first / after the last position).
+    outside = _no_extra(t.track.filter((pl.col("frame") < t.lo) | (pl.col("frame") > t.hi)))
+    out = pl.concat([_finish(out, t.tracker, t.track_id, frame_times), outside.select(SMOOTH_COLUMNS)])
+    return out.sort("frame"), fit
+
+
+def _image_observations(model: ImageSmoothing, full: pl.DataFrame, frames: np.ndarray, raw: pl.DataFrame | None,
+                        measured: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``z`` (n, 4) = (x, y, vx, vy), NaN where not observed, and the measured rows that observe.
+
+    The tracker's raw measurements (before its own filter), where the replay kept them, replace its
+    filtered output: the smoother then filters them once, with the future, instead of smoothing a
+    filtered track."""
+    n = len(frames)
+    x, y = full["x"].to_numpy().astype(float), full["y"].to_numpy().astype(float)
+    vx = full["vx"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
+    vy = full["vy"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
+    z = np.where(measured[:, None], np.stack([x, y, vx, vy], axis=1), np.nan)
+    if raw is None or not raw.height or not raw["zx"].is_not_null().any():
+        return z, measured
+    r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
+    zx, zy = r["zx"].to_numpy().astype(float), r["zy"].to_numpy().astype(float)
+    zv = np.stack([r["zvx"].to_numpy().astype(float), r["zvy"].to_numpy().astype(float)], axis=1)
+    if model.velocity_lag:
+        zv = np.concatenate([zv[model.velocity_lag:], np.full((model.velocity_lag, 2), np.nan)])
+    if not model.raw_velocity:
+        zv = np.where(measured[:, None], np.stack([vx, vy], axis=1), np.nan)
+    ok = measured & np.isfinite(zx) & np.isfinite(zy)
+    z = np.full((n, 4), np.nan)
+    z[ok, 0], z[ok, 1] = zx[ok], zy[ok]
+    if model.observe_velocity:
+        z[:, 2:] = zv
+    # a raw observation on a frame the tracker also measured; the others fall back to nothing
+    return z, measured & (ok | np.isfinite(zv).all(axis=1))
+
+
+def _image_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, var: np.ndarray, plan: _Plan,
+                   has_pos: np.ndarray, cameras: Mapping[int, PtzCamera] | None) -> dict[str, np.ndarray]:
+    """Smoothed ``x, vx, y, vy`` with their std; box size and world position linear across filled
+    frames (the image model says nothing about them); lines of sight."""
+    def masked(v: np.ndarray) -> np.ndarray:
+        return np.where(plan.keep, v, np.nan)
+
+    std = np.sqrt(np.maximum(var, 0.0))
+    cols: dict[str, np.ndarray] = {}
+    for k, name in enumerate(("x", "vx", "y", "vy")):
+        cols[name] = masked(np.where(plan.smoothed, xs[:, k], full[name].to_numpy().astype(float)))
+        cols[f"{name}_std"] = np.where(plan.smoothed, std[:, k], np.nan)
+    f = frames.astype(float)
+    for name in ("w", "h", "X", "Y", "Z", "dx", "dy", "dz"):
+        values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
+        cols[name] = masked(_interp(f, values, plan.filled))
+    cols["dx"], cols["dy"], cols["dz"] = _lines_of_sight(cols, frames, plan.smoothed, cameras)
+    return cols
+
+
+def _lines_of_sight(cols: dict[str, np.ndarray], frames: np.ndarray, smoothed: np.ndarray,
+                    cameras: Mapping[int, PtzCamera] | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Through the frame's camera from the smoothed pixel, else interpolated; renormalised."""
+    d = np.stack([cols["dx"], cols["dy"], cols["dz"]], axis=1)
+    if cameras:
+        for i in np.flatnonzero(smoothed):
+            cam = cameras.get(int(frames[i]))
+            if cam is not None:
+                d[i] = cam.line_of_sight(np.array([[cols["x"][i], cols["y"][i]]]))[0]
+    norm = np.linalg.norm(d, axis=1)
+    ok = np.isfinite(norm) & (norm > 0)
+    d[ok] /= norm[ok][:, None]
+    return d[:, 0], d[:, 1], d[:, 2]
+
+
+def _finish(full: pl.DataFrame, tracker: str, track_id: int, frame_times: Mapping[int, int] | None) -> pl.DataFrame:
+    """Identity columns and the times of added frames (the log's frame times, else interpolated)."""
+    frames = full["frame"].to_numpy()
+    known = full["t_ns"].is_not_null().to_numpy()
+    t = full["t_ns"].fill_null(0).to_numpy().astype(np.int64)
+    if frame_times and not known.all():  # (ints: float64 would round epoch times off their frames)
+        logged = [frame_times.get(int(k)) for k in frames]
+        for i in np.flatnonzero(~known):
+            if logged[i] is not None:
+                t[i], known[i] = logged[i], True
+    t = interpolated_times(frames, t, known)
+    full = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items() if c not in full.columns))
+    return full.with_columns(
+        pl.lit(tracker).alias("tracker"),
+        pl.lit(track_id, dtype=pl.Int64).alias("track_id"),
+        pl.Series("t_ns", t, dtype=pl.Int64),
+    ).select(SMOOTH_COLUMNS)
+
+
+def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *,
+                      frame_times: Mapping[int, int] | None = None,
+                      cameras: Mapping[int, PtzCamera] | None = None,
+                      observations: pl.DataFrame | None = None,
+                      configs: Mapping[str, Any] | None = None) -> tuple[pl.DataFrame, list[TrackFit]]:
+    """RTS-smooth every track of a trajectory table (see the module docstring).
+
+    ``observations`` (:data:`OBS_SCHEMA`, from :func:`observation_rows` during the replay, e.g.
+    ``ReplayRequest(observations=True)``): the trackers' raw measurements, used instead of their
+    filtered output where present. ``configs`` (tracker name -> its config as replayed,
+    ``ReplayResult.config``): a model that reads its tracker's config (groups: the EKF's process
+    noise) reads that one; the config's defaults otherwise.
+
+    ``frame_times`` (frame -> t_ns) gives added frames their log time; ``cameras`` (frame -> posed
+    camera) lets lines of sight follow the smoothed pixels. Deterministic: no randomness, a fixed
+    parameter grid, tracks in canonical order.
+    """
+    if config.max_gap < 0:
+        raise TrackreplayError(f"--max-gap must be >= 0, not {config.max_gap}")
+    if df.is_empty():
+        return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items())).select(SMOOTH_COLUMNS), []
+    raw_by_track: dict = {}
+    if observations is not None and observations.height:
+        for key, part in observations.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
+            raw_by_track[tuple(key)] = part.drop("tracker", "track_id")
+    models: dict[str, SmoothingModel] = {}
+    results: list = []  # per track, in canonical order: (rows, fit), or the image track awaiting the smoother
+    for key, track in df.select(COLUMNS).sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
+        tracker = key[0]
+        if tracker not in models:
+            models[tracker] = smoothing_model(tracker, (configs or {}).get(tracker))
+        model, raw = models[tracker], raw_by_track.get(tuple(key))
+        if isinstance(model, SpaceSmoothing):
+            results.append(_space_track(model, track, frame_times, raw))
+        else:
+            results.append(_image_track(model, track, frame_times, raw))
+    waiting = [i for i, r in enumerate(results) if isinstance(r, _ImageTrack)]
+    # every image track at once: the models differ only in what they observe, which z already says
+    smoothed = smooth_tracks([results[i].z for i in waiting], [results[i].conf for i in waiting], config)
+    for i, sm in zip(waiting, smoothed):
+        results[i] = _image_result(models[results[i].tracker], results[i], sm, config, frame_times, cameras)
+    for tracker in dict.fromkeys(r.tracker for r in results if isinstance(r, _SpaceTrack)):
+        waiting = [i for i, r in enumerate(results) if isinstance(r, _SpaceTrack) and r.tracker == tracker]
+        fitted = _fit_space(models[tracker], [results[i] for i in waiting], config)
+        for i, f in zip(waiting, fitted):
+            results[i] = _space_result(models[tracker], results[i], f, config, frame_times)
+    parts = [out.cast({**SCHEMA, **EXTRA_SCHEMA}) for out, _ in results]
+    fits = [fit for _, fit in results if fit is not None]
+    return pl.concat(parts).sort(["tracker", "track_id", "frame"], maintain_order=True), fits
+
+
+@dataclass(frozen=True)
+class _SpaceTrack:
+    """A 3-D track ready for the smoother: its positioned span and its observations."""
+
+    track: pl.DataFrame
+    tracker: str
+    track_id: int
+    lo: int
+    hi: int
+    frames: np.ndarray
+    full: pl.DataFrame
+    status: np.ndarray
+    P3: np.ndarray  # (n, 3) the tracker's own X, Y, Z
+    has_pos: np.ndarray
+    measured: np.ndarray
+    z: np.ndarray  # (n, 3), NaN where not observed
+    R0: np.ndarray  # (n, 3, 3), I where not observed
+    ok: np.ndarray
+    grid: tuple[float, ...]  # R's scales tried
+
+
+def _space_track(model: SpaceSmoothing, track: pl.DataFrame, frame_times: Mapping[int, int] | None,
+                 raw: pl.DataFrame | None) -> _SpaceTrack | tuple[pl.DataFrame, None]:
+    """The track's span and observations, or its finished rows when fewer than two are observed."""
+    head = track.row(0, named=True)
+    tracker, track_id = head["tracker"], head["track_id"]
+    positioned = track.filter(pl.col("X").is_not_null() & (pl.col("status") != "lost"))
+    if positioned.height == 0:
+        return _finish(track, tracker, track_id, frame_times).sort("frame"), None
+    lo, hi, frames, full = _span(track, positioned)
+    status = full["status"].fill_null("lost").to_numpy().astype(object)
+    P3 = np.stack([full[c].to_numpy().astype(float) for c in ("X", "Y", "Z")], axis=1)
+    has_pos = np.isfinite(P3).all(axis=1) & (status != "lost")
+    measured = has_pos & (status == "measured")
+    z, R0, ok, grid = _space_observations(model, frames, raw, P3, measured)
+    if ok.sum() < 2:
+        return _finish(full, tracker, track_id, frame_times).sort("frame"), None
+    return _SpaceTrack(track, tracker, track_id, lo, hi, frames, full, status, P3, has_pos, measured, z, R0, ok, grid)
+
+
+def _space_result(model: SpaceSmoothing, t: _SpaceTrack, fitted: tuple, cfg: SmoothConfig,
+                  frame_times: Mapping[int, int] | None) -> tuple[pl.DataFrame, TrackFit]:
+    """A 3-D track's rows (groups): 3-D position and velocity smoothed, gaps filled."""
+    accel, s, ll, xs, Ps, ok, outliers = fitted
+    plan = _plan(ok, t.measured, t.has_pos, t.status, cfg.max_gap)
+    cols = _space_columns(t.full, t.frames, xs, Ps, plan, t.has_pos, t.P3, frame_times)
+    out = _assemble(t.full, cols, np.where(plan.filled, np.nan, t.full["confidence"].to_numpy().astype(float)), plan)
+    q = accel**2
+    fit = TrackFit(t.tracker, int(t.track_id), q, s, math.nan, ll, int(ok.sum() + outliers.sum()), int(outliers.sum()),
+                   int(plan.filled.sum()), model.describe(q, s))
+    outside = t.track.filter((pl.col("frame") < t.lo) | (pl.col("frame") > t.hi))
+    out = pl.concat([_finish(out, t.tracker, t.track_id, frame_times), _finish(outside, t.tracker, t.track_id, frame_times)])
+    return out.sort("frame"), fit
+
+
+def _space_observations(model: SpaceSmoothing, frames: np.ndarray, raw: pl.DataFrame | None, P3: np.ndarray,
+                        measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[float, ...]]:
+    """``z`` (n, 3) and ``R`` (n, 3, 3) on the observed rows (NaN and I elsewhere), those rows, and the
+    grid of ``R``'s scale: the tracker's raw 3-D measurements with their covariance where the replay
+    kept them, else its own ``X, Y, Z`` with ``R = I`` (``σ`` from the model's sigma grid, m)."""
+    n = len(frames)
+    if raw is not None and raw.height > 0 and raw["zX"].is_not_null().any():
+        r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
+        z = np.stack([r[c].to_numpy().astype(float) for c in ("zX", "zY", "zZ")], axis=1)
+        c = {k: r[k].to_numpy().astype(float) for k in ("rXX", "rXY", "rXZ", "rYY", "rYZ", "rZZ")}
+        R0 = np.stack([np.stack([c["rXX"], c["rXY"], c["rXZ"]], -1), np.stack([c["rXY"], c["rYY"], c["rYZ"]], -1),
+                       np.stack([c["rXZ"], c["rYZ"], c["rZZ"]], -1)], axis=1)
+        ok = measured & np.isfinite(z).all(axis=1) & np.isfinite(R0).all(axis=(1, 2))
+        grid = model.scale_grid
+    else:
+        z = P3.copy()
+        R0 = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
+        ok = measured.copy()
+        grid = model.sigma_grid
+    z[~ok] = np.nan
+    R0[~ok] = np.eye(3)
+    return z, R0, ok, grid
+
+
+def _space_filter(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: np.ndarray, s: np.ndarray, keep: bool):
+    """:func:`rts_space.filter_space` of ``tracks`` in lanes, at grid points ``(accel, s)`` (each (G,))
+    or, with ``keep``, at one ``(accel, s)`` per track (each (B,)) followed by the RTS pass.
+    Returns per track its log-likelihoods (G,) or its smoothed ``(x, P)``."""
+    F = model.F()
+    out: list = [None] * len(tracks)
+    width = max(1, LANE_ELEMENTS // 64 // (1 if keep else len(accel)))
+    for lane in _lanes([len(t.z) for t in tracks], width):
+        cols = rts_space.SpaceColumns.pack([tracks[i].z for i in lane], [tracks[i].R0 for i in lane])
+        a, sc = (accel[lane], s[lane]) if keep else (accel, s)
+        Q = np.stack([model.Q(float(v)) for v in a])
+        Q, s2 = (Q[None], (sc * sc)[None, :, None, None]) if keep else (Q[:, None], (sc * sc)[:, None, None, None])
+        ll, xs, Ps = rts_space.filter_space(cols, F, Q, s2, keep)
+        if keep:
+            xs, Ps = rts_space.rts_space(xs, Ps, F, Q)
+        for j, i in enumerate(lane):
+            n = len(tracks[i].z)
+            out[i] = (xs[:n, 0, j], Ps[:n, 0, j]) if keep else ll[:, j]
+    return out
+
+
+def _fit_space(model: SpaceSmoothing, tracks: list[_SpaceTrack], cfg: SmoothConfig) -> list[tuple]:
+    """Per track, the acceleration and ``R`` scale of the highest likelihood (first on ties), the
+    smoothed ``x, P``; then again without the measurements beyond ``outlier_sigma`` of their own
+    noise (a splinter, a merge). Per track ``(accel, s, log-likelihood, x, P, observed rows, outliers)``;
+    its ``z`` and ``R0`` lose the outliers in place."""
+    best: list = [None] * len(tracks)
+    for grid in dict.fromkeys(t.grid for t in tracks):
+        part = [i for i, t in enumerate(tracks) if t.grid == grid]
+        accel, s = (g.ravel() for g in np.meshgrid(np.array(model.accel_grid, float), np.array(grid, float), indexing="ij"))
+        for i, ll in zip(part, _space_filter(model, [tracks[i] for i in part], accel, s, keep=False)):
+            ll = np.where(np.isnan(ll), -math.inf, ll)
+            g = int(np.argmax(ll))
+            best[i] = (float(accel[g]), float(s[g]), float(ll[g]))
+    accel, s = np.array([b[0] for b in best]), np.array([b[1] for b in best])
+    smoothed = _space_filter(model, tracks, accel, s, keep=True)
+    oks = [t.ok.copy() for t in tracks]
+    outliers = [np.zeros(len(t.z), bool) for t in tracks]
+    again = []
+    for i, t in enumerate(tracks):
+        if oks[i].sum() > 4:
+            resid = np.where(oks[i][:, None], t.z - smoothed[i][0][:, [0, 2, 4]], 0.0)
+            d2 = (resid * np.linalg.solve(t.R0 * s[i] * s[i], resid[..., None])[..., 0]).sum(axis=1) / 3.0
+            bad = oks[i] & (np.sqrt(d2) > cfg.outlier_sigma)
+            if bad.any() and (oks[i] & ~bad).sum() >= 2:
+                outliers[i], t.z[bad], t.R0[bad] = bad, np.nan, np.eye(3)
+                oks[i] = oks[i] & ~bad
+                again.append(i)
+    if again:
+        redo = _space_filter(model, [tracks[i] for i in again], accel[again], s[again], keep=True)
+        for i, sm in zip(again, redo):
+            smoothed[i] = sm
+    return [(accel[i], s[i], best[i][2], *smoothed[i], oks[i], outliers[i]) for i in range(len(tracks))]
+
+
+def _space_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, Ps: np.ndarray, plan: _Plan,
+                   has_pos: np.ndarray, P3: np.ndarray, frame_times: Mapping[int, int] | None) -> dict[str, np.ndarray]:
+    """Smoothed ``X, Y, Z`` with their std and velocity (m/s at the log's median frame interval); the
+    image columns are the tracker's own box on its rows, linear across filled frames (the 3-D model
+    says nothing about the box), a filled row's image velocity the rate of those positions."""
+    t = full["t_ns"].to_numpy().astype(float)
+    if frame_times:
+        t = np.where(np.isfinite(t), t, [frame_times.get(int(k), np.nan) for k in frames])
+    dt = np.nanmedian(np.diff(t)) * 1e-9 if np.isfinite(t).sum() >= 2 else math.nan
+    per_s = 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+    f = frames.astype(float)
+    cols: dict[str, np.ndarray] = {}
+    for k, name in enumerate(("X", "Y", "Z")):
+        cols[name] = np.where(plan.keep, np.where(plan.smoothed, xs[:, 2 * k], P3[:, k]), np.nan)
+        cols[f"{name}_std"] = np.where(plan.smoothed, np.sqrt(np.maximum(Ps[:, 2 * k, 2 * k], 0.0)), np.nan)
+        cols[f"V{name}"] = np.where(plan.smoothed, xs[:, 2 * k + 1] * per_s, np.nan)
+    for name in ("x", "y", "w", "h", "vx", "vy"):
+        values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
+        cols[name] = np.where(plan.keep, _interp(f, values, plan.filled), np.nan)
+    for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own (linear) positions do
+        values = np.where(has_pos, full[p].to_numpy().astype(float), np.nan)
+        cols[v] = np.where(plan.filled & plan.keep, _interp_rate(f, values, plan.filled), cols[v])
+    return cols
+
+
+def log_context(log) -> tuple[dict[int, int], dict[int, PtzCamera]]:
+    """Frame times and (where the log has PTZ encoders and a lens table) the posed camera of every
+    frame, read from ``log`` without decoding any image."""
+    from trackreplay.replay.log.frames import FrameTopics, PtzInterpolator, _ptz_stream
+    from trackreplay.replay.log.reader import LogReader
+    from trackreplay.schemas.records import LensTable
+
+    reader = log if isinstance(log, LogReader) else LogReader(log)
+    topics = FrameTopics.detect(reader)
+    times: dict[int, int] = {}
+    for item in reader.messages([topics.image]):
+        if item.lost is None:
+            times[item.index] = item.log_time
+    cameras: dict[int, PtzCamera] = {}
+    lens_pb = reader.first(topics.lens) if topics.lens else None
+    if topics.ptz and lens_pb is not None:
+        lens = LensTable.from_pb(lens_pb)
+        ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, None), 100_000_000)
+        for index in sorted(times, key=lambda i: times[i]):
+            pose = ptz.at(times[index])
+            if pose is not None:
+                cameras[index] = PtzCamera.from_reading(pose, lens)
+    return times, cameras

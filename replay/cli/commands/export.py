@@ -1,0 +1,29 @@
+"""`trackreplay export TRAJ OUT`: gap-fill a trajectory and write Parquet, CSV or MOTChallenge."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from trackreplay.replay.cli.commands.values import non_negative_int
+from trackreplay.replay.core.export import METHODS, fill_gaps, read_trajectory, write_trajectory
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("export", help="interpolate gaps and convert a trajectory table")
+    p.add_argument("trajectory", type=Path, help="input .parquet or .csv")
+    p.add_argument("out", type=Path, help="output .parquet, .csv or .txt (MOTChallenge)")
+    p.add_argument("--interpolate", choices=("none", *METHODS), default="linear")
+    p.add_argument("--max-gap", type=non_negative_int, default=15, help="longest gap (frames) filled; longer stays lost")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    table = read_trajectory(args.trajectory)
+    if args.interpolate != "none":
+        table = fill_gaps(table, args.interpolate, args.max_gap)
+    write_trajectory(table, args.out)
+    filled = table.filter(table["status"] == "interpolated").height
+    print(f"wrote {args.out}: {table.height} rows, {filled} interpolated")
+    return 0

@@ -1,0 +1,97 @@
+"""`trackreplay flight TRAJ LOG`: the golf ball's 3-D flight fitted to its lines of sight."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from trackreplay.replay.cli.commands.values import finite_json
+
+
+def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
+    p = sub.add_parser("flight", help="fit the golf ball's 3-D flight, bounce and roll from one PTZ camera")
+    p.add_argument("trajectory", type=Path, help="golf trajectory from `replay --export` (.parquet or .csv)")
+    p.add_argument("log", type=Path, help="the log it was replayed from (PTZ encoders, lens table, frame times)")
+    p.add_argument("--out", type=Path, help="3-D trajectory at frame times (X, Y, Z rows): .parquet or .csv")
+    p.add_argument("--report", type=Path, help="per-shot report as JSON (values and 1-sigma uncertainties)")
+    p.add_argument("--rrd", type=Path, help="Rerun 3-D view: camera, lines of sight, fitted path")
+    p.add_argument("--track", type=int, help="track id (default: the track with most measured frames)")
+    p.add_argument("--no-size", action="store_true", help="ignore the apparent ball size (lines of sight only)")
+    p.add_argument("--rescan", type=Path, metavar="TRAJ_OUT",
+                   help="look again, along the fitted flight, in every frame the tracker did not measure (offline); "
+                        "write the trajectory with the frames found there (status measured, fill 'rescan') to this "
+                        ".parquet or .csv, and fit the flight to them too")
+    p.set_defaults(func=run)
+    return p
+
+
+def _ball_rows(table):
+    """The rows of the trackers whose spec says their tracks are a ball in flight (golf); the whole
+    table when it has none (a table of another tracker, or of several: the ball's rows)."""
+    import polars as pl
+
+    from trackreplay.replay.core import registry
+
+    names = [n for n in table["tracker"].unique(maintain_order=True).to_list()
+             if (spec := registry.find(n)) is not None and spec.ball_flight]
+    balls = table.filter(pl.col("tracker").is_in(names))
+    return balls if balls.height else table
+
+
+def run(args: argparse.Namespace) -> int:
+    import polars as pl
+
+    from trackreplay.replay.core.export import read_trajectory, write_trajectory
+    from trackreplay.replay.analysis.flight import FlightConfig, fit_flight, flight_rows, observations
+    from trackreplay.replay.analysis.smooth import log_context
+
+    from trackreplay.schemas.errors import TrackreplayError
+
+    for flag, path, what in (("--out", args.out, "a flight"), ("--rescan", args.rescan, "a trajectory")):
+        if path is not None and path.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
+            raise TrackreplayError(f"{flag} {path}: {what} is written as .parquet or .csv")
+    table = read_trajectory(args.trajectory, keep_fill=True)
+    traj = _ball_rows(table)
+    track = args.track
+    if track is not None and track not in set(traj["track_id"].to_list()):
+        have = ", ".join(str(t) for t in sorted(set(traj["track_id"].to_list())))
+        raise TrackreplayError(f"{args.trajectory} has no track {track} (tracks: {have or 'none'})")
+    if track is None and not traj.is_empty():
+        counts = traj.filter(pl.col("status") == "measured").group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
+        track = int(counts["track_id"][0]) if counts.height else None
+    times, cameras = log_context(args.log)
+    obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
+    fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
+    config = FlightConfig(use_size=not args.no_size)
+    rescanned: frozenset[int] = frozenset()
+    if args.rescan is not None:
+        from trackreplay.replay.analysis.flight_rescan import rescan
+
+        found = rescan(table, args.log, times, cameras, track_id=track, flight=config, fps=fps,
+                       what=f"{args.trajectory} (log {args.log})", tracker=str(traj["tracker"][0]))
+        for warning in found.warnings:
+            print(f"trackreplay: rescan: {warning}", file=sys.stderr)
+        fit, rescanned = found.fit, frozenset(s.frame for s in found.sightings)
+        write_trajectory(found.trajectory, args.rescan)
+        print(f"rescan: {len(found.sightings)} frames found along the fitted flight "
+              f"(per round: {', '.join(str(n) for n in found.rounds)}"
+              + (f"; {len(found.dropped)} dropped, off the final fit: {', '.join(str(f) for f in found.dropped)}" if found.dropped else "")
+              + f"); wrote {args.rescan}")
+    else:
+        fit = fit_flight(obs, config, fps)
+    print(fit.report.describe())
+    rows = flight_rows(fit, times, cameras, track_id=track or 1)
+    if args.out:
+        write_trajectory(rows, args.out)
+        print(f"wrote {args.out}: {rows.height} rows")
+    if args.report:
+        args.report.parent.mkdir(parents=True, exist_ok=True)
+        args.report.write_text(json.dumps(finite_json(fit.report.as_dict()), indent=2, allow_nan=False) + "\n")
+    if args.rrd:
+        from trackreplay.replay.views.flight import write_flight_rrd
+
+        write_flight_rrd(args.rrd, fit, rows, name=Path(args.log).stem, rescanned=rescanned)
+        print(f"wrote {args.rrd}")
+    return 0

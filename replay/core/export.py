@@ -1,0 +1,195 @@
+"""Gap filling and writing of the ★ trajectory table (Parquet, CSV, MOTChallenge txt)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+from scipy.interpolate import CubicSpline
+
+from trackreplay.recorder.atomic import claim_partial
+from trackreplay.schemas.errors import OutputError, TrackreplayError
+from trackreplay.replay.core.trajectory import COLUMNS, FLOAT_COLUMNS, canonical_order, conform, interpolated_times
+
+METHODS = ("linear", "cubic")
+FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
+
+
+def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of runs of True that have valid samples on both sides."""
+    runs: list[tuple[int, int]] = []
+    i, n = 0, missing.size
+    while i < n:
+        if missing[i]:
+            j = i
+            while j < n and missing[j]:
+                j += 1
+            if i > 0 and j < n:
+                runs.append((i, j))
+            i = j
+        else:
+            i += 1
+    return runs
+
+
+def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
+    """Values at frames ``at`` from the known samples and their rate (per frame) there: the segment's
+    slope for linear, the spline's derivative for cubic (natural, from 4 samples; linear below)."""
+    if method == "cubic" and known_f.size >= 4:
+        spline = CubicSpline(known_f, known_v, bc_type="natural")
+        return spline(at), spline(at, 1)
+    k = np.clip(np.searchsorted(known_f, at), 1, known_f.size - 1)
+    slope = (known_v[k] - known_v[k - 1]) / (known_f[k] - known_f[k - 1])
+    return np.interp(at, known_f, known_v), slope
+
+
+def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
+    first, last = track["frame"].min(), track["frame"].max()
+    frames = pl.DataFrame({"frame": np.arange(first, last + 1, dtype=np.int64)})
+    full = frames.join(track, on="frame", how="left")
+    head = track.row(0, named=True)
+    full = full.with_columns(
+        pl.lit(head["tracker"]).alias("tracker"),
+        pl.lit(head["track_id"], dtype=pl.Int64).alias("track_id"),
+        pl.col("status").fill_null("lost"),
+    )
+    full = full.with_columns(pl.Series("t_ns", interpolated_times(full["frame"].to_numpy(), full["t_ns"].fill_null(0).to_numpy(),
+                                                                  full["t_ns"].is_not_null().to_numpy()), dtype=pl.Int64))
+    x = full["x"].to_numpy().astype(float)
+    missing = np.isnan(x) | (full["status"].to_numpy() == "lost")
+    fill = np.zeros(missing.size, bool)
+    for a, b in _gap_runs(missing):
+        if b - a <= max_gap:
+            fill[a:b] = True
+    if not fill.any():
+        return full.select(COLUMNS)
+    f = full["frame"].to_numpy().astype(float)
+    known = ~missing
+    columns, rates = {}, {}
+    for name in FLOAT_COLUMNS:
+        values = full[name].to_numpy().astype(float)
+        ok = known & ~np.isnan(values)
+        if ok.sum() < 2:
+            continue
+        values[fill], rates[name] = _interpolate(f[ok], values[ok], f[fill], method)
+        columns[name] = values
+    for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own positions do, not as the neighbours' velocities
+        if v in columns and p in rates:
+            columns[v][fill] = rates[p]
+    if all(k in columns for k in ("dx", "dy", "dz")):  # lines of sight stay unit vectors
+        d = np.stack([columns["dx"], columns["dy"], columns["dz"]])
+        d[:, fill] /= np.linalg.norm(d[:, fill], axis=0)
+        columns["dx"], columns["dy"], columns["dz"] = d
+    status = np.where(fill, "interpolated", full["status"].to_numpy())
+    return full.with_columns(
+        *(pl.Series(k, v, dtype=pl.Float64, nan_to_null=True) for k, v in columns.items()),
+        pl.Series("status", status, dtype=pl.String),
+    ).select(COLUMNS)
+
+
+def fill_gaps(df: pl.DataFrame, method: str = "linear", max_gap: int = 15) -> pl.DataFrame:
+    """Interpolate interior gaps of at most ``max_gap`` frames per track; longer gaps stay ``lost``.
+
+    Missing frames between a track's first and last row become rows; filled rows get
+    ``status = "interpolated"``. ``cubic`` uses a natural cubic spline through the known samples.
+    A filled row's ``vx, vy`` are its positions' rate (the segment's slope, or the spline's
+    derivative), in px/frame; its ``t_ns`` is interpolated between the neighbours' (exact only
+    without jitter: eval and smooth do not compare it with the log's).
+    """
+    if method not in METHODS:
+        raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
+    if df.is_empty():
+        return df
+    parts = [
+        _fill_track(track, method, max_gap)
+        for _, track in df.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True)
+    ]
+    return canonical_order(pl.concat(parts))
+
+
+def write_mot(df: pl.DataFrame, path: Path) -> None:
+    """MOTChallenge: ``frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z``, 1-based frames **and
+    pixels** (the top-left pixel is (1, 1) there, (0, 0) here): ``bb_left = x - w/2 + 1``.
+    ``recorder.sources.groundtruth.read_mot`` undoes it, so MOT ground truth imported, tracked
+    and exported compares in ``motmetrics`` without a 1 px offset."""
+    rows = df.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost")).with_columns(
+        w=pl.col("w").fill_null(1.0), h=pl.col("h").fill_null(1.0)
+    )
+    out = rows.select(
+        (pl.col("frame") + 1).alias("frame"),
+        pl.col("track_id").alias("id"),
+        (pl.col("x") - pl.col("w") / 2 + 1).alias("bb_left"),
+        (pl.col("y") - pl.col("h") / 2 + 1).alias("bb_top"),
+        pl.col("w").alias("bb_width"),
+        pl.col("h").alias("bb_height"),
+        pl.when(pl.col("status") == "measured").then(1.0).otherwise(0.5).alias("conf"),
+        pl.col("X").fill_null(-1.0).alias("x"),
+        pl.col("Y").fill_null(-1.0).alias("y"),
+        pl.col("Z").fill_null(-1.0).alias("z"),
+    ).sort(["frame", "id"])
+    out.write_csv(path, include_header=False, float_precision=3)
+
+
+def trajectory_format(path: str | Path) -> str:
+    """The format a trajectory path's suffix asks for (checked before a replay, so a wrong name
+    does not cost the whole replay first)."""
+    kind = FORMATS.get(Path(path).suffix.lower())
+    if kind is None:
+        raise TrackreplayError(f"{path}: unknown trajectory format; use .parquet, .csv or .txt (MOTChallenge)")
+    return kind
+
+
+def write_trajectory(df: pl.DataFrame, path: str | Path) -> Path:
+    """Write by suffix: ``.parquet`` (default format), ``.csv`` or ``.txt`` (MOTChallenge)."""
+    path = Path(path)
+    kind = trajectory_format(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = claim_partial(path)  # this process's own; the final name appears only for a complete file
+    try:
+        if kind == "parquet":
+            df.write_parquet(tmp)
+        elif kind == "csv":
+            df.write_csv(tmp)
+        else:
+            write_mot(df, tmp)
+        os.replace(tmp, path)
+    except (OSError, pl.exceptions.PolarsError) as err:  # polars reports a full disk as ComputeError
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {path} ({err})") from None
+    return path
+
+
+def read_trajectory(path: str | Path, keep_fill: bool = False) -> pl.DataFrame:
+    """Read a trajectory written by :func:`write_trajectory` (Parquet or CSV), checked as the ★ table
+    (:func:`~trackreplay.replay.core.trajectory.conform`); an empty one is refused (nothing to work on).
+    ``keep_fill``: also the ``fill`` column ``smooth`` and ``flight --rescan`` write, where the table has one
+    (how a row was obtained: a frame ``rescan`` found is no measurement of the tracker's)."""
+    path = Path(path)
+    if not path.is_file():
+        raise TrackreplayError(f"{path} does not exist")
+    suffix = path.suffix.lower()
+    if suffix not in (".parquet", ".csv"):
+        raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
+    try:
+        # CSV cells are read as text and cast by conform, which names the line of a bad one
+        df = pl.read_parquet(path) if suffix == ".parquet" else pl.read_csv(path, infer_schema=False)
+    except (pl.exceptions.PolarsError, OSError) as err:
+        raise TrackreplayError(f"{path} is not a readable trajectory table ({_first_line(err)})") from None
+    if "confidence" not in df.columns:  # tables written before the column existed
+        df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
+    where = (lambda i: f"row {i + 1}") if suffix == ".parquet" else (lambda i: f"line {i + 2}")  # CSV line 1: header
+    fill = df.get_column("fill").cast(pl.String, strict=False) if keep_fill and "fill" in df.columns else None
+    df = conform(df, str(path), where)  # (the rows in the same order: the fill column goes back beside them)
+    if df.is_empty():
+        raise TrackreplayError(f"{path} holds no rows: an empty trajectory")
+    if fill is not None:
+        return canonical_order(df.with_columns(fill), extra=("fill",))
+    return canonical_order(df)
+
+
+def _first_line(err: Exception) -> str:
+    """The gist of a library's message (polars explains at length, over several paragraphs)."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    return lines[0].rstrip(".:") if lines else type(err).__name__

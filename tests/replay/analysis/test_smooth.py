@@ -1,0 +1,288 @@
+"""Offline RTS smoothing (issue 13): better than the causal track, gaps filled with a std, deterministic."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.core.export import fill_gaps, read_trajectory, write_trajectory
+from trackreplay.replay.analysis.smooth import SMOOTH_COLUMNS, smooth_trajectory
+from trackreplay.replay.core.trajectory import state_row, trajectory_table
+from trackreplay.trackers.base import TrackState
+
+
+def _truth(n: int = 120) -> np.ndarray:
+    k = np.arange(n, dtype=float)
+    return np.stack([100 + 40 * np.cos(k / 25.0), 80 + 30 * np.sin(k / 25.0)], axis=1)
+
+
+def _noisy_track(gap: tuple[int, int] = (50, 60), seed: int = 0) -> tuple[pl.DataFrame, np.ndarray]:
+    """A causal-looking track: noisy measurements (noise grows as confidence falls), a gap of
+    ``predicted`` then ``lost`` rows, and one wrong blob."""
+    rng = np.random.default_rng(seed)
+    truth = _truth()
+    rows = []
+    for k, (x, y) in enumerate(truth):
+        conf = 0.5 + 0.5 * (k % 3 == 0)
+        if gap[0] <= k < gap[0] + 3:
+            state = TrackState(1, x=x + 8.0 * (k - gap[0] + 1), y=y, w=5.0, h=5.0, status="predicted", confidence=0.1)
+        elif gap[0] + 3 <= k < gap[1]:
+            state = TrackState(1, status="lost")
+        else:
+            sx, sy = rng.normal(0.0, 1.5 / np.sqrt(conf), 2)
+            if k == 90:
+                sx += 60.0  # a wrong blob
+            state = TrackState(1, x=x + sx, y=y + sy, w=5.0, h=5.0, vx=None, vy=None, status="measured", confidence=conf)
+        if k == 70:
+            continue  # a frame without a row at all
+        rows.append(state_row("golf", k, k * 33_333_333, state))
+    return trajectory_table(rows), truth
+
+
+def _rmse(df: pl.DataFrame, truth: np.ndarray, frames: np.ndarray) -> float:
+    d = df.filter(pl.col("frame").is_in(frames.tolist()) & pl.col("x").is_not_null()).sort("frame")
+    assert d.height == len(frames)
+    est = d.select("x", "y").to_numpy()
+    return float(np.sqrt(np.mean(np.sum((est - truth[d["frame"].to_numpy()]) ** 2, axis=1))))
+
+
+def test_rts_beats_the_causal_track_and_linear_gap_filling() -> None:
+    df, truth = _noisy_track()
+    out, fits = smooth_trajectory(df)
+    measured = df.filter((pl.col("status") == "measured") & (pl.col("frame") != 90))["frame"].to_numpy()
+    assert _rmse(out, truth, measured) < 0.6 * _rmse(df, truth, measured)
+    gap = np.arange(50, 60)
+    linear = fill_gaps(df.filter(pl.col("status") != "predicted"), "linear", max_gap=15)
+    assert _rmse(out, truth, gap) < _rmse(linear, truth, gap)  # the arc is curved: a chord cuts it
+    assert fits[0].outliers == 1 and fits[0].observations == len(measured) + 1
+
+
+def test_filled_rows_are_interpolated_with_std_and_say_how() -> None:
+    df, _ = _noisy_track()
+    out, _ = smooth_trajectory(df)
+    assert out.columns == list(SMOOTH_COLUMNS)
+    assert out["frame"].to_list() == list(range(120))  # the absent frame 70 is added
+    gap = out.filter(pl.col("frame").is_between(50, 59))
+    assert gap["status"].to_list() == ["interpolated"] * 10
+    assert gap["fill"].to_list() == ["rts_gap"] * 10
+    assert gap["x_std"].is_not_null().all() and gap["y_std"].is_not_null().all()
+    # the std grows towards the middle of the gap and is larger than on measured frames
+    std = gap["x_std"].to_numpy()
+    assert std.max() > out.filter(pl.col("frame") == 20)["x_std"][0]
+    assert out.filter(pl.col("frame") == 70)["fill"][0] == "rts_gap"
+    assert out.filter(pl.col("frame") == 70)["t_ns"][0] == 70 * 33_333_333
+    assert out.filter(pl.col("frame") == 90)["fill"][0] == "rts_outlier"
+    assert set(out["fill"].drop_nulls().to_list()) <= {"rts", "rts_gap", "rts_outlier"}
+
+
+def test_long_gaps_and_track_ends_are_not_extrapolated() -> None:
+    df, _ = _noisy_track(gap=(40, 80))
+    out, _ = smooth_trajectory(df)
+    gap = out.filter(pl.col("frame").is_between(43, 79))
+    assert set(gap["status"].to_list()) == {"lost"} and gap["x"].null_count() == gap.height
+    kept = out.filter(pl.col("frame").is_between(40, 42))  # the tracker's predictions before a long gap stay its own
+    assert kept["status"].to_list() == ["predicted"] * 3 and kept["fill"].null_count() == 3
+
+
+def test_deterministic_and_written(tmp_path) -> None:
+    df, _ = _noisy_track()
+    a, _ = smooth_trajectory(df)
+    b, _ = smooth_trajectory(df)
+    assert a.equals(b)
+    write_trajectory(a, tmp_path / "s.parquet")
+    back = pl.read_parquet(tmp_path / "s.parquet")
+    assert back.equals(a)
+    assert read_trajectory(tmp_path / "s.parquet").height == a.height  # still a ★ trajectory table
+
+
+GOLDEN = Path(__file__).resolve().parents[2] / "golden"
+
+
+def test_cli_smooth_and_replay_smooth_on_the_golden_flow_log(tmp_path) -> None:
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    traj = tmp_path / "t.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--export", str(traj), "--interpolate", "none", "--quiet"]) == 0
+    out = tmp_path / "s.parquet"
+    assert main(["smooth", str(traj), str(log), "--out", str(out)]) == 0
+    smoothed = pl.read_parquet(out)
+    assert smoothed.height == 24 and smoothed["fill"].to_list() == ["rts"] * 24
+    # replay --smooth (which also has the raw measurements): test_replay_smooth_uses_raw_measurements...
+
+
+def test_empty_and_positionless_tracks() -> None:
+    empty = trajectory_table([])
+    out, fits = smooth_trajectory(empty)
+    assert out.is_empty() and fits == []
+    lost = trajectory_table([state_row("flow", k, k, TrackState(1, status="lost")) for k in range(3)])
+    out, fits = smooth_trajectory(lost)
+    assert out["status"].to_list() == ["lost"] * 3 and fits == []
+
+
+def test_replay_smooth_uses_raw_measurements_and_keeps_the_digest(tmp_path) -> None:
+    """replay --smooth observes the flow tracker's raw centroid (before its Kalman filter): closer
+    to the truth than the causal track; asking for the observations leaves the digest alone."""
+    from trackreplay.replay.core.engine import ReplayRequest, replay
+    from trackreplay.replay.analysis.eval import evaluate
+    from trackreplay.replay.log.groundtruth import read_groundtruth
+    from trackreplay.replay.log.reader import LogReader
+
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    plain = replay(ReplayRequest(log=log, tracker="flow"))
+    res = replay(ReplayRequest(log=log, tracker="flow", observations=True))
+    assert res.digest == plain.digest and plain.observations is None
+    assert res.observations.height >= 20 and res.observations["zx"].is_not_null().all()
+    smoothed, _ = smooth_trajectory(res.trajectory, observations=res.observations)
+    gt = read_groundtruth(LogReader(log))
+    causal = evaluate(res.trajectory, gt)[1]["centre_error"].drop_nulls().to_numpy()
+    smooth = evaluate(smoothed, gt)[1]["centre_error"].drop_nulls().to_numpy()
+    assert np.sqrt(np.mean(smooth**2)) < np.sqrt(np.mean(causal**2))
+    out = tmp_path / "s.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--smooth", "--export", str(out), "--quiet"]) == 0
+    assert pl.read_parquet(out).select("x", "y").equals(smoothed.select("x", "y"))
+
+
+def _walking_group(fps: float = 24.0):
+    """A group walking at constant velocity in the camera frame, raw 3-D points with the stereo
+    covariance (depth noisier), a 6-frame hole: (trajectory, observations, truth)."""
+    from trackreplay.replay.analysis.smooth import observations_table
+
+    rng = np.random.default_rng(0)
+    n = 60
+    k = np.arange(n, dtype=float)
+    truth = np.stack([-2.0 + 0.05 * k, 0.5 + 0.0 * k, 8.0 - 0.02 * k], axis=1)  # m; 1.2 m/s across, 0.48 m/s closer
+    R = np.diag([0.03, 0.03, 0.15]) ** 2
+    rows, obs = [], []
+    for i in range(n):
+        if 30 <= i < 36:
+            rows.append(state_row("groups", i, int(i * 1e9 / fps), TrackState(4, x=1.0, y=1.0, w=2.0, h=2.0, status="predicted")))
+            continue
+        z = truth[i] + rng.multivariate_normal(np.zeros(3), R)
+        X, Y, Z = (float(v) for v in z)
+        rows.append(state_row("groups", i, int(i * 1e9 / fps), TrackState(4, x=1.0, y=1.0, w=2.0, h=2.0, X=X, Y=Y, Z=Z, status="measured")))
+        obs.append({"tracker": "groups", "track_id": 4, "frame": i, "zX": X, "zY": Y, "zZ": Z, "rXX": R[0, 0], "rXY": 0.0,
+                    "rXZ": 0.0, "rYY": R[1, 1], "rYZ": 0.0, "rZZ": R[2, 2]})
+    return trajectory_table(rows), observations_table(obs), truth
+
+
+def test_group_tracks_smoothed_in_3d_from_raw_points() -> None:
+    """The walking group: the EKF model's RTS beats the raw points, fills the hole with a std and
+    gives VX, VY, VZ in m/s."""
+    fps = 24.0
+    table, obs, truth = _walking_group(fps)
+    out, fits = smooth_trajectory(table, observations=obs)
+    assert fits[0].tracker == "groups" and fits[0].filled == 6
+    P = out.select("X", "Y", "Z").to_numpy()
+    raw = table.select("X", "Y", "Z").to_numpy().astype(float)
+    seen = np.isfinite(raw).all(axis=1)
+    assert np.sqrt(np.mean(np.sum((P - truth) ** 2, axis=1))) < 0.5 * np.sqrt(np.mean(np.sum((raw[seen] - truth[seen]) ** 2, axis=1)))
+    hole = out.filter(pl.col("frame").is_between(30, 35))
+    assert hole["status"].to_list() == ["interpolated"] * 6 and hole["fill"].to_list() == ["rts_gap"] * 6
+    assert (hole["Z_std"].to_numpy() > 0).all()
+    V = out.select("VX", "VY", "VZ").to_numpy()
+    assert np.allclose(np.median(V, axis=0), [0.05 * fps, 0.0, -0.02 * fps], atol=0.15)
+
+
+def test_group_smoothing_reads_the_ekf_config_the_replay_used() -> None:
+    """The 3-D model's process noise is the group EKF's own at the config replayed (``configs``), not
+    the defaults'; the defaults given explicitly change nothing."""
+    from trackreplay.trackers.groups.config import EkfConfig, GroupsConfig
+
+    table, obs, _ = _walking_group()
+    default, default_fits = smooth_trajectory(table, observations=obs)
+    same, _ = smooth_trajectory(table, observations=obs, configs={"groups": GroupsConfig()})
+    assert same.equals(default)
+    brisk, fits = smooth_trajectory(table, observations=obs, configs={"groups": GroupsConfig(ekf=EkfConfig(accel_sigma=0.02))})
+    assert default_fits[0].q == pytest.approx(0.0015**2) and fits[0].q == pytest.approx(0.02**2)
+    assert fits[0].noise.startswith("q 0.0004 (m/frame²)², R scale ")
+    # more process noise: the smoothed track is less certain and its velocity follows the points' noise
+    assert brisk["X_std"].mean() > 1.5 * default["X_std"].mean()
+    assert brisk["VX"].std() > 3.0 * default["VX"].std()
+
+
+def test_replay_smooth_smooths_groups_with_the_config_it_replayed(tmp_path: Path, capsys) -> None:
+    """``replay --config g.toml --smooth`` hands the smoother the config it replayed (ReplayResult.config):
+    the fit's q is that config's EKF acceleration squared."""
+    log = GOLDEN / "groups-crossing-320x240.mcap"
+    toml = tmp_path / "g.toml"
+    toml.write_text("[groups.ekf]\naccel_sigma = 0.006\n")
+    out = tmp_path / "s.parquet"
+    assert main(["replay", str(log), "--tracker", "groups", "--config", str(toml), "--smooth", "--export", str(out),
+                 "--quiet"]) == 0
+    lines = [x for x in capsys.readouterr().out.splitlines() if x.startswith("smooth groups/")]
+    assert lines and all("q 3.6e-05 (m/frame²)²" in x for x in lines)
+
+
+def test_golden_groups_log_smoothed_in_3d_from_its_points() -> None:
+    """The group tracker's raw measurements (mean [u v d] of each group's points) reach the smoother:
+    every measured group row observed in 3-D, with velocity (m/s) and position std (m)."""
+    from trackreplay.replay.core.engine import ReplayRequest, replay
+
+    res = replay(ReplayRequest(log=GOLDEN / "groups-crossing-320x240.mcap", tracker="groups", observations=True))
+    obs = res.observations
+    assert obs.height > 0 and obs["zZ"].is_not_null().all()
+    # in the trajectory's own frame (the world, Z up: the golden log carries the rig's pose), within
+    # the EKF's smoothing of the raw points; the depth, mostly along world Y here, the noisiest
+    assert res.position_frame == "world"
+    j = obs.join(res.trajectory, on=["track_id", "frame"])
+    assert j.height == obs.height
+    assert j.select(((pl.col("zX") - pl.col("X")) ** 2 + (pl.col("zY") - pl.col("Y")) ** 2
+                     + (pl.col("zZ") - pl.col("Z")) ** 2).sqrt().max()).item() < 0.5
+    assert (obs["rYY"] > obs["rXX"]).all() and (obs["rYY"] > obs["rZZ"]).all()
+    out, fits = smooth_trajectory(res.trajectory, observations=obs)
+    assert fits and all(f.tracker == "groups" for f in fits)
+    rts = out.filter(pl.col("fill") == "rts")
+    assert rts.height >= obs.height - sum(f.outliers for f in fits)
+    assert rts.select("VX", "VY", "VZ", "X_std", "Y_std", "Z_std").null_count().sum_horizontal().item() == 0
+    assert (rts["Z_std"] > 0).all() and (rts["Z_std"] < 1.0).all()
+
+
+def test_a_trajectory_of_another_log_is_refused(tmp_path: Path, capsys) -> None:
+    """smooth takes frame times and camera poses from the log: a trajectory whose frames are at
+    other times there (replayed from another log) is refused instead of smoothed with them."""
+    log = Path(__file__).resolve().parents[2] / "golden" / "flow-sim1-24f.mcap"
+    traj, other = tmp_path / "t.parquet", tmp_path / "other.parquet"
+    assert main(["replay", str(log), "--tracker", "flow", "--quiet", "--export", str(traj)]) == 0
+    assert main(["smooth", str(traj), str(log), "--out", str(tmp_path / "s.parquet")]) == 0
+    write_trajectory(read_trajectory(traj).with_columns(pl.col("t_ns") + 1_000_000), other)
+    capsys.readouterr()
+    assert main(["smooth", str(other), str(log), "--out", str(tmp_path / "s2.parquet")]) == 2
+    assert "it was not replayed from this log" in capsys.readouterr().err
+    assert not (tmp_path / "s2.parquet").exists()
+
+
+def test_a_wrong_output_suffix_is_refused_before_any_work(tmp_path: Path, capsys) -> None:
+    """`smooth --out x.json` once smoothed the whole log first, then suggested .txt, which smooth refuses."""
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    for name in ("s.json", "s.txt"):
+        assert main(["smooth", str(tmp_path / "missing.parquet"), str(log), "--out", str(tmp_path / name)]) == 2
+        err = capsys.readouterr().err.strip()  # about the suffix, not the missing input: checked first
+        assert err == (f"trackreplay: error: {tmp_path / name}: a smoothed trajectory is written as .parquet or .csv "
+                       "(it has std and fill columns, which MOTChallenge .txt cannot hold)")
+
+
+def test_replay_smooth_refuses_interpolate(tmp_path: Path, capsys) -> None:
+    """`replay --smooth --interpolate cubic` silently smoothed instead: the two fill gaps differently."""
+    out = tmp_path / "t.parquet"
+    for method in ("cubic", "linear", "none"):
+        assert main(["replay", str(tmp_path / "missing.mcap"), "--smooth", "--interpolate", method,
+                     "--export", str(out), "--quiet"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert err.startswith(f"trackreplay: error: --interpolate {method} and --smooth exclude each other") and "\n" not in err
+    assert not out.exists()
+
+
+def test_a_filled_group_rows_velocity_is_its_positions_rate() -> None:
+    """A review: group tracks' filled rows got vx, vy interpolated on their own while x, y moved linearly."""
+    import numpy as np
+
+    from trackreplay.replay.analysis.smooth import _interp, _interp_rate
+
+    f = np.arange(8, dtype=float)
+    x = np.array([0.0, np.nan, np.nan, np.nan, 40.0, 41.0, np.nan, 45.0])
+    fill = ~np.isfinite(x)
+    assert np.allclose(_interp(f, x, fill)[fill], [10.0, 20.0, 30.0, 43.0])
+    assert np.allclose(_interp_rate(f, x, fill)[fill], [10.0, 10.0, 10.0, 2.0])  # the slope of the very line drawn

@@ -1,0 +1,209 @@
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from trackreplay.replay.core.export import fill_gaps, read_trajectory, write_trajectory
+from trackreplay.replay.core.trajectory import COLUMNS, state_row, table_digest, trajectory_table
+from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.trackers.base import TrackState
+
+
+def _table(frames, positions, statuses=None):
+    statuses = statuses or ["measured"] * len(frames)
+    rows = []
+    for f, p, s in zip(frames, positions, statuses):
+        state = TrackState(1, x=p, y=2 * p, w=4.0, h=4.0, status=s) if p is not None else TrackState(1, status=s)
+        rows.append(state_row("flow", f, f * 1000, state))
+    return trajectory_table(rows)
+
+
+def test_linear_fill_of_missing_and_lost_frames() -> None:
+    df = _table([0, 1, 2, 5, 6], [0.0, 1.0, None, 5.0, 6.0], ["measured", "measured", "lost", "measured", "measured"])
+    out = fill_gaps(df, "linear", max_gap=5)
+    assert out["frame"].to_list() == list(range(7))
+    assert out["x"].to_list() == pytest.approx([0, 1, 2, 3, 4, 5, 6])
+    assert out["t_ns"].to_list() == [f * 1000 for f in range(7)]
+    assert out["status"].to_list()[2:5] == ["interpolated"] * 3
+
+
+def test_gap_longer_than_max_stays_lost() -> None:
+    df = _table([0, 1, 6, 7], [0.0, 1.0, 6.0, 7.0])
+    out = fill_gaps(df, "linear", max_gap=3)
+    assert out["status"].to_list()[2:6] == ["lost"] * 4
+    assert out["x"].to_list()[2:6] == [None] * 4
+
+
+def test_cubic_follows_a_parabola_exactly_where_linear_cannot() -> None:
+    frames = [0, 1, 2, 3, 7, 8, 9, 10]
+    xs = [float(f * f) for f in frames]
+    cubic = fill_gaps(_table(frames, xs), "cubic", 5)
+    linear = fill_gaps(_table(frames, xs), "linear", 5)
+    gap = [4, 5, 6]
+    err_cubic = np.abs(np.array(cubic["x"].to_list())[gap] - np.array(gap) ** 2).max()
+    err_linear = np.abs(np.array(linear["x"].to_list())[gap] - np.array(gap) ** 2).max()
+    assert err_cubic < 0.5 < err_linear
+
+
+def test_round_trip_formats(tmp_path: Path) -> None:
+    df = _table([0, 1, 2], [10.0, 11.0, 12.0])
+    for suffix in (".parquet", ".csv"):
+        path = write_trajectory(df, tmp_path / f"t{suffix}")
+        assert table_digest(read_trajectory(path)) == table_digest(df)
+    mot = write_trajectory(df, tmp_path / "t.txt").read_text().splitlines()
+    assert mot[0] == "1,1,9.000,19.000,4.000,4.000,1.000,-1.000,-1.000,-1.000"  # 1-based frame and pixels
+    assert len(mot) == 3
+
+
+def test_mot_ground_truth_round_trips_through_a_trajectory(tmp_path: Path) -> None:
+    """MOT ground truth imported, 'tracked' perfectly and exported gives the file's own boxes back."""
+    from trackreplay.recorder.sources.groundtruth import read_groundtruth
+
+    gt = tmp_path / "gt.txt"
+    gt.write_text("1,1,1.000,1.000,10.000,8.000,1,-1,-1,-1\n2,1,3.500,2.000,10.000,8.000,1,-1,-1,-1\n")
+    table = read_groundtruth(gt, "mot")
+    xs = [table.objects_at(f)[0].x for f in (0, 1)]
+    ys = [table.objects_at(f)[0].y for f in (0, 1)]
+    assert xs == [5.0, 7.5]  # the top-left pixel (1, 1) is our (0, 0): a 10 px box from it is centred at 5
+    df = _table([0, 1], xs).with_columns(pl.Series("y", ys), pl.lit(10.0).alias("w"), pl.lit(8.0).alias("h"))
+    lines = write_trajectory(df, tmp_path / "out.txt").read_text().splitlines()
+    assert [line.split(",")[2:6] for line in lines] == [r.split(",")[2:6] for r in gt.read_text().splitlines()]
+
+
+def test_schema_is_the_contract() -> None:
+    df = _table([0], [1.0])
+    assert tuple(df.columns) == COLUMNS
+    assert df.schema["frame"] == pl.Int64 and df.schema["x"] == pl.Float64 and df.schema["status"] == pl.String
+
+
+def test_bad_inputs(tmp_path: Path) -> None:
+    with pytest.raises(TrackreplayError, match="unknown trajectory format"):
+        write_trajectory(_table([0], [1.0]), tmp_path / "t.xlsx")
+    bad = tmp_path / "bad.csv"
+    bad.write_text("a,b\n1,2\n")
+    with pytest.raises(TrackreplayError, match="lacks trajectory columns"):
+        read_trajectory(bad)
+    with pytest.raises(TrackreplayError, match="interpolation method"):
+        fill_gaps(_table([0], [1.0]), "quadratic")
+
+
+def test_lost_state_with_a_position_is_refused_and_confidence_is_bounded() -> None:
+    import pytest
+
+    from trackreplay.trackers.base import TrackState
+
+    with pytest.raises(ValueError, match="no position"):
+        TrackState(1, x=3.0, y=4.0, status="lost")
+    with pytest.raises(ValueError, match="confidence"):
+        TrackState(1, x=3.0, y=4.0, confidence=1.5)
+    assert TrackState(1, status="lost", confidence=0.0).x is None
+
+
+def test_epoch_times_stay_exact_through_gap_filling_and_smoothing() -> None:
+    """Wall-clock log times (~1.7e18 ns) do not fit float64's 53 bits: a review found every row's
+    t_ns rounded by the gap filling (and smoothing), and eval then refusing the tool's own output."""
+    from trackreplay.replay.analysis.smooth import smooth_trajectory
+    from trackreplay.replay.core.trajectory import interpolated_times, state_row, trajectory_table
+    from trackreplay.trackers.base import TrackState
+
+    t0, step = 1_732_800_000_123_456_789, 33_333_333
+    times = {f: t0 + f * step + (f % 3) for f in range(12)}  # not a float64-representable run
+    rows = [state_row("flow", f, times[f], TrackState(1, x=10.0 + f, y=5.0, status="measured"))
+            for f in range(12) if f not in (4, 5, 6)]
+    filled = fill_gaps(trajectory_table(rows), "linear", max_gap=5)
+    got = dict(zip(filled["frame"].to_list(), filled["t_ns"].to_list()))
+    assert all(got[f] == times[f] for f in range(12) if f not in (4, 5, 6))
+    assert [got[f] for f in (4, 5, 6)] == [int(v) for v in interpolated_times(
+        np.arange(12), np.array([times.get(f, 0) for f in range(12)]), np.array([f not in (4, 5, 6) for f in range(12)]))[4:7]]
+    assert times[3] < got[4] < got[5] < got[6] < times[7]
+    smoothed, _ = smooth_trajectory(trajectory_table(rows), frame_times=times)
+    assert dict(zip(smoothed["frame"].to_list(), smoothed["t_ns"].to_list())) == times
+
+
+def test_interpolated_times_known_values() -> None:
+    from trackreplay.replay.core.trajectory import interpolated_times
+
+    t = interpolated_times(np.array([0, 1, 2, 3, 5]), np.array([0, 0, 10, 0, 0]), np.array([False, False, True, False, True]))
+    assert t.tolist() == [10, 10, 10, 7, 0]  # the start held at the first known; 10 - 10/3 = 6.67 -> 7
+    t = interpolated_times(np.array([0, 1, 2, 4]), np.array([100, 0, 0, 401]), np.array([True, False, False, True]))
+    assert t.tolist() == [100, 175, 251, 401]  # 100 + 301/4 = 175.25 -> 175, 100 + 602/4 = 250.5 -> 251 (half up)
+
+
+def test_filled_rows_move_at_their_positions_rate() -> None:
+    """A review found filled rows' vx, vy interpolated on their own (y advancing 29.9 px/frame while
+    vy ramped 5.8 -> 46.2): a filled row's velocity is its positions' rate, measured rows keep theirs."""
+    frames = [0, 1, 2, 3, 8, 9, 10, 11]
+    rows = [state_row("flow", f, f, TrackState(1, x=float(f * f), y=3.0 * f, w=4.0, h=4.0, vx=100.0 + f, vy=-1.0))
+            for f in frames]
+    linear = fill_gaps(trajectory_table(rows), "linear", 5)
+    gap = linear.filter(pl.col("status") == "interpolated")
+    assert gap["frame"].to_list() == [4, 5, 6, 7]
+    assert gap["vx"].to_list() == pytest.approx([(64 - 9) / 5] * 4)  # the segment's slope, px/frame
+    assert gap["vy"].to_list() == pytest.approx([3.0] * 4)
+    measured = linear.filter(pl.col("status") == "measured")
+    assert measured["vx"].to_list() == [100.0 + f for f in frames] and measured["vy"].to_list() == [-1.0] * 8
+    cubic = fill_gaps(trajectory_table(rows), "cubic", 5)
+    from scipy.interpolate import CubicSpline
+
+    spline = CubicSpline(frames, [float(f * f) for f in frames], bc_type="natural")
+    gap = cubic.filter(pl.col("status") == "interpolated")
+    assert gap["x"].to_list() == pytest.approx(spline([4, 5, 6, 7]).tolist())
+    assert gap["vx"].to_list() == pytest.approx(spline([4, 5, 6, 7], 1).tolist())  # the spline's own derivative
+    assert cubic.filter(pl.col("status") == "measured")["vx"].to_list() == [100.0 + f for f in frames]
+
+
+def _written(tmp_path: Path, df: pl.DataFrame, name: str = "t.parquet") -> Path:
+    path = tmp_path / name
+    df.write_parquet(path) if path.suffix == ".parquet" else df.write_csv(path)
+    return path
+
+
+@pytest.mark.parametrize("change, says", [
+    (lambda d: d.with_columns(pl.format("{}x", "frame").alias("frame")), "row 1: frame is '0x', not an integer"),
+    (lambda d: d.with_columns(pl.col("frame").cast(pl.Float64) + 0.5), "row 1: frame is 0.5, not an integer"),
+    (lambda d: d.with_columns(pl.when(pl.col("frame") == 2).then(pl.lit("gone")).otherwise("status").alias("status")),
+     "row 3: status 'gone' is not one of measured, predicted, interpolated, lost"),
+    (lambda d: pl.concat([d, d.slice(1, 1)]), "row 4: a second row for track 1 (flow) on frame 1: one row per track and frame"),
+    (lambda d: d.with_columns(pl.when(pl.col("frame") == 1).then(pl.lit("lost")).otherwise("status").alias("status")),
+     "row 2: a lost row of track 1 on frame 1 carries a position (x); lost rows have none"),
+    (lambda d: d.with_columns(pl.col("frame") - 1), "row 1: frame -1 is negative"),
+    (lambda d: d.with_columns(pl.lit(None, dtype=pl.String).alias("status")), "row 1: no status"),
+])
+def test_malformed_tables_are_refused_naming_the_row(tmp_path: Path, change, says: str) -> None:
+    path = _written(tmp_path, change(_table([0, 1, 2], [1.0, 2.0, 3.0])))
+    with pytest.raises(TrackreplayError) as err:
+        read_trajectory(path)
+    assert str(err.value).startswith(f"{path} {says}")
+
+
+def test_a_csv_cell_that_is_not_a_number_is_one_sentence_naming_the_line(tmp_path: Path) -> None:
+    path = _written(tmp_path, _table([0, 1, 2], [1.0, 2.0, 3.0]), "t.csv")
+    lines = path.read_text().splitlines()
+    lines[2] = lines[2].replace(",2.0,", ",abc,", 1)
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(TrackreplayError) as err:
+        read_trajectory(path)
+    assert str(err.value) == f"{path} line 3: x is 'abc', not a number"
+
+
+@pytest.mark.parametrize("verb", ["export", "smooth", "eval"])
+@pytest.mark.parametrize("case", ["text frame", "duplicate", "empty"])
+def test_every_verb_refuses_a_bad_or_empty_table(tmp_path: Path, capsys, verb: str, case: str) -> None:
+    """Once: a text frame column ended in an internal error (exit 70), duplicate rows made eval count
+    102 frames of a 51-frame log and smooth crash, an empty table was exported and smoothed to an empty file."""
+    from trackreplay.replay.cli.main import main
+
+    golden = Path(__file__).resolve().parents[2] / "golden"
+    table = read_trajectory(golden / "flow.trajectory.parquet")
+    bad = {"text frame": table.with_columns(pl.col("frame").cast(pl.String) + "x"),
+           "duplicate": pl.concat([table, table.head(1)]),
+           "empty": table.clear()}[case]
+    path = _written(tmp_path, bad)
+    out = tmp_path / "out.parquet"
+    argv = {"export": [str(path), str(out)], "smooth": [str(path), str(golden / "flow-sim1-24f.mcap"), "--out", str(out)],
+            "eval": [str(path), str(golden / "flow-sim1-24f.mcap")]}[verb]
+    assert main([verb, *argv]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"trackreplay: error: {path} ") and "\n" not in err
+    assert not out.exists()
