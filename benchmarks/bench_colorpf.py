@@ -41,6 +41,7 @@ VARIANTS = {"paper": PAPER, "defaults": {}, "defaults, camera taken as fixed": {
                              "refine": {"mode": "meanshift"}, "size": {"no_plane": "random_walk"}}}
 from trackreplay.trackers.colorpf.camera import shift_image  # noqa: E402
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker  # noqa: E402
+from trackreplay.replay.runs.csrt import SIDE as CSRT_SIDE  # noqa: E402  (the CSRT side evaluate runs too)
 
 DEFAULT_VENV = Path.home() / ".cache" / "trackreplay" / "csrt-venv"
 
@@ -109,7 +110,7 @@ def main() -> None:
             cv2.imwrite(str(folder / f"{f.index:06d}.png"), f.image)
         box = f"{mark.x - mark.w / 2 + 0.5},{mark.y - mark.h / 2 + 0.5},{mark.w},{mark.h}"
         out = folder / "csrt.json"
-        subprocess.run([str(py), str(HERE / "csrt_side.py"), str(folder), box, str(out)], check=True)
+        subprocess.run([str(py), str(CSRT_SIDE), str(folder), box, str(out)], check=True)
         csrt = json.loads(out.read_text())
     result["csrt_opencv"] = csrt["opencv"]
     result["csrt_step_ms"] = float(np.median(csrt["times"]) * 1e3)

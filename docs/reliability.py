@@ -10,7 +10,10 @@ classified:
   ``timeout``, ``memory`` (peak RSS over the budget), ``undocumented`` (any other status).
 
 ``recover`` is also scored on salvage: image messages saved / image messages in chunks the damage
-did not touch. Writes docs/reliability.md. Usage: ``python docs/reliability.py [--quick]``.
+did not touch. Input files and log structures of issue 33 (a CSV field over 128 KB, TOML 1e308 or nested
+500 deep, a 50 MB TOML line, JSON nested 200k deep; a log without a summary section, times beyond 2**63,
+a channel declared twice) are run once each. Writes docs/reliability.md. Usage:
+``python docs/reliability.py [--quick] [--kinds issue33]``.
 """
 
 from __future__ import annotations
@@ -211,8 +214,102 @@ def hostile_logs(folder: Path) -> list[tuple[str, Path]]:
     return out
 
 
+# --- input files and log structures (issue 33) --------------------------------------------------------
+def input_cases(folder: Path, log: Path) -> list[tuple[str, list[str]]]:
+    """(name, argv) of text inputs that ended in exit 70 or gigabytes: each must now be exit 2."""
+    img = folder / "img"
+    img.mkdir(exist_ok=True)
+    for i in range(3):
+        cv2.imwrite(str(img / f"f{i}.png"), np.full((48, 64, 3), 40 * i, np.uint8))
+    huge = "9" * 200_000
+    camera_info = ("image_width: 64\nimage_height: 48\ncamera_matrix:\n  rows: 3\n  cols: 3\n"
+                   "  data: [50, 0, 32, 0, nan, 24, 0, 0, 1]\n")
+    files = {
+        "enc.csv": f"t_ns,pan,tilt,zoom,focus\n0,1,2,3,4\n1,{huge},0,1,1\n",
+        "marks.csv": f"frame,x,y,w,h,label\n0,1,1,4,4,{huge}\n",
+        "big.toml": "[flow]\ncond_max = 1e308\n", "tiny.toml": "[flow]\ncond_max = 1e-300\n",
+        "deep.toml": "x = " + "[" * 500 + "]" * 500 + "\n",
+        "long.toml": "[flow]\n# " + "x" * 50_000_000 + "\n",
+        "deep.json": "[" * 200_000 + "]" * 200_000, "digits.json": '{"width": 64, "height": 48, "K": [' + "9" * 5000 + "]}",
+        "camera_info.yaml": camera_info,
+        "plane.json": json.dumps({"width": 64, "height": 48, "image_to_ground": [[0, 0, 0]] * 3,
+                                  "camera_ground": [0, 0], "camera_height": 5}),
+    }
+    for name, text in files.items():
+        (folder / name).write_text(text)
+    out = str(folder / "input-out.mcap")
+    record = ["record", out, "--images", str(img), "--fps", "10", "--quiet"]
+    return [
+        ("CSV field over 128 KB (encoders)", [*record, "--encoders", str(folder / "enc.csv")]),
+        ("CSV field over 128 KB (marks)", ["annotate", str(log), "--from-csv", str(folder / "marks.csv"), "--out", out]),
+        *[(f"TOML {what}", ["replay", str(log), "--quiet", "--config", str(folder / name)])
+          for what, name in (("1e308", "big.toml"), ("1e-300", "tiny.toml"), ("nested 500 deep", "deep.toml"),
+                             ("50 MB line", "long.toml"))],
+        ("JSON nested 200k deep", [*record, "--calibration", str(folder / "deep.json")]),
+        ("JSON 5000-digit number", [*record, "--calibration", str(folder / "digits.json")]),
+        ("camera_info with nan", [*record, "--calibration", str(folder / "camera_info.yaml")]),
+        ("all-zero image_to_ground", [*record, "--ground-plane", str(folder / "plane.json")]),
+        ("--connect http://", ["replay", str(log), "--quiet", "--connect", "http://127.0.0.1:9/proxy"]),
+    ]
+
+
+def structure_logs(folder: Path, log: Path) -> list[tuple[str, Path, bool]]:
+    """(name, log, usable as it stands) rewritten from ``log``: streamed without a summary section,
+    log times at and beyond 2**63, a channel id declared twice with different schemas."""
+    from mcap.records import Channel
+    from mcap.writer import IndexType, Writer
+
+    def rewrite(name: str, streamed: bool = False, chunked: bool = True, time: int | None = None,
+                redeclare: bool = False) -> Path:
+        dst = folder / f"structure-{name}.mcap"
+        options = dict(index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False,
+                       use_statistics=False, use_summary_offsets=False) if streamed else {}
+        with open(log, "rb") as fh, open(dst, "wb") as out:
+            reader = make_reader(fh)
+            writer = Writer(out, use_chunking=chunked, **options)
+            writer.start(profile=reader.get_header().profile, library="reliability")
+            ids: dict[tuple[str, int], int] = {}
+            for k, (schema, channel, msg) in enumerate(reader.iter_messages(log_time_order=False)):
+                if ("s", schema.id) not in ids:
+                    ids["s", schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+                if ("c", channel.id) not in ids:
+                    ids["c", channel.id] = writer.register_channel(channel.topic, channel.message_encoding, ids["s", schema.id])
+                if redeclare and k == 20:
+                    other = writer.register_schema("reliability.Other", "jsonschema", b"{}")
+                    writer._Writer__chunk_builder.add_channel(Channel(ids["c", channel.id], channel.topic, "json", {}, other))
+                t = time if time is not None and k == 5 else msg.log_time
+                writer.add_message(ids["c", channel.id], t, msg.data, t, msg.sequence)
+            writer.finish()
+        return dst
+
+    return [("streamed, no summary", rewrite("streamed", streamed=True), True),
+            ("streamed, no chunks", rewrite("unchunked", streamed=True, chunked=False), True),
+            ("log time 2**63", rewrite("t63", time=2**63), False),
+            ("log time -1 as unsigned", rewrite("tneg", time=2**64 - 1), False),
+            ("channel declared twice", rewrite("twice", redeclare=True), True)]
+
+
+def issue33(folder: Path, log: Path, intact: dict) -> list[Outcome]:
+    outcomes = []
+    for name, argv in input_cases(folder, log):
+        s, err, mb, sec = run(argv)
+        ok = s == 2 and len(err.strip().splitlines()) >= 1 and "Traceback" not in err
+        outcomes.append(Outcome(name, "input file", argv[0], s, "documented" if ok else verdict(s, err, mb, False), mb, sec))
+    for name, path, usable in structure_logs(folder, log):
+        s, err, mb, sec = run(["info", str(path)])
+        outcomes.append(Outcome(name, "log structure", "info", s, verdict(s, err, mb, None if usable else False), mb, sec))
+        summary = folder / f"{path.stem}.json"
+        s, err, mb, sec = run(["replay", str(path), "--quiet", "--summary", str(summary)])
+        right = (json.loads(summary.read_text())["digest"] == intact["digest"]) if s == 0 and usable else (None if s else False)
+        outcomes.append(Outcome(name, "log structure", "replay", s, verdict(s, err, mb, right), mb, sec))
+        s, err, mb, sec = run(["recover", str(path), str(folder / f"{path.stem}.fixed.mcap")])
+        complete = s == 0 if usable else None  # a usable log is complete, not a partial salvage
+        outcomes.append(Outcome(name, "log structure", "recover", s, verdict(s, err, mb, complete, quiet_ok=s in (1, 2)), mb, sec))
+    return outcomes
+
+
 # --- the campaign ------------------------------------------------------------------------------------
-def campaign(quick: bool) -> tuple[list[Outcome], dict]:
+def campaign(quick: bool, kinds: set[str] = frozenset({"damage", "hostile", "disk", "issue33"})) -> tuple[list[Outcome], dict]:
     rng = random.Random(0)
     folder = Path(tempfile.mkdtemp(prefix="trackreplay-fuzz-"))
     log = base_log(folder)
@@ -221,8 +318,8 @@ def campaign(quick: bool) -> tuple[list[Outcome], dict]:
     run(["replay", str(log), "--quiet", "--summary", str(intact_summary)])
     intact = json.loads(intact_summary.read_text())
     n = (20, 30, 10) if quick else (120, 200, 60)
-    cases = mutations(log, rng, *n)
-    outcomes: list[Outcome] = []
+    cases = mutations(log, rng, *n) if "damage" in kinds else []
+    outcomes: list[Outcome] = issue33(folder, log, intact) if "issue33" in kinds else []
 
     def one(case) -> list[Outcome]:
         name, kind, data, at = case
@@ -253,14 +350,14 @@ def campaign(quick: bool) -> tuple[list[Outcome], dict]:
 
     # Success is right only where the log is usable as it stands (a long time gap is data, not damage).
     usable = {"1-day time gap", "log time near 2**63"}
-    for name, path in hostile_logs(folder):
+    for name, path in hostile_logs(folder) if "hostile" in kinds else ():
         for tracker in ("flow", "golf"):
             s, err, mb, sec = run(["replay", str(path), "--quiet", "--tracker", tracker], timeout=60)
             right = None if name in usable else (None if s else False)
             outcomes.append(Outcome(f"{name} ({tracker})", "hostile message", "replay", s, verdict(s, err, mb, right), mb, sec))
 
     # Full disk for every writing verb.
-    for verb, argv, limit in [
+    for verb, argv, limit in [] if "disk" not in kinds else [
         ("synth", ["synth", "flow-sim1", str(folder / "full-synth.mcap"), "--frames", "51"], 300_000),
         ("replay --export", ["replay", str(log), "--quiet", "--export", str(folder / "full.parquet")], 2_000),
         ("replay --rrd", ["replay", str(log), "--quiet", "--rrd", str(folder / "full.rrd")], 100_000),
@@ -319,10 +416,15 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true", help="a small budget (about 3 minutes on 2 cores)")
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "reliability.md")
+    parser.add_argument("--kinds", default="damage,hostile,disk,issue33",
+                        help="which cases: damage (bit flips, truncation...), hostile (messages), disk (full), issue33 "
+                             "(input files and log structures); a subset is printed, docs/reliability.md kept")
     args = parser.parse_args()
-    outcomes, meta = campaign(args.quick)
-    write_report(outcomes, meta, args.out)
-    print(args.out.read_text())
+    kinds = set(args.kinds.split(","))
+    outcomes, meta = campaign(args.quick, kinds)
+    out = args.out if kinds >= {"damage", "hostile", "disk", "issue33"} else Path(tempfile.mkdtemp()) / "subset.md"
+    write_report(outcomes, meta, out)
+    print(out.read_text())
 
 
 if __name__ == "__main__":

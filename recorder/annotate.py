@@ -9,6 +9,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import cv2
+import numpy as np
 from mcap.reader import make_reader
 from mcap_protobuf.schema import register_schema
 
@@ -150,9 +152,41 @@ def clip_mark(mark: Mark, width: int, height: int) -> Mark:
     return dataclasses.replace(mark, x=x0, y=y0, w=x1 - x0, h=y1 - y0)
 
 
-def _frame_times(path: Path, image_topic: str) -> list[int]:
+def _frame_times(path: Path, image_topic: str, sized: set[int] = frozenset()) -> tuple[list[int], dict[int, tuple[int, int]]]:
+    """The frames' log times, and the picture size (width, height) of each frame in ``sized`` that a
+    foxglove image holds (other encodings: not known here; ``replay`` checks its marks again)."""
+    times: list[int] = []
+    sizes: dict[int, tuple[int, int]] = {}
     with open(path, "rb") as fh, damage_is_an_error(path):
-        return [msg.log_time for _, _, msg in make_reader(fh).iter_messages(topics=[image_topic], log_time_order=True)]
+        for schema, _, msg in make_reader(fh).iter_messages(topics=[image_topic], log_time_order=True):
+            if len(times) in sized and schema is not None:
+                size = _picture_size(schema.name, msg.data)
+                if size is not None:
+                    sizes[len(times)] = size
+            times.append(msg.log_time)
+    return times, sizes
+
+
+def _picture_size(schema: str, data: bytes) -> tuple[int, int] | None:
+    """(width, height) of a foxglove RawImage or CompressedImage message, None when it does not say."""
+    try:
+        if schema == "foxglove.RawImage":
+            raw = m.RawImage.FromString(data)
+            return raw.width, raw.height
+        if schema == "foxglove.CompressedImage":
+            picture = cv2.imdecode(np.frombuffer(m.CompressedImage.FromString(data).data, np.uint8), cv2.IMREAD_UNCHANGED)
+            return None if picture is None else (picture.shape[1], picture.shape[0])
+    except Exception:  # an undecodable frame: `replay` names it as such
+        return None
+    return None
+
+
+def check_mark_inside(mark: Mark, width: int, height: int) -> None:
+    """Refuse a mark that does not lie inside the ``width`` x ``height`` picture of its frame (written
+    so that nan fails too): a tracker would start on pixels that are not there."""
+    if not (0 <= mark.x and 0 <= mark.y and mark.x + mark.w <= width and mark.y + mark.h <= height):
+        raise SourceError(f"{mark.source or 'the mark'}: the box x,y,w,h = {mark.x:g},{mark.y:g},{mark.w:g},{mark.h:g} "
+                          f"on frame {mark.frame} is not inside the {width}x{height} picture")
 
 
 def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMERA_IMAGE) -> list[InitRegion]:
@@ -165,16 +199,19 @@ def annotate(src: Path, out: Path, marks: list[Mark], image_topic: str = T.CAMER
     summary = read_summary(src)  # missing, not MCAP or truncated: one-sentence errors
     require_topic(src, summary, image_topic)
     require_intact(src)
-    times = _frame_times(src, image_topic)
+    times, sizes = _frame_times(src, image_topic, {mk.frame for mk in marks})
     regions = []
     for mk in marks:
         if not 0 <= mk.frame < len(times):
             raise SourceError(f"{src} has no frame {mk.frame} on {image_topic} (it has {len(times)} frames)")
+        if mk.frame in sizes:
+            check_mark_inside(mk, *sizes[mk.frame])
         regions.append(InitRegion(mk.frame, times[mk.frame], mk.x + mk.w / 2, mk.y + mk.h / 2, mk.w, mk.h, mk.label))
     annotation = init_annotations_pb(regions, times[0])
     # Written as OUT.partial and renamed when complete (so --in-place never damages the original);
-    # the file gets the usual permissions (umask), not a temporary file's 0600.
-    with replace_when_done(out) as dst, open(src, "rb") as fh, damage_is_an_error(src):
+    # a new file gets the usual permissions (umask), one rewritten in place keeps its mode and owner.
+    in_place = Path(out).exists() and Path(out).resolve() == src.resolve()
+    with replace_when_done(out, in_place=in_place) as dst, open(src, "rb") as fh, damage_is_an_error(src):
         source = make_reader(fh)
         copy = McapCopy(source, dst)
         writer = copy.writer

@@ -9,6 +9,7 @@ failed write removes only the file it created, never the final name or another w
 from __future__ import annotations
 
 import os
+import stat
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -54,11 +55,27 @@ def claim_partial(path: str | Path) -> Path:
     return tmp
 
 
+def _take_mode_and_owner(tmp: Path, original: Path) -> None:
+    """Give ``tmp`` the permission bits, owner and group of ``original`` (a file replaced in place keeps
+    them); an owner this process may not give (not root) stays its own."""
+    st = os.stat(original)
+    os.chmod(tmp, stat.S_IMODE(st.st_mode))
+    if (st.st_uid, st.st_gid) != (os.stat(tmp).st_uid, os.stat(tmp).st_gid):
+        try:
+            os.chown(tmp, st.st_uid, st.st_gid)
+        except PermissionError:
+            try:
+                os.chown(tmp, -1, st.st_gid)  # a group the user belongs to
+            except PermissionError:
+                pass
+
+
 @contextmanager
-def replace_when_done(path: str | Path, *, keep_partial: bool = False) -> Iterator[BinaryIO]:
+def replace_when_done(path: str | Path, *, keep_partial: bool = False, in_place: bool = False) -> Iterator[BinaryIO]:
     """A binary file at :func:`open_partial`'s name, renamed to ``path`` when the block ends without error.
 
     On an error that file is removed, unless ``keep_partial`` (a log that ``recover`` can salvage).
+    ``in_place``: ``path`` exists and is being rewritten: the new file keeps its mode and owner.
     """
     path = Path(path)
     tmp, fh = open_partial(path)
@@ -77,4 +94,6 @@ def replace_when_done(path: str | Path, *, keep_partial: bool = False) -> Iterat
             raise OutputError(f"cannot write {path} ({err.strerror or err})") from None
         raise
     fh.close()
+    if in_place:
+        _take_mode_and_owner(tmp, path)
     os.replace(tmp, path)

@@ -141,12 +141,15 @@ def _resync(data: mmap.mmap | bytes, start: int) -> int:
         return pos
 
 
-def chunk_messages(data: bytes) -> list[Message]:
+def chunk_messages(data: bytes, channels: list[Channel] | None = None) -> list[Message]:
     """The messages of the chunk record that ``data`` holds whole (e.g. read at a chunk index's offset
-    and length), CRC-checked; raises :class:`RecordDamage` when it is damaged or not one chunk."""
+    and length), CRC-checked; raises :class:`RecordDamage` when it is damaged or not one chunk. The
+    chunk's channel records are appended to ``channels`` when given."""
     size, item = read_record(data, 0)
     if not isinstance(item, ChunkRecords) or size != len(data):
         raise RecordDamage("no chunk record at the indexed offset")
+    if channels is not None:
+        channels.extend(r for r in item.records if isinstance(r, Channel))
     return [r for r in item.records if isinstance(r, Message)]
 
 

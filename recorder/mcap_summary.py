@@ -11,6 +11,7 @@ messages outside chunks by mcap's linear reader.
 from __future__ import annotations
 
 import struct
+import zlib
 from pathlib import Path
 
 from mcap.opcode import Opcode
@@ -26,7 +27,9 @@ def streamed(data: bytes) -> bool:
     start = end - FOOTER_SIZE
     if start < len(MCAP_MAGIC) or bytes(data[end:]) != MCAP_MAGIC or data[start] != Opcode.FOOTER:
         return False
-    return struct.unpack_from("<Q", data, start + 9)[0] == 0
+    summary_start, _, summary_crc = struct.unpack_from("<QQI", data, start + 9)
+    # the CRC then covers the footer's own fields: a summary_start flipped to 0 is damage, not a stream
+    return summary_start == 0 and (summary_crc == 0 or zlib.crc32(data[start:start + 9 + 16]) == summary_crc)
 
 
 def streamed_summary(path: Path) -> Summary | None:

@@ -12,7 +12,7 @@ import os
 from collections.abc import Mapping
 from pathlib import Path
 from types import TracebackType
-from typing import Any, BinaryIO
+from typing import Any
 
 from mcap.writer import CompressionType, Writer
 from mcap_protobuf.schema import register_schema

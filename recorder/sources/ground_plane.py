@@ -35,6 +35,8 @@ from trackreplay.schemas.errors import SourceError
 from trackreplay.schemas.ground_plane import GroundPlaneCalibration
 from trackreplay.trackers.geometry.homography import apply_homography
 
+MAX_CONDITION = 1e12  # an image-to-ground homography's 2-norm condition number: beyond it, singular
+
 KEYS = ("width", "height", "image_to_ground", "points", "camera_ground", "camera_height", "principal_point", "focal_px")
 FIT_WARNING_M = 0.05
 
@@ -86,6 +88,9 @@ def read_ground_plane(path: str | Path) -> tuple[GroundPlaneCalibration, tuple[s
             warnings.append(f"{path}: the homography misses a point by {error:.3f} m (check the points)")
     else:
         H = _numbers(path, "image_to_ground", data["image_to_ground"], (3, 3))
+        if not np.linalg.cond(H) < MAX_CONDITION:  # (an all-zero matrix: inf; nan fails too)
+            raise SourceError(f"{path}: image_to_ground is singular (all zero, or its rows dependent): it maps the "
+                              "picture onto no plane")
     width, height = (_numbers(path, k, data[k], (1,))[0] for k in ("width", "height"))
     if width != int(width) or height != int(height):
         raise SourceError(f"{path}: width and height must be whole pixels")

@@ -134,6 +134,10 @@ def _get(data: dict[str, Any], key: str, path: Path, default: Any = None, requir
     return default
 
 
+MAX_CALIBRATION_VALUE = 1e300
+MAX_SIDE = 1 << 18  # pixels; a picture's side (images are limited to 2**28 pixels)
+
+
 def _floats(value: Any, n: int, key: str, path: Path) -> tuple[float, ...]:
     try:
         arr = np.asarray(value, dtype=np.float64).ravel()
@@ -141,8 +145,10 @@ def _floats(value: Any, n: int, key: str, path: Path) -> tuple[float, ...]:
         raise SourceError(f"calibration {path}: {key} is not a list of numbers") from None
     if n and arr.size != n:
         raise SourceError(f"calibration {path}: {key} has {arr.size} numbers, expected {n}")
-    if not np.all(np.isfinite(arr)):
-        raise SourceError(f"calibration {path}: {key} holds a non-finite number")
+    # OpenCV's YAML reader reads `nan` (ROS camera_info writes it so) as the largest double: no
+    # calibration value comes near that
+    if not np.all(np.isfinite(arr)) or np.any(np.abs(arr) >= MAX_CALIBRATION_VALUE):
+        raise SourceError(f"calibration {path}: {key} holds a non-finite number (nan or inf)")
     return tuple(float(v) for v in arr)
 
 
@@ -156,9 +162,10 @@ def _camera(data: dict[str, Any], path: Path, prefix: str, fallback: CameraModel
         if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and float(v).is_integer()
                    for v in (width, height)):
             raise SourceError(f"calibration {path}: width and height must be integers, not {width!r} and {height!r}")
+        if not (0 < width <= MAX_SIDE and 0 < height <= MAX_SIDE):  # (a `nan` read by OpenCV is 1.8e308)
+            raise SourceError(f"calibration {path}: width and height must be positive, at most {MAX_SIDE} pixels, "
+                              f"not {width:g} and {height:g}")
         width, height = int(width), int(height)
-        if width <= 0 or height <= 0:
-            raise SourceError(f"calibration {path}: width and height must be positive")
     else:
         width, height = fallback.width, fallback.height
     k_raw = get("K")
@@ -195,7 +202,7 @@ def load_calibration(path: str | Path, stereo: bool = False) -> Calibration:
         if isinstance(baseline, bool) or not isinstance(baseline, (int, float)):  # (not "0.12", not true)
             raise SourceError(f"calibration {path}: baseline_m is not a number")
         baseline = float(baseline)
-        if not (math.isfinite(baseline) and baseline > 0):
+        if not (math.isfinite(baseline) and 0 < baseline < MAX_CALIBRATION_VALUE):
             raise SourceError(f"calibration {path}: baseline_m must be a finite positive number of metres, not {baseline!r}")
     right = _camera(data, path, "right_", left, baseline)
     # the baseline the right P implies (P_right[3] = -fx_right * baseline), as the replay reads it

@@ -177,10 +177,10 @@ def sidecar_path(summary: Path) -> Path:
 
 
 def write_sidecar(frames: FrameDigests, path: Path) -> Path:
-    from trackreplay.replay.core.outputs import write_parquet
+    from trackreplay.replay.core.outputs import write_parquet_with
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    return write_parquet(frames.table(), path)
+    return write_parquet_with(path, frames.write_table)  # a spilled replay's row groups one at a time
 
 
 def read_sidecar(path: Path) -> FrameDigests:

@@ -1,20 +1,21 @@
-"""Rauch–Tung–Striebel smoothing of many image tracks at once, at every noise of a grid (issue 33).
+"""Rauch–Tung–Striebel smoothing of many tracks at once, at every noise of a grid (issue 33).
 
 :mod:`trackreplay.replay.analysis.smooth`'s image model is constant velocity per axis with a
-diagonal measurement noise, so its 4-state filter is two independent 2-state ``(p, v)`` filters
-(``F``, ``Q``, ``R`` and the prior are block diagonal and stay so), and the two axes of a track,
-observed on the same frames with the same variances, share one covariance: it is computed once.
-Every step below runs the filter for all tracks (and all grid points) as numpy elementwise
-operations on ``(grid, axis, track)`` arrays, frames in a Python loop. The update by a position
-and a velocity of independent noise is done as two scalar updates (the same posterior; the
-log-likelihood is the joint density by the chain rule). A velocity that is not observed is not
-an observation (the filterpy version gave it a variance of 10¹², which moved the results by
-under 10⁻¹¹ px).
+diagonal measurement noise, so its 4-state filter is independent 2-state ``(p, v)`` filters, one
+per axis (``F``, ``Q``, ``R`` and the prior are block diagonal and stay so); the axes of a track,
+observed on the same frames with the same variances, share one covariance, computed once. A 3-D
+track observed with ``R = s² I`` splits the same way (three axes). Every frame runs the filter for
+all tracks and grid points as numpy elementwise operations on ``(grid, axis, track)`` arrays, the
+frames in a Python loop; the update by a position and a velocity of independent noise is two
+scalar updates (the same posterior; the log-likelihood is the joint density by the chain rule).
+The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds).
 
-This replaces filterpy's ``KalmanFilter.batch_filter`` and ``rts_smoother``, which run one track at
-one noise in Python (9.5 ms a row over the 140-point grid); no maintained library batches a
-time-varying filter over tracks and parameters. Recursions: Särkkä, *Bayesian Filtering and
-Smoothing* (2013), Kalman filter eqs. 4.20–4.21 and RTS smoother eq. 8.6 (docs/papers.md).
+filterpy's ``KalmanFilter.batch_filter`` and ``rts_smoother``, which this replaces, run one track at
+one noise in Python (9.5 ms a row over flow's 140-point grid); no maintained library batches a
+time-varying filter over tracks and parameters. A velocity the tracker does not give is not an
+observation here (filterpy's version gave it a variance of 10¹², which moved positions by under
+10⁻¹¹ px). Kalman filter: the general discrete filter of seed 004 §3.2, eqs. 12–24 (docs/papers.md);
+smoother: Rauch, Tung and Striebel, AIAA Journal 3(8), 1965.
 """
 
 from __future__ import annotations
@@ -25,154 +26,203 @@ from dataclasses import dataclass
 import numpy as np
 
 LOG_2PI = math.log(2.0 * math.pi)
+# The variance of what a frame does not observe: its update then moves the state by ~10⁻⁹⁰ of itself,
+# nothing at double precision, and every frame is the same arithmetic (no masks)
+UNSEEN = 1e100
 
 
 @dataclass(frozen=True)
 class Columns:
     """Observations of a batch of ``B`` tracks on ``N`` frames (a track shorter than the batch is
-    padded with unobserved frames, which change nothing before its end). Means are ``(2, B)`` per
-    frame (x and y axes); variances and masks ``(1, B)``, or ``(2, B)`` for the velocity when some
-    track observes vx and vy on different frames (its axes then need their own covariance)."""
+    padded with unobserved frames, which change nothing before its end). Means are ``(D, B)`` per
+    frame (D axes: x, y in the image, X, Y, Z in 3-D); variances and masks ``(1, B)``, or ``(D, B)``
+    for the velocity when some track observes its axes' velocities on different frames (its axes
+    then need their own covariance)."""
 
-    zp: np.ndarray  # (N, 2, B) observed position (px), 0 where not observed
-    zv: np.ndarray  # (N, 2, B) observed velocity (px/frame), 0 where not observed
-    rp: np.ndarray  # (N, 1, B) the position's variance per σ₀² (1/confidence)
-    rv: np.ndarray  # (N, A, B) the velocity's variance per σ_v²
-    seen: np.ndarray  # (N, 1, B) 1.0 on an observed row
-    seen_v: np.ndarray  # (N, A, B) 1.0 where the velocity is observed
+    zp: np.ndarray  # (N, D, B) observed position, 0 where not observed
+    zv: np.ndarray  # (N, D, B) observed velocity (per frame), 0 where not observed
+    rp: np.ndarray  # (N, 1, B) the position's variance per σ₀² (1/confidence), UNSEEN where not observed
+    rv: np.ndarray  # (N, A, B) the velocity's variance per σ_v², UNSEEN where not observed
     counted: np.ndarray  # (N, 1, B) 1.0 where the position counts in the likelihood (observed, not the first)
     counted_v: np.ndarray  # (N, A, B) 1.0 where the velocity counts in the likelihood
-    p0: np.ndarray  # (2, B) the first observed position (the prior's mean)
+    p0: np.ndarray  # (D, B) the first observed position (the prior's mean)
     r0: np.ndarray  # (1, B) its variance per σ₀² (the prior's spread)
     components: np.ndarray  # (B,) observed components counted in each track's likelihood
+    last: np.ndarray  # (B,) each track's last frame
+    velocity: bool  # some track observes a velocity
 
     @staticmethod
     def pack(zs: list[np.ndarray], rs: list[np.ndarray]) -> Columns:
-        """``zs[i]`` (n_i, 4) = (x, y, vx, vy), NaN where not observed (a row without x, y is not
-        observed at all); ``rs[i]`` (n_i,) the variance scale of each row (1/confidence)."""
-        b, n = len(zs), max(len(z) for z in zs)
+        """``zs[i]`` (n_i, 2D) = D positions then D velocities (image: x, y, vx, vy), NaN where not
+        observed (a row without its first position is not observed at all); ``rs[i]`` (n_i,) the
+        variance scale of each row (1/confidence)."""
+        b, n, d = len(zs), max(len(z) for z in zs), zs[0].shape[1] // 2
         obs = [np.isfinite(z[:, 0]) for z in zs]
-        vel = [o[:, None] & np.isfinite(z[:, 2:]) for o, z in zip(obs, zs)]
-        a = 1 if all(np.array_equal(v[:, 0], v[:, 1]) for v in vel) else 2
-        zp, zv = np.zeros((n, 2, b)), np.zeros((n, 2, b))
-        rp, seen, counted = np.zeros((n, 1, b)), np.zeros((n, 1, b)), np.zeros((n, 1, b))
-        rv, seen_v, counted_v = np.zeros((n, a, b)), np.zeros((n, a, b)), np.zeros((n, a, b))
-        p0, r0, comp = np.zeros((2, b)), np.zeros((1, b)), np.zeros(b)
+        vel = [o[:, None] & np.isfinite(z[:, d:]) for o, z in zip(obs, zs)]
+        a = 1 if all((v == v[:, :1]).all() for v in vel) else d
+        zp, zv = np.zeros((n, d, b)), np.zeros((n, d, b))
+        rp, counted = np.full((n, 1, b), UNSEEN), np.zeros((n, 1, b))
+        rv, counted_v = np.full((n, a, b), UNSEEN), np.zeros((n, a, b))
+        p0, r0, comp = np.zeros((d, b)), np.zeros((1, b)), np.zeros(b)
         for i, (z, r, o, v) in enumerate(zip(zs, rs, obs, vel)):
             m, first = len(z), int(np.flatnonzero(o)[0])
             c = o.copy()
             c[first] = False
-            zp[:m, :, i] = np.where(o[:, None], z[:, :2], 0.0)
-            zv[:m, :, i] = np.where(v, z[:, 2:], 0.0)
-            rp[:m, 0, i], seen[:m, 0, i], counted[:m, 0, i] = np.where(o, r, 0.0), o, c
-            rv[:m, :, i] = np.where(v[:, :a], r[:, None], 0.0)
-            seen_v[:m, :, i], counted_v[:m, :, i] = v[:, :a], v[:, :a] & c[:, None]
-            p0[:, i], r0[0, i] = z[first, :2], r[first]
-            comp[i] = 2 * c.sum() + (v & c[:, None]).sum()
-        return Columns(zp, zv, rp, rv, seen, seen_v, counted, counted_v, p0, r0, comp)
+            zp[:m, :, i] = np.where(o[:, None], z[:, :d], 0.0)
+            zv[:m, :, i] = np.where(v, z[:, d:], 0.0)
+            rp[:m, 0, i], counted[:m, 0, i] = np.where(o, r, UNSEEN), c
+            rv[:m, :, i] = np.where(v[:, :a], r[:, None], UNSEEN)
+            counted_v[:m, :, i] = v[:, :a] & c[:, None]
+            p0[:, i], r0[0, i] = z[first, :d], r[first]
+            comp[i] = d * c.sum() + (v & c[:, None]).sum()
+        last = np.array([len(z) - 1 for z in zs])
+        velocity = any(v.any() for v in vel)
+        return Columns(zp, zv, rp, rv, counted, counted_v, p0, r0, comp, last, velocity)
 
 
-def _prior(cols: Columns, s2: np.ndarray, axes: int) -> tuple[np.ndarray, ...]:
-    """Vague, around the first observation: mean ``(p₀, 0)``, covariance ``diag(σ₀² r + 10⁴, 10²)``."""
-    a = np.broadcast_to(s2 * cols.r0 + 1e4, np.broadcast_shapes(np.shape(s2), (axes, cols.r0.shape[1]))).copy()
-    p = np.broadcast_to(cols.p0, (*a.shape[:-2], 2, a.shape[-1])).copy()
-    return p, np.zeros(p.shape), a, np.zeros(a.shape), np.full(a.shape, 1e2)
+@dataclass(frozen=True)
+class Prior:
+    """The prior around a track's first observation: mean ``(p₀, 0)``, covariance
+    ``diag(σ₀² r₀ + position, velocity)`` per axis."""
+
+    position: float = 1e4  # vague (image: px²)
+    velocity: float = 1e2
 
 
-def filter_columns(cols: Columns, q: np.ndarray, s2: np.ndarray, sv2: np.ndarray, keep: bool):
-    """Forward filter of every track at noises ``q``, ``σ₀²``, ``σ_v²`` (arrays broadcast against
-    ``(…, 1, B)``): per frame the prediction ``x ← F x``, ``P ← F P Fᵀ + Q`` (``F = [[1, 1], [0, 1]]``,
-    ``Q = q [[1/3, 1/2], [1/2, 1]]``), then scalar updates by the position and the velocity
-    (``a - a²/s`` written ``a r / s``: no cancellation). Returns ``-2 ×`` the log-likelihood without
+IMAGE_PRIOR = Prior()
+
+
+def axis_noise(Q, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Q_pp, Q_pv, Q_vv)`` of one axis of the process noise ``Q(v)`` (a block diagonal
+    constant-velocity model's, state ``(p₁, v₁, p₂, v₂, …)``) at every value ``v``."""
+    blocks = np.array([np.asarray(Q(float(v)))[:2, :2] for v in values]).reshape(-1, 2, 2)
+    return blocks[:, 0, 0], blocks[:, 0, 1], blocks[:, 1, 1]
+
+
+def _prior(cols: Columns, s2: np.ndarray, axes: int, prior: Prior) -> tuple[np.ndarray, np.ndarray]:
+    """The means ``[p, v]`` (2, …, D, B) and covariances ``[a, b, c]`` (3, …, A, B) before the first frame."""
+    a = s2 * cols.r0 + prior.position
+    shape = np.broadcast_shapes(np.shape(a), (axes, cols.r0.shape[1]))
+    cov = np.zeros((3, *shape))
+    cov[0], cov[2] = a, prior.velocity
+    pv = np.zeros((2, *shape[:-2], *cols.p0.shape))
+    pv[0] = cols.p0
+    return pv, cov
+
+
+def filter_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, keep: bool,
+                   prior: Prior = IMAGE_PRIOR):
+    """Forward filter of every track at process noise ``Q = (Q_pp, Q_pv, Q_vv)``, measurement noise
+    ``σ₀²``, ``σ_v²`` (arrays broadcast against ``(…, 1, B)``): per frame the prediction ``x ← F x``,
+    ``P ← F P Fᵀ + Q`` (``F = [[1, 1], [0, 1]]``), then scalar updates by the position and the velocity
+    (``a - a²/s`` written ``a r / s``: no cancellation; an unobserved frame has variance
+    :data:`UNSEEN`). Returns ``-2 ×`` the log-likelihood without
     its ``2π`` terms (…, B) and, with ``keep``, the filtered ``(p, v, a, b, c)`` of every frame."""
-    q3, q2 = q / 3.0, q * 0.5
+    q3, q2, q = Q
     axes = cols.rv.shape[1]
-    p, v, a, b, c = _prior(cols, s2, axes)
+    pv, cov = _prior(cols, s2, axes, prior)
+    p, v, a, b, c = pv[0], pv[1], cov[0], cov[1], cov[2]  # views: updated in place
     quad, logs = np.zeros(p.shape), np.zeros(a.shape)
-    velocity, likelihood = bool(cols.seen_v.any()), not keep
     n = cols.zp.shape[0]
-    kept = tuple(np.empty((n, *x.shape)) for x in (p, v, a, a, a)) if keep else ()
-    rows = zip(cols.zp, cols.rp, cols.seen, cols.counted, cols.zv, cols.rv, cols.seen_v, cols.counted_v)
-    for k, (zp, rp, seen, counted, zv, rv, seen_v, counted_v) in enumerate(rows):
+    kept = (np.empty((n, *pv.shape)), np.empty((n, *cov.shape))) if keep else None
+    for k, (zp, rp, counted, zv, rv, counted_v) in enumerate(zip(cols.zp, cols.rp, cols.counted, cols.zv, cols.rv,
+                                                                 cols.counted_v)):
         p += v  # predict
         t = b + c
         a += b
         a += t
         a += q3
-        b = t + q2
+        np.add(t, q2, out=b)
         c += q
-        r = s2 * rp  # position update
+        r = s2 * rp  # position update: gains K = (a, b) / s
         s = a + r
+        w = np.reciprocal(s)
+        K = cov[:2] * w
         y = zp - p
-        w = seen / s
-        k1, k2 = a * w, b * w
-        p += k1 * y
-        v += k2 * y
-        c -= k2 * b
-        b -= k1 * b
-        a = k1 * r + a * (1.0 - seen)
-        if likelihood:
-            quad += y * y * (counted / s)
+        pv += K * y
+        c -= K[1] * b
+        b -= K[0] * b
+        np.multiply(K[0], r, out=a)
+        if not keep:
+            quad += y * y * w  # 0 on the first observation: the prior's mean
             logs += np.log(s) * counted
-        if velocity:
-            r = sv2 * rv
+        if cols.velocity:
+            r = sv2 * rv  # velocity update: K = (b, c) / s
             s = c + r
+            w = np.reciprocal(s)
+            K = cov[1:] * w
             y = zv - v
-            w = seen_v / s
-            k1, k2 = b * w, c * w
-            p += k1 * y
-            v += k2 * y
-            a -= k1 * b
-            b -= k2 * b
-            c = k2 * r + c * (1.0 - seen_v)
-            if likelihood:
-                quad += y * y * (counted_v / s)
+            pv += K * y
+            a -= K[0] * b
+            b -= K[1] * b
+            np.multiply(K[1], r, out=c)
+            if not keep:
+                quad += y * y * (counted_v * w)
                 logs += np.log(s) * counted_v
-        for out, value in zip(kept, (p, v, a, b, c)):
-            out[k] = value
-    return quad.sum(axis=-2) + logs.sum(axis=-2) * (2 // axes), kept
+        if keep:
+            kept[0][k], kept[1][k] = pv, cov
+    filtered = (kept[0][:, 0], kept[0][:, 1], kept[1][:, 0], kept[1][:, 1], kept[1][:, 2]) if keep else ()
+    return quad.sum(axis=-2) + logs.sum(axis=-2) * (cols.zp.shape[1] // axes), filtered
 
 
-def rts_columns(filtered: tuple[np.ndarray, ...], q: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The RTS backward pass over filtered ``(p, v, a, b, c)`` (N, …) at process noise ``q``: the
-    gains ``G = P Fᵀ (F P Fᵀ + Q)⁻¹`` of every frame at once, then the recursion. Returns the
-    smoothed ``(p, v, a, b, c)``."""
+def _compose(first: tuple[np.ndarray, ...], then: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+    """``first ∘ then`` of two backward maps ``(G, u, U)``: ``x ↦ G x + u``, ``P ↦ G P Gᵀ + U``;
+    ``G = (g11, g12, g21, g22)``, ``u = (u_p, u_v)``, ``U = (U_a, U_b, U_c)``."""
+    g11, g12, g21, g22, up, uv, ua, ub, uc = first
+    h11, h12, h21, h22, wp, wv, wa, wb, wc = then
+    m11, m12 = g11 * wa + g12 * wb, g11 * wb + g12 * wc  # G₁ U₂
+    m21, m22 = g21 * wa + g22 * wb, g21 * wb + g22 * wc
+    return (g11 * h11 + g12 * h21, g11 * h12 + g12 * h22, g21 * h11 + g22 * h21, g21 * h12 + g22 * h22,
+            g11 * wp + g12 * wv + up, g21 * wp + g22 * wv + uv,
+            m11 * g11 + m12 * g12 + ua, m11 * g21 + m12 * g22 + ub, m21 * g21 + m22 * g22 + uc)
+
+
+def rts_columns(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], last: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The RTS pass over filtered ``(p, v, a, b, c)`` (N, …, B) at process noise ``Q``, each track
+    ending at frame ``last`` (B,). Each frame's step back, ``x ↦ x_k + G (x - F x_k)`` and
+    ``P ↦ P_k + G (P - P⁻_{k+1}) Gᵀ`` with ``G = P_k Fᵀ (P⁻_{k+1})⁻¹``, is an affine map; the maps are
+    composed by a parallel prefix scan (log₂ N vectorised rounds instead of N Python steps), the
+    last frame's map the constant filtered state. Returns the smoothed ``(p, v, a, b, c)``."""
     p, v, a, b, c = filtered
     bc = b + c
-    A, B, C = a + b + bc + q / 3.0, bc + q * 0.5, c + q  # the next frame's prediction covariance
+    A, B, C = a + b + bc + Q[0], bc + Q[1], c + Q[2]  # the next frame's prediction covariance P⁻
     det = A * C - B * B
     ab = a + b
-    g11, g12 = (ab * C - b * B) / det, (b * A - ab * B) / det
-    g21, g22 = (bc * C - c * B) / det, (c * A - bc * B) / det
+    g = [(ab * C - b * B) / det, (b * A - ab * B) / det, (bc * C - c * B) / det, (c * A - bc * B) / det]
     fp = p + v
-    ps, vs, as_, bs, cs = p.copy(), v.copy(), a.copy(), b.copy(), c.copy()
-    for k in range(len(p) - 2, -1, -1):
-        dp, dv = ps[k + 1] - fp[k], vs[k + 1] - v[k]
-        ps[k] += g11[k] * dp + g12[k] * dv
-        vs[k] += g21[k] * dp + g22[k] * dv
-        dA, dB, dC = as_[k + 1] - A[k], bs[k + 1] - B[k], cs[k + 1] - C[k]
-        u1, u2 = g11[k] * dA + g12[k] * dB, g11[k] * dB + g12[k] * dC
-        w1, w2 = g21[k] * dA + g22[k] * dB, g21[k] * dB + g22[k] * dC
-        as_[k] += g11[k] * u1 + g12[k] * u2
-        bs[k] += g21[k] * u1 + g22[k] * u2
-        cs[k] += g21[k] * w1 + g22[k] * w2
-    return ps, vs, as_, bs, cs
+    u = [p - g[0] * fp - g[1] * v, v - g[2] * fp - g[3] * v]  # x_k - G F x_k
+    m11, m12 = g[0] * A + g[1] * B, g[0] * B + g[1] * C  # G P⁻
+    m21, m22 = g[2] * A + g[3] * B, g[2] * B + g[3] * C
+    U = [a - m11 * g[0] - m12 * g[1], b - m11 * g[2] - m12 * g[3], c - m21 * g[2] - m22 * g[3]]
+    end = (np.arange(len(p))[:, None] >= last)[:, None, :]  # a track's last frame and the padding after it
+    maps = [np.where(end, 0.0, x) for x in g] + [np.where(end, x, y) for x, y in zip((p, v, a, b, c), (*u, *U))]
+    d = 1
+    while d < len(p):
+        head = _compose(tuple(x[:-d] for x in maps), tuple(x[d:] for x in maps))
+        for x, y in zip(maps, head):
+            x[:-d] = y
+        d *= 2
+    return tuple(maps[4:])
 
 
-def grid_loglik(cols: Columns, q: np.ndarray, s2: np.ndarray, sv2: np.ndarray, lane_elements: int) -> np.ndarray:
-    """Log-likelihood (G, B) of every track at every grid point ``(q, σ₀², σ_v²)`` (each (G,)),
+def grid_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, lane_elements: int,
+                prior: Prior = IMAGE_PRIOR) -> np.ndarray:
+    """Log-likelihood (G, B) of every track at every grid point ``(Q, σ₀², σ_v²)`` (each (G,)),
     at most ``lane_elements`` grid points × tracks at a time (the working set)."""
-    g, b = len(q), cols.zp.shape[-1]
+    g, b = len(s2), cols.zp.shape[-1]
     step = max(1, lane_elements // b)
     out = np.empty((g, b))
     for lo in range(0, g, step):
         sl = slice(lo, lo + step)
-        out[sl] = filter_columns(cols, q[sl, None, None], s2[sl, None, None], sv2[sl, None, None], keep=False)[0]
+        noise = tuple(x[sl, None, None] for x in Q)
+        out[sl] = filter_columns(cols, noise, s2[sl, None, None], sv2[sl, None, None], False, prior)[0]
     return -0.5 * (out + cols.components * LOG_2PI)
 
 
-def smooth_columns(cols: Columns, q: np.ndarray, s2: np.ndarray, sv2: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Filter and RTS at one noise per track (each (B,)): the smoothed ``(p, v)`` (N, 2, B) and
+def smooth_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray,
+                   prior: Prior = IMAGE_PRIOR) -> tuple[np.ndarray, ...]:
+    """Filter and RTS at one noise per track (each (B,)): the smoothed ``(p, v)`` (N, D, B) and
     ``(a, b, c)`` (N, A, B)."""
-    _, kept = filter_columns(cols, q[None], s2[None], sv2[None], keep=True)
-    return rts_columns(kept, q[None])
+    noise = tuple(x[None] for x in Q)
+    _, kept = filter_columns(cols, noise, s2[None], sv2[None], True, prior)
+    return rts_columns(kept, noise, cols.last)

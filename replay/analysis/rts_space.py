@@ -5,8 +5,8 @@ transition and process noise, the 3-D position observed with a full covariance `
 points' covariance couples the axes, so the filter does not split into axes as the image one does,
 :mod:`.rts`). Each step is numpy's stacked matrix products and solves over ``(grid, track)``, frames
 in a Python loop; the RTS gains of every frame are one stacked solve. It replaces filterpy's
-``batch_filter`` / ``rts_smoother`` per track and noise, which gave the same numbers to 10⁻¹² m.
-Recursions: Särkkä, *Bayesian Filtering and Smoothing* (2013), eqs. 4.20–4.21 and 8.6 (docs/papers.md).
+``batch_filter`` / ``rts_smoother`` per track and noise, which gave the same numbers to 10⁻¹³ m.
+Kalman filter: seed 004 §3.2, eqs. 12–24 (docs/papers.md); smoother: Rauch, Tung and Striebel (1965).
 """
 
 from __future__ import annotations

@@ -2,9 +2,14 @@
 
 The trackers are causal: a frame's estimate uses only the past. After the event the whole log is
 in hand, so every estimate may use the future as well. :func:`smooth_trajectory` runs, per track,
-a Rauch–Tung–Striebel smoother (filterpy's ``KalmanFilter.batch_filter`` forward, then its
-``rts_smoother`` backward) over the tracker's motion model, and fills the frames the tracker did
-not measure from the smoothed state, with a standard deviation.
+a Rauch–Tung–Striebel smoother (Kalman filter forward, RTS backward) over the tracker's motion
+model, and fills the frames the tracker did not measure from the smoothed state, with a standard
+deviation. All tracks and all noise grid points are filtered at once (issue 33): the image model
+splits into axes (:mod:`.rts`, elementwise numpy over grid × axis × track, the backward pass a
+parallel prefix scan), a 3-D model with a full ``R`` uses stacked matrices (:mod:`.rts_space`).
+filterpy's ``batch_filter`` / ``rts_smoother``, one track and grid point at a time, gave the same
+numbers (positions within 10⁻¹¹ px, the same fits; ``benchmarks/bench_smooth.py`` keeps it as the
+reference) at ~100× the cost.
 
 **Model.** Each tracker declares its own in its spec (``TrackerSpec.smoothing``,
 :mod:`trackreplay.trackers.smoothing`); a tracker that declares none, or a name no spec declares,
@@ -153,7 +158,7 @@ def _select(zs: list[np.ndarray], rs: list[np.ndarray], cfg: SmoothConfig) -> li
         for lane in _lanes([len(zs[i]) for i in part], max(1, LANE_ELEMENTS // len(q))):
             tracks = [part[j] for j in lane]
             cols = rts.Columns.pack([zs[i] for i in tracks], [rs[i] for i in tracks])
-            ll = rts.grid_loglik(cols, q, s * s, sv * sv, LANE_ELEMENTS)
+            ll = rts.grid_loglik(cols, rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv, LANE_ELEMENTS)
             ll = np.where(np.isnan(ll), -math.inf, ll)
             for j, i in enumerate(tracks):
                 g = int(np.argmax(ll[:, j]))
@@ -167,7 +172,7 @@ def _smooth_at(zs: list[np.ndarray], rs: list[np.ndarray], fits: list) -> list[t
     for lane in _lanes([len(z) for z in zs], LANE_ELEMENTS):
         cols = rts.Columns.pack([zs[i] for i in lane], [rs[i] for i in lane])
         q, s, sv = (np.array([fits[i][k] for i in lane]) for k in range(3))
-        p, v, a, _, c = rts.smooth_columns(cols, q, s * s, sv * sv)
+        p, v, a, _, c = rts.smooth_columns(cols, rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv)
         last = a.shape[1] - 1  # the y axis' covariance: its own, or shared with x
         for j, i in enumerate(lane):
             n = len(zs[i])
@@ -469,7 +474,7 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
         for key, part in observations.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
             raw_by_track[tuple(key)] = part.drop("tracker", "track_id")
     models: dict[str, SmoothingModel] = {}
-    results: list = []  # per track, in canonical order: (rows, fit), or the image track awaiting the smoother
+    results: list = []  # per track, in canonical order: (rows, fit), or the track awaiting the smoother
     for key, track in df.select(COLUMNS).sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
         tracker = key[0]
         if tracker not in models:
@@ -479,8 +484,18 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
             results.append(_space_track(model, track, frame_times, raw))
         else:
             results.append(_image_track(model, track, frame_times, raw))
+    _smooth_waiting(results, models, config, frame_times, cameras)
+    parts = [out.cast({**SCHEMA, **EXTRA_SCHEMA}) for out, _ in results]
+    fits = [fit for _, fit in results if fit is not None]
+    return pl.concat(parts).sort(["tracker", "track_id", "frame"], maintain_order=True), fits
+
+
+def _smooth_waiting(results: list, models: Mapping[str, SmoothingModel], config: SmoothConfig,
+                    frame_times: Mapping[int, int] | None, cameras: Mapping[int, PtzCamera] | None) -> None:
+    """Replace every track awaiting the smoother in ``results`` by its rows and fit: all image tracks
+    at once (the models differ only in what they observe, which ``z`` already says), then each 3-D
+    model's tracks at once."""
     waiting = [i for i, r in enumerate(results) if isinstance(r, _ImageTrack)]
-    # every image track at once: the models differ only in what they observe, which z already says
     smoothed = smooth_tracks([results[i].z for i in waiting], [results[i].conf for i in waiting], config)
     for i, sm in zip(waiting, smoothed):
         results[i] = _image_result(models[results[i].tracker], results[i], sm, config, frame_times, cameras)
@@ -489,9 +504,6 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
         fitted = _fit_space(models[tracker], [results[i] for i in waiting], config)
         for i, f in zip(waiting, fitted):
             results[i] = _space_result(models[tracker], results[i], f, config, frame_times)
-    parts = [out.cast({**SCHEMA, **EXTRA_SCHEMA}) for out, _ in results]
-    fits = [fit for _, fit in results if fit is not None]
-    return pl.concat(parts).sort(["tracker", "track_id", "frame"], maintain_order=True), fits
 
 
 @dataclass(frozen=True)
@@ -573,10 +585,61 @@ def _space_observations(model: SpaceSmoothing, frames: np.ndarray, raw: pl.DataF
     return z, R0, ok, grid
 
 
+def _per_axis(model: SpaceSmoothing, track: _SpaceTrack) -> bool:
+    """Whether ``track`` splits into three independent axes: the model's transition and process noise
+    are the same constant velocity on each axis, and ``R`` is a multiple of I (no raw covariance)."""
+    F = model.F()
+    if not np.array_equal(F, np.kron(np.eye(3), np.array([[1.0, 1.0], [0.0, 1.0]]))):
+        return False
+    if any(not np.array_equal(Q := model.Q(a), np.kron(np.eye(3), Q[:2, :2])) for a in model.accel_grid):
+        return False
+    return bool((track.R0 == np.eye(3)).all())
+
+
+SPACE_PRIOR = rts.Prior(float(rts_space.PRIOR[0, 0]), float(rts_space.PRIOR[1, 1]))
+
+
+def _space_filter_axes(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: np.ndarray, s: np.ndarray, keep: bool):
+    """:func:`_space_filter` for tracks that split into axes (:func:`_per_axis`): the image kernel
+    (:mod:`.rts`) on three position axes, observed with ``R = s² I``."""
+    out: list = [None] * len(tracks)
+    width = LANE_ELEMENTS if keep else max(1, LANE_ELEMENTS // len(accel))
+    for lane in _lanes([len(t.z) for t in tracks], width):
+        zs = [np.concatenate([tracks[i].z, np.full_like(tracks[i].z, np.nan)], axis=1) for i in lane]
+        cols = rts.Columns.pack(zs, [np.ones(len(z)) for z in zs])
+        a, sc = (accel[lane], s[lane]) if keep else (accel, s)
+        Q, s2 = rts.axis_noise(model.Q, a), sc * sc
+        if not keep:
+            ll = rts.grid_loglik(cols, Q, s2, np.zeros_like(s2), LANE_ELEMENTS, SPACE_PRIOR)
+            for j, i in enumerate(lane):
+                out[i] = ll[:, j]
+            continue
+        p, v, pa, pb, pc = rts.smooth_columns(cols, Q, s2, np.zeros_like(s2), SPACE_PRIOR)
+        for j, i in enumerate(lane):
+            n = len(tracks[i].z)
+            xs = np.stack([p[:n, :, j], v[:n, :, j]], axis=2).reshape(n, 6)  # X Ẋ Y Ẏ Z Ż
+            block = np.stack([np.stack([pa[:n, 0, j], pb[:n, 0, j]], -1), np.stack([pb[:n, 0, j], pc[:n, 0, j]], -1)], -2)
+            out[i] = (xs, np.einsum("ij,nab->niajb", np.eye(3), block).reshape(n, 6, 6))
+    return out
+
+
 def _space_filter(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: np.ndarray, s: np.ndarray, keep: bool):
     """:func:`rts_space.filter_space` of ``tracks`` in lanes, at grid points ``(accel, s)`` (each (G,))
     or, with ``keep``, at one ``(accel, s)`` per track (each (B,)) followed by the RTS pass.
-    Returns per track its log-likelihoods (G,) or its smoothed ``(x, P)``."""
+    Returns per track its log-likelihoods (G,) or its smoothed ``(x, P)``. Tracks that split into
+    axes go through the image kernel."""
+    axes = [_per_axis(model, t) for t in tracks]
+    if any(axes):
+        out: list = [None] * len(tracks)
+        for split in (True, False):
+            part = [i for i in range(len(tracks)) if axes[i] == split]
+            if part:
+                run = _space_filter_axes if split else _space_filter
+                idx = np.array(part)
+                sub = run(model, [tracks[i] for i in part], accel[idx] if keep else accel, s[idx] if keep else s, keep)
+                for i, r in zip(part, sub):
+                    out[i] = r
+        return out
     F = model.F()
     out: list = [None] * len(tracks)
     width = max(1, LANE_ELEMENTS // 64 // (1 if keep else len(accel)))

@@ -110,18 +110,20 @@ def config_from_dict(cls: type[C], values: Mapping[str, Any], source: str = "con
             raise TrackreplayError(f"{source}: {_join(prefix, key)} must be {want}, not {value!r}")
         if (bad := _not_finite(value)) is not None:  # no parameter of ours means anything at nan or inf
             raise TrackreplayError(f"{source}: {_join(prefix, key)} must be a finite number, not {bad!r}")
-        if (big := _out_of_range(value)) is not None:
-            raise TrackreplayError(f"{source}: {_join(prefix, key)} = {big!r} is out of range (a number's magnitude "
-                                   f"must be 0 or between {MIN_MAGNITUDE:g} and {MAX_MAGNITUDE:g})")
         inner = _dataclass_of(hints.get(key))
         if inner is None or value is None or isinstance(value, inner):
             clean[key] = _tuples(value)
         else:  # a nested config: its table (anything else is reported there)
             clean[key] = config_from_dict(inner, value, source, _join(prefix, key))
     try:
-        return cls(**clean)
-    except (TypeError, ValueError) as err:
+        config = cls(**clean)
+    except (TypeError, ValueError, OverflowError) as err:
         raise TrackreplayError(f"{source}: invalid {prefix or cls.__name__} ({err})") from None
+    for key, value in clean.items():  # after the config's own checks, which say more where they apply
+        if (big := _out_of_range(value)) is not None:
+            raise TrackreplayError(f"{source}: {_join(prefix, key)} = {big!r} is out of range (a number's magnitude "
+                                   f"must be 0 or between {MIN_MAGNITUDE:g} and {MAX_MAGNITUDE:g})")
+    return config
 
 
 MAX_TOML_LINE = 64 * 1024  # bytes, its newline included; a config line is a key and a short value

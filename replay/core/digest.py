@@ -12,14 +12,19 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import os
+import shutil
 import struct
+import tempfile
+import weakref
+from array import array
 from collections.abc import Iterator
-from typing import Any
+from typing import Any, BinaryIO
 
 import numpy as np
 import polars as pl
 
-from trackreplay.replay.core.trajectory import canonical_bytes
+from trackreplay.replay.core.trajectory import SpilledTrajectory, canonical_parts
 
 
 def portable_floats(values: np.ndarray) -> np.ndarray:
@@ -121,12 +126,17 @@ def _feed(h: "hashlib._Hash", name: str, value: Any, path: str = "", leaves: lis
 
 
 _NAMES: dict[str, bytes] = {}  # name -> name.encode() + b"\0"
+# Field names and list positions repeat every frame; a frame's own name (``frame{index}``) never does,
+# so the cache stops growing at this size (it had kept every frame's name: ~115 B a frame of a replay).
+_NAMES_KEPT = 4096
 
 
 def _name(name: str) -> bytes:
     out = _NAMES.get(name)
     if out is None:
-        out = _NAMES[name] = name.encode() + b"\0"
+        out = name.encode() + b"\0"
+        if len(_NAMES) < _NAMES_KEPT and not name.startswith("frame"):
+            _NAMES[name] = out
     return out
 
 
@@ -255,6 +265,11 @@ def leaf_values(value: Any, path: str = "") -> Iterator[tuple[str, Any]]:
         raise TypeError(f"cannot digest {type(value).__name__} in field {path}")
 
 
+# Per-frame digests a replay keeps in memory (~1 KB a frame) before they go to a temporary Parquet file
+# (docs/memory.md).
+SPILL_FRAMES = 2048
+
+
 class FrameDigests:
     """Per-frame, per-field hashes of a replay, recorded beside the digest (which they leave unchanged).
 
@@ -262,15 +277,24 @@ class FrameDigests:
     concatenated 8-byte blake2b hashes of the fields, and the values of small numeric fields (≤ SMALL
     elements: track states, filter states, velocities) as one float64 blob, so memory stays small.
     Paths are ``intermediates.<field>…`` and ``states.<i>.<field>`` (``states.len`` the track count).
+
+    With ``spill_frames``, every ``spill_frames`` frames go to a temporary Parquet file as one row group
+    of :meth:`table`'s rows, so a long replay holds at most that many frames (and 8 bytes per frame for
+    ``frames``); :meth:`fields` and :meth:`values` of a spilled frame read its row group back (one kept).
     """
 
-    def __init__(self) -> None:
-        self.frames: list[int] = []
-        self._paths: list[tuple[str, ...]] = []
+    def __init__(self, spill_frames: int | None = None) -> None:
+        self.frames: array[int] = array("q")
+        self._paths: list[tuple[str, ...]] = []  # of the frames in memory: frames[self._spilled:]
         self._hashes: list[bytes] = []
         self._sizes: list[tuple[int, ...]] = []  # per field: number of kept values, -1 for none
         self._values: list[bytes] = []
         self._layouts: dict[tuple, tuple] = {}
+        self._spill_frames = spill_frames
+        self._spilled = 0
+        self._writer = None
+        self._path: str | None = None
+        self._group: tuple[int, FrameDigests] | None = None  # the spilled row group read back last
 
     def add(self, index: int, leaves: list[tuple[str, bytes, Any]]) -> None:
         """One frame: (path, 8-byte hash, kept values — a flat list or array of numbers, or None) per field."""
@@ -285,12 +309,44 @@ class FrameDigests:
         self._sizes.append(self._layouts.setdefault(sizes, sizes))
         self._hashes.append(b"".join(d for _, d, _ in leaves))
         self._values.append(np.array(flat, dtype=np.float64).tobytes())
+        if self._spill_frames is not None and len(self._paths) >= self._spill_frames:
+            self._spill()
+
+    def _spill(self) -> None:
+        import pyarrow.parquet as pq
+
+        if self._writer is not None and not self._writer.is_open:
+            raise RuntimeError("per-frame digests added after their spilled table was read")
+        table = self._memory_table().to_arrow()
+        if self._writer is None:
+            fd, self._path = tempfile.mkstemp(prefix="trackreplay-frame-digests-", suffix=".parquet")
+            os.close(fd)
+            weakref.finalize(self, os.unlink, self._path)
+            self._writer = pq.ParquetWriter(self._path, table.schema)
+        self._writer.write_table(table, row_group_size=max(table.num_rows, 1))
+        self._spilled += len(self._paths)
+        self._paths, self._hashes, self._sizes, self._values = [], [], [], []
+
+    def _frame(self, i: int) -> tuple[FrameDigests, int]:
+        """Where the i-th recorded frame is: (a FrameDigests holding it, its position there)."""
+        i = range(len(self.frames))[i]  # (negative from the end; IndexError past it)
+        if i >= self._spilled:
+            return self, i - self._spilled
+        import pyarrow.parquet as pq
+
+        self._finish_spill()
+        group = i // self._spill_frames
+        if self._group is None or self._group[0] != group:
+            part = pl.from_arrow(pq.ParquetFile(self._path).read_row_group(group))
+            self._group = (group, FrameDigests.from_table(part))
+        return self._group[1], i - group * self._spill_frames
 
     def values(self, i: int) -> dict[str, np.ndarray]:
         """Field path -> kept values (flattened float64) of the i-th recorded frame."""
-        flat = np.frombuffer(self._values[i], dtype=np.float64)
+        holder, i = self._frame(i)
+        flat = np.frombuffer(holder._values[i], dtype=np.float64)
         out, at = {}, 0
-        for path, n in zip(self._paths[i], self._sizes[i]):
+        for path, n in zip(holder._paths[i], holder._sizes[i]):
             if n >= 0:
                 out[path] = flat[at:at + n]
                 at += n
@@ -301,14 +357,41 @@ class FrameDigests:
 
     def fields(self, i: int) -> dict[str, str]:
         """Field path -> hex hash of the i-th recorded frame."""
-        blob = self._hashes[i]
-        return {p: blob[8 * k:8 * k + 8].hex() for k, p in enumerate(self._paths[i])}
+        holder, i = self._frame(i)
+        blob = holder._hashes[i]
+        return {p: blob[8 * k:8 * k + 8].hex() for k, p in enumerate(holder._paths[i])}
 
     def table(self) -> pl.DataFrame:
         """Long table (the sidecar): frame, field (categorical), hash (the 8 bytes as a big-endian
         UInt64), values (kept values, null for larger fields), one row per field per frame. Built
-        from the stored blobs in a few vectorised steps, without a Python object per row.
+        from the stored blobs in a few vectorised steps, without a Python object per row. Spilled
+        frames are read back: for a long replay, :meth:`write_table` writes it without holding it.
         """
+        if not self._spilled:
+            return self._memory_table()
+        self._finish_spill()
+        return pl.read_parquet(self._path)
+
+    def write_table(self, out: BinaryIO) -> None:
+        """:meth:`table` to an open binary file as Parquet; once spilled, the spill file's bytes (its last
+        row group the frames still in memory), copied without decoding."""
+        if not self._spilled:
+            self._memory_table().write_parquet(out)
+            return
+        self._finish_spill()
+        with open(self._path, "rb") as spill:
+            shutil.copyfileobj(spill, out, 1 << 20)
+
+    def _finish_spill(self) -> None:
+        """The frames still in memory go to the spill file as its last row group, and it is closed
+        (for reading; the frames stay readable by :meth:`fields` and :meth:`values`)."""
+        if self._writer is not None and self._writer.is_open:
+            if self._paths:
+                self._spill()
+            self._writer.close()
+
+    def _memory_table(self) -> pl.DataFrame:
+        """:meth:`table` of the frames held in memory."""
         import pyarrow as pa
 
         names: dict[str, int] = {}
@@ -327,7 +410,7 @@ class FrameDigests:
         values = pa.LargeListArray.from_arrays(pa.array(offsets), pa.array(flat), mask=pa.array(sizes < 0))
         fields = pa.DictionaryArray.from_arrays(pa.array(codes), pa.array(list(names), pa.string()))
         return pl.DataFrame({
-            "frame": np.repeat(np.asarray(self.frames, dtype=np.int64), counts),
+            "frame": np.repeat(np.asarray(self.frames[self._spilled:], dtype=np.int64), counts),
             "field": pl.from_arrow(fields).cast(pl.String),
             "hash": hashes,
             "values": pl.from_arrow(values).cast(pl.List(pl.Float64)),
@@ -364,9 +447,9 @@ def _frame_path(path: str) -> str:
 class ReplayDigest:
     """Accumulates per-frame outputs in replay order; ``finish`` adds the trajectory table."""
 
-    def __init__(self, per_frame: bool = False) -> None:
+    def __init__(self, per_frame: bool = False, spill_frames: int | None = SPILL_FRAMES) -> None:
         self._h = hashlib.sha256(b"trackreplay-digest-v2")
-        self.frames: FrameDigests | None = FrameDigests() if per_frame else None
+        self.frames: FrameDigests | None = FrameDigests(spill_frames) if per_frame else None
 
     def add_frame(self, index: int, intermediates: Any) -> None:
         """Hash one frame's outputs; with ``per_frame``, also record its per-field hashes.
@@ -392,6 +475,8 @@ class ReplayDigest:
         if lost:
             _feed(self._h, "lost", [f"{topic}#{index}@{t_ns}" for topic, index, t_ns in lost])
 
-    def finish(self, table: pl.DataFrame) -> str:
-        self._h.update(canonical_bytes(table, float_bytes=lambda v: portable_floats(v).tobytes()))
+    def finish(self, table: pl.DataFrame | SpilledTrajectory) -> str:
+        """The digest, after the trajectory table (in memory, or spilled: hashed a column at a time)."""
+        for part in canonical_parts(table, float_bytes=lambda v: portable_floats(v).tobytes()):
+            self._h.update(part)
         return self._h.hexdigest()

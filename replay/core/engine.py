@@ -32,14 +32,14 @@ from trackreplay import __version__
 from trackreplay.replay.core import registry
 from trackreplay.replay.core.config import ConfigSource, config_to_dict, load_config
 from trackreplay.replay.core.config_toml import config_toml
-from trackreplay.replay.core.digest import FrameDigests, ReplayDigest
+from trackreplay.replay.core.digest import SPILL_FRAMES, FrameDigests, ReplayDigest
 from trackreplay.replay.core.observations import observation_rows, observations_table
 from trackreplay.replay.log.frames import (BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints,
                                        read_stereo_rig)
 from trackreplay.replay.log.marks import check_can_track, check_labels, check_one_start_per_frame
 from trackreplay.replay.log.prefetch import prefetch
 from trackreplay.replay.log.reader import LogReader
-from trackreplay.replay.core.trajectory import state_row, trajectory_table
+from trackreplay.replay.core.trajectory import SPILL_ROWS, SpilledTrajectory, TrajectoryRows, state_row
 from trackreplay.trackers.base import Tracker, TrackState
 from trackreplay.trackers.frame import Frame
 from trackreplay.schemas.errors import TrackreplayError
@@ -86,10 +86,18 @@ class ReplayRequest:
     # Keep the trackers' raw measurements (replay/core/observations.py observation_rows) for the offline
     # smoother: ReplayResult.observations. Not part of the digest.
     observations: bool = False
+    # Trajectory rows kept in memory; beyond this many the table goes to a temporary Parquet file in row
+    # groups of this size and ReplayResult.trajectory reads it back (docs/memory.md).
+    spill_rows: int = SPILL_ROWS
+    spill_frames: int = SPILL_FRAMES  # the same for per-frame digests (frame_digests), in frames
 
     def __post_init__(self) -> None:
         """The checks the CLI's argument parser makes, for callers of the Python API too."""
         check_seed(self.seed)
+        for name in ("spill_rows", "spill_frames"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise TrackreplayError(f"{name} must be a whole number >= 1, not {value!r}")
         for name in ("start_s", "end_s"):
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
@@ -103,7 +111,9 @@ class ReplayRequest:
 class ReplayResult:
     tracker: str
     seed: int
-    trajectory: pl.DataFrame
+    # The trajectory table: in memory, or (past ReplayRequest.spill_rows rows) a temporary Parquet file
+    # that ``trajectory`` reads back on each access and ``scan_trajectory`` scans lazily.
+    table: pl.DataFrame | SpilledTrajectory
     digest: str
     frames: int
     seconds: float
@@ -119,6 +129,19 @@ class ReplayResult:
     # The frame X Y Z are in when the tracker says ("world": Z up, from the log's rig pose; "camera")
     position_frame: str | None = None
 
+    @property
+    def trajectory(self) -> pl.DataFrame:
+        """The trajectory table in canonical order (read from its spill file when the replay spilled it)."""
+        return self.table.frame() if isinstance(self.table, SpilledTrajectory) else self.table
+
+    def scan_trajectory(self) -> pl.LazyFrame:
+        """The trajectory as a LazyFrame: bounded memory for a query that needs only part of it."""
+        return self.table.scan() if isinstance(self.table, SpilledTrajectory) else self.table.lazy()
+
+    @property
+    def rows(self) -> int:
+        return self.table.height
+
     def summary(self, log: Path) -> dict[str, Any]:
         return {
             "log": str(log),
@@ -129,7 +152,7 @@ class ReplayResult:
             "config_toml": None if self.config is None else config_toml(self.config, self.tracker),
             "digest": self.digest,
             "frames": self.frames,
-            "rows": self.trajectory.height,
+            "rows": self.rows,
             "timings": {
                 "seconds": round(self.seconds, 4),
                 "frames_per_second": round(self.frames / self.seconds, 2) if self.seconds > 0 else None,
@@ -232,8 +255,8 @@ def replay(req: ReplayRequest) -> ReplayResult:
     steps = iter_steps(req)
     spec = steps.spec
     sink = _open_sink(req, spec.view)
-    digest = ReplayDigest(per_frame=req.frame_digests)
-    rows: list[tuple] = []
+    digest = ReplayDigest(per_frame=req.frame_digests, spill_frames=req.spill_frames)
+    rows = TrajectoryRows(req.spill_rows)
     extra: list[dict] | None = [] if spec.extra_rows is not None else None
     observed: list[dict] | None = [] if req.observations else None
     notices: list[str] = []
@@ -261,7 +284,7 @@ def replay(req: ReplayRequest) -> ReplayResult:
             sink.close()
     seconds = time.perf_counter() - started
     digest.add_lost([(x.topic, x.index, x.t_ns) for x in steps.report.lost])
-    table = trajectory_table(rows)
+    table = rows.finish()
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
                         req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra),
                         observations=None if observed is None else observations_table(observed),

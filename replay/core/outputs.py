@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+from collections.abc import Callable
+from typing import Any, BinaryIO
 
 import polars as pl
 
@@ -28,10 +29,17 @@ def write_json(path: Path, data: Any, **kwargs: Any) -> Path:
 
 
 def write_parquet(table: pl.DataFrame, path: Path) -> Path:
+    return write_parquet_with(path, table.write_parquet)
+
+
+def write_parquet_with(path: Path, write: Callable[[BinaryIO], None]) -> Path:
+    """A Parquet file that ``write`` writes to an open file (e.g. row group by row group, from a spill)."""
+    import pyarrow as pa
+
     try:
         with replace_when_done(path) as fh:
-            table.write_parquet(fh)
-    except pl.exceptions.PolarsError as err:  # polars reports a full disk as ComputeError
+            write(fh)
+    except (pl.exceptions.PolarsError, pa.ArrowException) as err:  # polars reports a full disk as ComputeError
         raise OutputError(f"cannot write {path} ({_first_line(err)})") from None
     return path
 

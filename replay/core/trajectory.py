@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Iterable, Sequence
+import os
+import tempfile
+import weakref
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from pathlib import Path
 
 import numpy as np
 import polars as pl
@@ -154,3 +158,114 @@ def _refuse(df: pl.DataFrame, bad: pl.Expr, source: str, where: Callable[[int], 
     if hits.height:
         row = hits.row(0, named=True)
         raise TrackreplayError(f"{source} {where(row['_i'])}: {says(row)}")
+
+
+# A replay keeps this many trajectory rows in memory; beyond it they go to a temporary Parquet file, one
+# row group per this many rows, so the replay's memory does not grow with the log (docs/memory.md).
+SPILL_ROWS = 8192
+
+
+class TrajectoryRows:
+    """A replay's rows as they come: in memory up to ``spill_rows``, then appended to a temporary
+    Parquet file in row groups of ``spill_rows`` rows. :meth:`finish` gives the table (in memory) or a
+    :class:`SpilledTrajectory` (on disk): the same rows either way."""
+
+    def __init__(self, spill_rows: int = SPILL_ROWS) -> None:
+        if spill_rows < 1:
+            raise ValueError(f"spill_rows must be at least 1, not {spill_rows}")
+        self._rows: list[tuple] = []
+        self._spill_rows = spill_rows
+        self._writer = None
+        self._path: Path | None = None
+
+    def extend(self, rows: Iterable[Sequence]) -> None:
+        self._rows.extend(rows)
+        if len(self._rows) >= self._spill_rows:
+            self._spill()
+
+    def _spill(self) -> None:
+        import pyarrow.parquet as pq
+
+        table = pl.DataFrame(self._rows, schema=SCHEMA, orient="row").to_arrow()
+        if self._writer is None:
+            fd, name = tempfile.mkstemp(prefix="trackreplay-trajectory-", suffix=".parquet")
+            os.close(fd)
+            self._path = Path(name)
+            self._writer = pq.ParquetWriter(name, table.schema)
+        self._writer.write_table(table, row_group_size=max(len(self._rows), 1))
+        self._rows = []
+
+    def finish(self) -> pl.DataFrame | SpilledTrajectory:
+        if self._writer is None:
+            return trajectory_table(self._rows)
+        if self._rows:
+            self._spill()
+        self._writer.close()
+        return SpilledTrajectory(self._path, owned=True)
+
+
+class SpilledTrajectory:
+    """A trajectory table in a Parquet file (rows in replay order), read back a column or a row group at
+    a time: :meth:`canonical_parts` (the digest) holds 3 integers per row and one column, never the table.
+    ``owned``: the file is a temporary one, removed when this object goes."""
+
+    def __init__(self, path: Path, owned: bool = False) -> None:
+        import pyarrow.parquet as pq
+
+        self.path = Path(path)
+        meta = pq.ParquetFile(self.path).metadata
+        self.height = meta.num_rows
+        self.row_groups = meta.num_row_groups
+        if owned:
+            weakref.finalize(self, os.unlink, str(self.path))
+
+    def scan(self) -> pl.LazyFrame:
+        """The rows in canonical order, lazily (polars reads the file when collected)."""
+        return pl.scan_parquet(self.path).select(*COLUMNS).sort(["tracker", "track_id", "frame"], maintain_order=True)
+
+    def frame(self) -> pl.DataFrame:
+        """The whole table in memory, in canonical order (as an unspilled replay returns it)."""
+        return canonical_order(pl.read_parquet(self.path))
+
+    def _column(self, name: str) -> pl.Series:
+        return pl.read_parquet(self.path, columns=[name]).get_column(name)
+
+    def canonical_parts(self, float_bytes: Callable[[np.ndarray], bytes]) -> Iterator[bytes]:
+        """The bytes of :func:`canonical_bytes` of this table, in pieces, reading one column at a time."""
+        keys = pl.read_parquet(self.path, columns=list(KEY)).with_row_index("_i")
+        order = keys.sort(list(KEY), maintain_order=True).get_column("_i").to_numpy()
+        del keys
+        yield from _framed([",".join(COLUMNS).encode(), np.int64(self.height).tobytes()])
+        for name in COLUMNS:
+            col = self._column(name).gather(order)
+            yield from _framed([np.packbits(col.is_null().to_numpy()).tobytes()])
+            if SCHEMA[name] == pl.String:
+                yield from _joined_strings(col.fill_null(""))
+            elif SCHEMA[name] == pl.Int64:
+                yield from _framed([col.fill_null(0).to_numpy().astype("<i8").tobytes()])
+            else:
+                yield from _framed([float_bytes(col.fill_null(0.0).to_numpy().astype("<f8"))])
+
+
+def _framed(parts: list[bytes]) -> Iterator[bytes]:
+    for p in parts:
+        yield len(p).to_bytes(8, "little")
+        yield p
+
+
+def _joined_strings(col: pl.Series, block: int = 65_536) -> Iterator[bytes]:
+    """``"\\0".join(col).encode()`` framed as :func:`canonical_bytes` frames it, ``block`` strings at a time."""
+    n = col.len()
+    yield (int(col.str.len_bytes().sum() or 0) + max(n - 1, 0)).to_bytes(8, "little")
+    for start in range(0, n, block):
+        text = "\0".join(col.slice(start, block).to_list())
+        yield (text if start == 0 else "\0" + text).encode()
+
+
+def canonical_parts(table: pl.DataFrame | SpilledTrajectory,
+                    float_bytes: Callable[[np.ndarray], bytes] = lambda v: v.tobytes()) -> Iterator[bytes]:
+    """:func:`canonical_bytes` of a table in memory or spilled, as pieces whose concatenation it is."""
+    if isinstance(table, SpilledTrajectory):
+        yield from table.canonical_parts(float_bytes)
+    else:
+        yield canonical_bytes(table, float_bytes)

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import BinaryIO
 
 from mcap.opcode import Opcode
-from mcap.records import ChunkIndex, Message, MessageIndex
+from mcap.records import Channel, ChunkIndex, Message, MessageIndex
 from mcap.reader import Summary
 
 from trackreplay.recorder.mcap_scan import RecordDamage, chunk_messages, read_record
@@ -58,12 +58,17 @@ def _lost_times(fh: BinaryIO, index: ChunkIndex, channel_id: int) -> tuple[int, 
     return tuple(sorted(t for t, _ in record.records))
 
 
-def _load(fh: BinaryIO, index: ChunkIndex) -> list[Message]:
+def _load(fh: BinaryIO, index: ChunkIndex, channels: list[Channel] | None = None) -> list[Message]:
+    """The chunk's messages; its channel records are appended to ``channels`` when given."""
     fh.seek(index.chunk_start_offset)
     data = fh.read(index.chunk_length)
     if len(data) != index.chunk_length:
         raise RecordDamage("the file ends inside the chunk")
-    return chunk_messages(data)
+    return chunk_messages(data, channels)
+
+
+def _same(a: Channel, b: Channel) -> bool:
+    return (a.topic, a.schema_id, a.message_encoding) == (b.topic, b.schema_id, b.message_encoding)
 
 
 class ChunkCache:
@@ -75,10 +80,15 @@ class ChunkCache:
     a damaged one is read again and reported by each iteration, as before.
     """
 
-    def __init__(self, size: int = 4) -> None:
+    def __init__(self, size: int = 4, channels: dict[int, Channel] | None = None) -> None:
+        """``channels``: the summary's; a chunk that declares one of their ids again with another topic,
+        schema or encoding is counted in ``conflicts`` (id -> one sentence): its messages are read as
+        the summary's channel, which may be the wrong one."""
         self.size = size
         self._items: OrderedDict[int, list[Message]] = OrderedDict()
         self._lock = threading.Lock()
+        self.channels = channels or {}
+        self.conflicts: dict[int, str] = {}
 
     def load(self, fh: BinaryIO, index: ChunkIndex) -> list[Message]:
         key = index.chunk_start_offset
@@ -87,8 +97,16 @@ class ChunkCache:
             if messages is not None:
                 self._items.move_to_end(key)
                 return messages
-        messages = _load(fh, index)
+        declared: list[Channel] = []
+        messages = _load(fh, index, declared)
         with self._lock:
+            for channel in declared:
+                known = self.channels.get(channel.id)
+                if known is not None and not _same(known, channel) and channel.id not in self.conflicts:
+                    self.conflicts[channel.id] = (
+                        f"channel {channel.id} is declared twice with different contents ({known.topic} schema "
+                        f"{known.schema_id} {known.message_encoding}; again in the chunk at byte {key} as {channel.topic} "
+                        f"schema {channel.schema_id} {channel.message_encoding}); its messages are read as the first")
             self._items[key] = messages
             while len(self._items) > self.size:
                 self._items.popitem(last=False)

@@ -55,7 +55,16 @@ def encoded_size(data: bytes) -> tuple[int, int] | None:
     return None
 
 
-def _check_size(width: int, height: int, where: str, what: str) -> None:
+class SizeMismatch(LogError):
+    """An image whose header claims another size than the log's earlier images (refused before decoding)."""
+
+
+def _check_size(width: int, height: int, where: str, what: str, expect: tuple[int, int] | None = None) -> None:
+    """The claimed size against the log's frame size ``expect`` (width, height) when known, then against
+    the pixel limit: both before any pixel memory is allocated."""
+    if expect is not None and (width, height) != tuple(expect):
+        raise SizeMismatch(f"{where} is {width}x{height} but earlier images are {expect[0]}x{expect[1]} "
+                           f"(its {what}; refused before decoding)")
     limit = max_image_pixels()
     if width * height > limit:
         raise LogError(f"{where}: {what} claims {width}x{height} pixels, more than the {limit} allowed "
@@ -95,18 +104,21 @@ def payload(value) -> bytes:
     return bytes(value)
 
 
-def decode_image(pb, schema: str, where: str) -> tuple[np.ndarray, bytes | None, str | None]:
+def decode_image(pb, schema: str, where: str,
+                 expect: tuple[int, int] | None = None) -> tuple[np.ndarray, bytes | None, str | None]:
     """Pixels (BGR or grey uint8), the original encoded bytes, and their format.
 
     ``pb`` is a decoded ``foxglove.CompressedImage`` / ``RawImage`` (protobuf or JSON) or a ROS 2
     ``sensor_msgs/msg/CompressedImage`` / ``Image``. ``where`` names the file, topic and message
-    index for error messages.
+    index for error messages. ``expect``: the log's frame size (width, height); a PNG or JPEG header
+    or raw image claiming another is refused (:class:`SizeMismatch`) before any pixel is allocated, so
+    one frame claiming 16000² in a 640×480 log costs nothing (a header that is not found: after decoding).
     """
     try:
         if schema in COMPRESSED_SCHEMAS:
-            return _compressed(payload(pb.data), str(pb.format), where)
+            return _compressed(payload(pb.data), str(pb.format), where, expect)
         if schema in RAW_SCHEMAS:
-            return _raw(pb, where), None, None
+            return _raw(pb, where, expect), None, None
     except LogError as err:
         if str(err).startswith(where):
             raise
@@ -114,7 +126,7 @@ def decode_image(pb, schema: str, where: str) -> tuple[np.ndarray, bytes | None,
     raise LogError(f"{where}: schema {schema} is not an image schema (expected one of {', '.join(IMAGE_SCHEMAS)})")
 
 
-def _compressed(data: bytes, format_: str, where: str) -> tuple[np.ndarray, bytes, str]:
+def _compressed(data: bytes, format_: str, where: str, expect: tuple[int, int] | None) -> tuple[np.ndarray, bytes, str]:
     # ROS image_transport writes e.g. "rgb8; jpeg compressed bgr8" or "16UC1; compressedDepth png"
     # (the latter with a 12-byte header before the PNG).
     name = format_.lower().split(";")[-1].strip().split(" ")[0].removeprefix("image/") or "image"
@@ -124,7 +136,7 @@ def _compressed(data: bytes, format_: str, where: str) -> tuple[np.ndarray, byte
         name = "png"
     size = encoded_size(data)
     if size is not None:
-        _check_size(*size, where, f"{name} header")
+        _check_size(*size, where, f"{name} header", expect)
     buf = np.frombuffer(data, dtype=np.uint8)
     image = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if buf.size else None
     if image is None:
@@ -136,7 +148,7 @@ def _compressed(data: bytes, format_: str, where: str) -> tuple[np.ndarray, byte
     return image, data, "jpeg" if name == "jpg" else name
 
 
-def _raw(pb, where: str) -> np.ndarray:
+def _raw(pb, where: str, expect: tuple[int, int] | None = None) -> np.ndarray:
     encoding = str(pb.encoding)
     spec = _RAW.get(encoding)
     if spec is None:
@@ -148,7 +160,7 @@ def _raw(pb, where: str) -> np.ndarray:
     step = int(pb.step) or row
     if width == 0 or height == 0 or step < row or len(data) < step * (height - 1) + row:
         raise LogError(f"{where}: raw image claims {width}x{height} {encoding} but holds {len(data)} bytes")
-    _check_size(width, height, where, "raw image")
+    _check_size(width, height, where, "raw image", expect)
     flat = np.frombuffer(data, dtype=np.uint8)
     # Rows `step` apart inside the payload (checked above): a view, so a huge claimed step allocates nothing.
     rows = np.lib.stride_tricks.as_strided(flat, shape=(height, row), strides=(step, 1), writeable=False)

@@ -16,7 +16,7 @@ from trackreplay.trackers.geometry.ptz import PtzCamera
 from trackreplay.trackers.geometry.rig_pose import RigPose
 from trackreplay.trackers.geometry.stereo import StereoRig
 
-from trackreplay.replay.log.decode import decode_image, projection
+from trackreplay.replay.log.decode import SizeMismatch, decode_image, projection
 from trackreplay.replay.log.reader import LogMessage, LogReader
 
 
@@ -118,6 +118,7 @@ class BundleReport:
     lost: list[LostFrame] = field(default_factory=list)  # frames skipped: damaged chunk or undecodable image
     zoom_outside_lens: list[int] = field(default_factory=list)  # frames whose zoom the lens table does not cover
     out_of_order: list[int] = field(default_factory=list)  # frames written before the previous frame (time went backwards)
+    channel_conflicts: dict[int, str] = field(default_factory=dict)  # channel id declared twice: the reader's sentences
 
 
 @dataclass(frozen=True)
@@ -330,8 +331,11 @@ class _Bundler:
     def pixels(self, item: LogMessage):
         """``(image, encoded, encoding)`` of one image message, its size checked against the others'."""
         where = f"{self.reader.path}: topic {item.topic} message {item.index}"
+        expect = None if self.shape is None else (self.shape[1], self.shape[0])
         try:
-            image, encoded, encoding = decode_image(item.decode(), item.schema, where)
+            image, encoded, encoding = decode_image(item.decode(), item.schema, where, expect)
+        except SizeMismatch as err:  # (as after decoding: the log is inconsistent, not one frame damaged)
+            raise LogError(str(err)) from None
         except LogError as err:
             raise UndecodableImage(str(err)) from None
         if self.shape is None:
@@ -479,6 +483,7 @@ def iter_frames(
     ``report.lost`` (the tracker predicts across it); ``strict`` makes it an error instead.
     """
     report = report if report is not None else BundleReport()
+    report.channel_conflicts = reader.channel_conflicts  # (filled as the chunks are read)
     bundler = _Bundler.from_log(reader, topics, start_ns, end_ns, ptz_tolerance_ns, report, strict)
     image_topics = [topics.image] + ([topics.right] if topics.right else [])
     messages = iter(reader.messages(image_topics, start_ns=start_ns, end_ns=end_ns))

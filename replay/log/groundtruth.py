@@ -17,6 +17,9 @@ GT_SCHEMA = {
     "vx": pl.Float64, "vy": pl.Float64, "visible": pl.Boolean, "group": pl.Int64,
 }
 
+_FRAMES_SCHEMA = {"frame": pl.Int64, "t_ns": pl.Int64}
+_BATCH = 4096  # ground-truth rows read before they become columns
+
 
 def read_groundtruth(reader: LogReader, topic: str = T.GROUNDTRUTH, rig_world: bool = True) -> pl.DataFrame:
     """Ground truth rows, one per object per labelled frame, sorted by ``id, frame``:
@@ -42,14 +45,20 @@ def groundtruth_with_frames(reader: LogReader, topic: str = T.GROUNDTRUTH,
     """:func:`read_groundtruth`'s rows and the annotated frames (``frame, t_ns``, one per message),
     including those whose message lists no object: the truth says nothing is there."""
     reader.require(topic)
-    rows, frames = [], []
+    rows, frames, parts, frame_parts = [], [], [], []
     for item in reader.messages([topic]):
         gt = GroundTruthFrame.from_pb(item.decode())
         frames.append((gt.frame, gt.t_ns))
         for o in gt.objects:
             rows.append((gt.frame, gt.t_ns, o.id, o.x, o.y, o.w, o.h, o.X, o.Y, o.Z, o.vx, o.vy, o.visible, o.group))
-    table = pl.DataFrame(rows, schema=GT_SCHEMA, orient="row").sort(["id", "frame"])
-    annotated = pl.DataFrame(frames, schema={"frame": pl.Int64, "t_ns": pl.Int64}, orient="row").unique("frame").sort("frame")
+        if len(rows) >= _BATCH or len(frames) >= _BATCH:  # columns, not a Python tuple per row (~0.4 KB each)
+            parts.append(pl.DataFrame(rows, schema=GT_SCHEMA, orient="row"))
+            frame_parts.append(pl.DataFrame(frames, schema=_FRAMES_SCHEMA, orient="row"))
+            rows, frames = [], []
+    parts.append(pl.DataFrame(rows, schema=GT_SCHEMA, orient="row"))
+    frame_parts.append(pl.DataFrame(frames, schema=_FRAMES_SCHEMA, orient="row"))
+    table = pl.concat(parts, rechunk=True).sort(["id", "frame"])
+    annotated = pl.concat(frame_parts, rechunk=True).unique("frame").sort("frame")
     pose = read_rig_pose(reader) if rig_world else None
     if pose is None or table.height == 0:
         return table, annotated

@@ -42,6 +42,7 @@ class _Tally:
     metadata: list[str] = field(default_factory=list)
     metadata_values: list[dict[str, Any]] = field(default_factory=list)
     damage: list[Damage] = field(default_factory=list)
+    conflicts: list[str] = field(default_factory=list)  # a channel id declared again with other contents
     header: Header | None = None
     path: Path | None = None
     ended: bool = False
@@ -69,6 +70,14 @@ class _Tally:
             self.channels[record.id] = record
             if self.schemas.get(record.schema_id) in (*IMAGE_SCHEMAS, ENCODER_SCHEMA):
                 self.times[record.id] = array("q")
+        elif isinstance(record, Channel):
+            first = self.channels[record.id]
+            if (first.topic, first.schema_id, first.message_encoding) != (record.topic, record.schema_id,
+                                                                          record.message_encoding):
+                self.conflicts.append(
+                    f"channel {record.id} is declared twice with different contents ({first.topic} schema "
+                    f"{first.schema_id} {first.message_encoding}, then {record.topic} schema {record.schema_id} "
+                    f"{record.message_encoding}); its messages are counted as the first")
         elif isinstance(record, Attachment):
             self.attachments.append(record.name)
         elif isinstance(record, Metadata):
@@ -169,6 +178,7 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
         "truncated": truncated,
         "error": error,
         "damaged": [{"start_byte": d.start, "end_byte": d.end, "reason": d.reason} for d in tally.damage],
+        "channel_conflicts": tally.conflicts,
         "library": tally.header.library if tally.header else None,
         "messages": sum(tally.counts.values()),
         "start_ns": start,
@@ -338,6 +348,9 @@ def format_info(info: dict[str, Any]) -> str:
         lines.append(f"  attachments: {', '.join(info['attachments'])}")
     if info["metadata"]:
         lines.append(f"  metadata: {', '.join(info['metadata'])}")
+    if info.get("channel_conflicts"):
+        lines.append(f"  WARNING: {len(info['channel_conflicts'])} channel declaration(s) contradict an earlier one")
+        lines += _listed(info["channel_conflicts"], str)
     if info["damaged"]:
         lines.append(f"  DAMAGED: {len(info['damaged'])} unreadable stretch(es) skipped (their chunks' messages are not counted above)")
         lines += _listed(info["damaged"], lambda d: f"bytes {d['start_byte']}-{d['end_byte']}: {d['reason']}")

@@ -145,7 +145,10 @@ class LogReader:
         self._factory = DecoderFactory()
         self._ros2 = Ros2DecoderFactory()
         self._decoders: dict[int, Callable[[bytes], Any]] = {}
-        self._chunks = ChunkCache()  # a replay's image and encoder iterations share each chunk's parse
+        # a replay's image and encoder iterations share each chunk's parse; it also notes a channel id
+        # a chunk declares again with other contents (``channel_conflicts``)
+        self._chunks = ChunkCache(channels=summary.channels)
+        self.channel_conflicts: dict[int, str] = self._chunks.conflicts
 
     # -- what the log holds -------------------------------------------------
 

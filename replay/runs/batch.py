@@ -108,7 +108,8 @@ def plan(logs: Iterable[Path], tracker: str, seeds: Iterable[int], grid: list[di
     return tasks
 
 
-def _one_line(err: BaseException) -> str:
+def one_line(err: BaseException) -> str:
+    """The error as one sentence: its own message for a TrackreplayError, else prefixed with its type."""
     text = str(err) if isinstance(err, TrackreplayError) else f"{type(err).__name__}: {err}"
     return " ".join(text.split()) or type(err).__name__
 
@@ -166,7 +167,7 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
     except BaseException as err:  # noqa: BLE001 - a task reports, it never takes the batch down
         if isinstance(err, KeyboardInterrupt):
             raise
-        message = _one_line(err)
+        message = one_line(err)
         if shipped:  # name the log as the user knows it, not the task's temporary copy
             message = message.replace(str(out / task.log.name), str(task.log))
         row.update(status="error", error=message)
@@ -189,7 +190,7 @@ def _metrics(table: pl.DataFrame, log: Path, multi_object: bool = False) -> dict
     try:
         gt, annotated = groundtruth_with_frames(LogReader(log))
         if multi_object:
-            return _mot_metrics(table, gt, annotated["frame"])
+            return multi_object_metrics(table, gt, annotated["frame"])
         summary, _ = evaluate(table, gt)
     except TrackreplayError as err:  # e.g. a trajectory with no positioned rows: no metrics (why, in the row), not a failure
         return {"error": f"no metrics: {err}"}
@@ -197,7 +198,7 @@ def _metrics(table: pl.DataFrame, log: Path, multi_object: bool = False) -> dict
     return {m: values[m] for m in SINGLE_METRICS}
 
 
-def _mot_metrics(table: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> dict[str, Any]:
+def multi_object_metrics(table: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> dict[str, Any]:
     """MOTA, MOTP, IDF1, ID switches and HOTA as `eval --mot` gives them; the 3-D ones only where both
     sides have X, Y, Z (else None, and why in ``error`` when nothing else is missing)."""
     from trackreplay.replay.analysis.mot import hota_metrics, mot_metrics, three_d_missing
@@ -230,7 +231,7 @@ def _write_files(row: dict[str, Any], opts: BatchOptions) -> dict[str, Any]:
 
 def _error_row(task: BatchTask, err: BaseException) -> dict[str, Any]:
     return {"task": task.name, "log": str(task.log), "tracker": task.tracker, "seed": task.seed,
-            "params": json.dumps(task.params, sort_keys=True), "status": "error", "error": _one_line(err)}
+            "params": json.dumps(task.params, sort_keys=True), "status": "error", "error": one_line(err)}
 
 
 def not_run_row(task: BatchTask) -> dict[str, Any]:
@@ -294,7 +295,7 @@ def start_ray(address: str | None, workers: int | None) -> bool:
         raise TrackreplayError(f"--address {address}: cannot join a Ray cluster there ({err}); give auto, HOST:PORT "
                                f"or ray://HOST:10001") from None
     except (ConnectionError, SystemExit) as err:  # SystemExit: Ray gives up on a GCS that never answers
-        raise TrackreplayError(f"cannot join the Ray cluster at {address} ({_one_line(err)}); a cluster with token "
+        raise TrackreplayError(f"cannot join the Ray cluster at {address} ({one_line(err)}); a cluster with token "
                                f"authentication needs its token here (~/.ray/auth_token or RAY_AUTH_TOKEN)") from None
     return True
 

@@ -1,5 +1,5 @@
 """Runs inside the separate CSRT venv (opencv-contrib-python-headless only, never beside trackreplay's
-opencv-python-headless; see replay/runs/csrt.py): CSRT over a folder of images from a first box,
+opencv-python-headless; see replay/runs/csrt.py; benchmarks/bench_colorpf.py runs it too): CSRT over a folder of images from a first box,
 per-frame boxes (top-left, size; null where CSRT reports a failure) and step times.
 
     python csrt_side.py FOLDER x0,y0,w,h OUT.json
@@ -17,7 +17,7 @@ def main() -> None:
     folder, out = Path(sys.argv[1]), Path(sys.argv[3])
     box = tuple(float(v) for v in sys.argv[2].split(","))
     cv2.setNumThreads(1)
-    files = sorted(folder.glob("*.png"))
+    files = sorted(folder.glob("*.png")) + sorted(folder.glob("*.jpg"))
     tracker = cv2.TrackerCSRT_create()
     boxes, times = [list(box)], []
     tracker.init(cv2.imread(str(files[0])), tuple(int(round(v)) for v in box))

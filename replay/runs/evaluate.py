@@ -28,7 +28,7 @@ import numpy as np
 import polars as pl
 
 from trackreplay.replay.analysis.metrics import BoxScores, PointScores, box_scores, point_scores
-from trackreplay.replay.runs.batch import MOT_METRICS, _mot_metrics, _one_line
+from trackreplay.replay.runs.batch import MOT_METRICS, multi_object_metrics, one_line
 from trackreplay.replay.runs.case_logs import PreparedCase, prepare_case, truth_table
 from trackreplay.replay.runs.corpus import Case, Corpus
 from trackreplay.schemas.errors import TrackreplayError
@@ -105,7 +105,7 @@ def prepare_or_error(case: Case, opts: EvalOptions) -> PreparedCase | str:
         with contextlib.redirect_stderr(io.StringIO()):
             return prepare_case(case, opts.logs, opts.code, opts.seeds, opts.jitter)
     except Exception as err:  # noqa: BLE001 - a bad case is a row, never the end of the run
-        return _clean(_one_line(err), opts)
+        return _clean(one_line(err), opts)
 
 
 def _clean(message: str, opts: EvalOptions) -> str:
@@ -147,7 +147,7 @@ def score(prep: PreparedCase, log: Path, traj: pl.DataFrame) -> dict[str, Any]:
         from trackreplay.replay.log.reader import LogReader
 
         gt, annotated = groundtruth_with_frames(LogReader(log))
-        return {k: v for k, v in _mot_metrics(traj, gt, annotated["frame"]).items() if k != "error"}
+        return {k: v for k, v in multi_object_metrics(traj, gt, annotated["frame"]).items() if k != "error"}
     truth = truth_table(log).filter(pl.col("id") == prep.object)
     first = _first_frame(prep, log)
     if first is not None:
@@ -186,7 +186,7 @@ def run_task(task: EvalTask, prep: PreparedCase | str, opts: EvalOptions) -> tup
                 traj, seconds, frames = _replay(task, log, row)
             row |= score(prep, log, traj)
     except Exception as err:  # noqa: BLE001 - a failing replay is a row, never the end of the run
-        return row | {"status": "error", "error": _clean(_one_line(err), opts)}, None
+        return row | {"status": "error", "error": _clean(one_line(err), opts)}, None
     timing = {"case": task.case, "tracker": task.tracker, "seed": task.seed, "frames": frames, "seconds": seconds,
               "ms_per_frame": 1e3 * seconds / frames if frames else None}
     return row | {"frames": frames}, timing
@@ -260,7 +260,7 @@ def run_ray(cases: list[Case], tasks: list[EvalTask], opts: EvalOptions, *, addr
                         done[task.index] = ray.get(ref)
                     except ray.exceptions.RayError as err:  # a worker died (memory, signal): its row says so
                         done[task.index] = ({"case": task.case, "tracker": task.tracker, "seed": task.seed,
-                                             "status": "error", "error": _one_line(err)}, None)
+                                             "status": "error", "error": one_line(err)}, None)
                     if on_row is not None:
                         on_row(done[task.index][0])
                     bar.update()

@@ -106,11 +106,11 @@ def summary_markdown(table: pl.DataFrame, *, title: str, command: str, seeds: li
         parts += [f"## {TITLES[target]}", "", "Aggregate per tracker:", "",
                   _table(["tracker", "cases", *header, "worst case"], aggregate(rows, target)), "",
                   "Per case:", "", _table(["case", "tracker", "seeds", *header], per_case(rows, target)), ""]
-    failed = table.filter(pl.col("status") != "ok")
+    failed = table.filter(pl.col("status") != "ok").group_by(["case", "tracker", "error"], maintain_order=True).agg("seed")
     if failed.height:
-        parts += ["## Failed replays", "", _table(["case", "tracker", "seed", "error"],
-                                                   [[c, t, str(s), (e or "").replace("|", "/")]
-                                                    for c, t, s, e in failed.select("case", "tracker", "seed", "error").iter_rows()]), ""]
+        parts += ["## Failed replays", "", _table(["case", "tracker", "seeds", "error"],
+                                                   [[c, t, ", ".join(map(str, s)), (e or "").replace("|", "/")]
+                                                    for c, t, e, s in failed.iter_rows()]), ""]
     if skipped:
         parts += ["## Skipped cases", ""] + [f"- {s}" for s in skipped] + [""]
     return "\n".join(parts)

@@ -17,8 +17,10 @@ import rerun.blueprint as rrb
 import rerun.chunk as rc
 
 from trackreplay.recorder.atomic import claim_partial
-from trackreplay.schemas.errors import OutputError
+from trackreplay.schemas.errors import OutputError, TrackreplayError
 from trackreplay.trackers.frame import Frame
+
+RERUN_SCHEMES = ("rerun://", "rerun+http://", "rerun+https://")  # what the SDK's gRPC sink accepts
 
 CAMERA = "camera/image"
 RIGHT = "camera/right"
@@ -403,6 +405,15 @@ def _send(rec: rr.RecordingStream, path: str, timelines: dict, rows: list[list[t
     bindings.send_arrow_chunk(path, timelines=timelines, components=columns, recording=rec.to_native())
 
 
+def check_connect_url(url: str) -> str:
+    """``url`` when it is a Rerun viewer's gRPC address, else one sentence naming the schemes accepted
+    (the SDK's own refusal was an internal error)."""
+    if not url.startswith(RERUN_SCHEMES) or len(url) == len(next(s for s in RERUN_SCHEMES if url.startswith(s))):
+        raise TrackreplayError(f"--connect {url!r} is not a Rerun viewer URL; one starts with "
+                               f"{', '.join(RERUN_SCHEMES)} (e.g. rerun+http://127.0.0.1:9876/proxy)")
+    return url
+
+
 def _stream(recording_id: str) -> rr.RecordingStream:
     rec = rr.RecordingStream("trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher())
     # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
@@ -441,7 +452,7 @@ class RerunSink:
                 raise OutputError(f"cannot spawn a Rerun viewer ({err}); use --rrd FILE or --connect URL") from None
             connect = connect or "rerun+http://127.0.0.1:9876/proxy"
         if connect is not None:
-            sinks.append(rr.GrpcSink(connect))
+            sinks.append(rr.GrpcSink(check_connect_url(connect)))
         self.rec.set_sinks(*sinks, default_blueprint=blueprint)
         self.logger = FrameLogger(self.rec)
 

@@ -19,7 +19,9 @@ from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
 from trackreplay.recorder.sources.ground_plane import read_ground_plane
 from trackreplay.recorder.sources.groundtruth import read_groundtruth
 from trackreplay.recorder.sources.stereo import load_calibration
-from trackreplay.schemas.errors import SourceError
+from trackreplay.replay.core.config import config_from_toml
+from trackreplay.schemas.errors import SourceError, TrackreplayError
+from trackreplay.trackers.golf.config import GolfConfig
 
 FUZZ = settings(max_examples=120, derandomize=True, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
@@ -30,6 +32,8 @@ TOKENS = st.sampled_from([
     "t_ns", "pan", "tilt", "zoom", "focus", "fx", "fy", "cx", "cy", "frame", "x", "y", "w", "h",
     "# width: 640", "# height: 0", "# camera_position: 1, 2", ",", ",,", " ", "\t", "\n", "\r\n", "{", "}", "[", "]",
     '"', ":", "\"width\": 640", "\"image_to_ground\"", "\"points\": [[0,0,0,0]]", "%YAML:1.0", "K:", "é", "\x00",
+    # issue 33: a field over csv's 128 KB limit, nesting past the parsers' recursion, a 5000-digit number
+    "y" * 140_000, "[" * 70, "{\"a\":" * 70, "9" * 5000, "1e-300",
 ])
 CSV_TEXT = st.lists(TOKENS, max_size=60).map("".join)
 RAW = st.one_of(CSV_TEXT.map(lambda t: t.encode("utf-8")), st.binary(max_size=300),
@@ -101,6 +105,27 @@ def test_ground_plane(data: bytes) -> None:
 @given(RAW)
 def test_marks_csv(data: bytes) -> None:
     _parses_or_says_where(lambda p: read_marks_csv(p, "target"), data, "marks.csv")
+
+
+TOML_TOKENS = st.sampled_from([
+    "[golf]", "[golf.contrast]", "[golf.particles]", "registration_px", "n", "seed", " = ", "=", "\n", "1", "2.5",
+    "1e308", "1e-300", "-1e308", "nan", "inf", "9" * 5000, "true", '"x"', "[", "]", "[" * 40, "]" * 40, "{", "}",
+    "a = ", ",", "#", "x" * 70_000, "\x00", "é",
+])
+TOML_RAW = st.one_of(st.lists(TOML_TOKENS, max_size=40).map(lambda t: "".join(t).encode("utf-8")), st.binary(max_size=200))
+
+
+@FUZZ
+@given(TOML_RAW)
+def test_toml_config(data: bytes) -> None:
+    """A tracker config file: it loads, or one TrackreplayError sentence names the file (issue 33: 1e308,
+    nesting 500 deep and a huge line ended in internal errors or gigabytes)."""
+    path = _written(data, "golf.toml")
+    try:
+        config_from_toml(GolfConfig, path, "golf")
+    except TrackreplayError as err:
+        message = str(err)
+        assert "\n" not in message.strip() and str(path) in message, message
 
 
 def test_a_latin1_byte_names_its_line(tmp_path: Path) -> None:

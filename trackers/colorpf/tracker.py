@@ -21,6 +21,9 @@ Per frame, the paper's pipeline (§2-§4), one module per stage:
    Ours (``neighbour_check``): a "measured" estimate with a neighbouring box (its size, beside it)
    holding more foreground than the marked box did is reported "predicted" (on or against a
    larger moving region; :func:`.foreground.neighbour_shares`).
+   Ours (``support``, :meth:`_unsupported`): a row neither "measured" nor placed by a foreground region has
+   no support; its box is at most the last supported one's, its confidence falls, and after
+   ``support.lost_unsupported`` such frames in a row (2 s) the track is "lost" (:mod:`.support`).
 
 Departures of ours, each a switch (``colorpf.config``; measured in docs/colorpf.md): by default the
 histograms are Epanechnikov-weighted, the reference adapts (rate 0.05, only while the confidence
@@ -74,6 +77,7 @@ from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference,
                                                     subtract_and_mix)
 from trackreplay.trackers.colorpf.size import (WeakPerspectiveSize, foot_points, ground_distance, horizon_side,
                                               region_area)
+from trackreplay.trackers.colorpf.support import Support
 from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.colorpf.timing import FrameClock, frames_for, noise_for, smoothing_for
 from trackreplay.trackers.filters.particles import ParticleFilter
@@ -167,6 +171,7 @@ class ColorPfTracker(TrackerBase):
         self.template: TemplateModel | None = None  # likelihood.template > 0: the target's grey template
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self.motion = VouchedMotion()  # hold.enabled: the last vouched estimate, the velocity between them, held frames
+        self.support = Support(np.zeros(2))  # [colorpf.support]: frames since the last supported row, its box's size
         self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
@@ -516,10 +521,37 @@ class ColorPfTracker(TrackerBase):
         if not weigh_only:
             self._adapt(image, estimate, working, score)
         status = self._status(frame.index, image, view, estimate, score, placed, held, weigh_only)
+        status, shown, confidence = self._unsupported(status, estimate, score.confidence,
+                                                      weigh_only or status == "measured" or placed)
         if self.config.hold.enabled and not weigh_only:
             self._remember(frame.index, estimate, status == "measured" or placed)
-        self.intermediates = self._intermediates(m, estimate, score, size, mask, status)
-        return self._rows(status, estimate, prev, score.confidence, weigh_only)
+        self.intermediates = self._intermediates(m, shown, score, size, mask, status)
+        return self._rows(status, shown, prev, confidence, weigh_only)
+
+    def _unsupported(self, status: str, estimate: np.ndarray, confidence: float,
+                     supported: bool) -> tuple[str, np.ndarray, float]:
+        """Ours (``[colorpf.support]``, :mod:`.support`): a row without support ("measured" or placed by a
+        region) turns "lost" after ``lost_unsupported`` such frames in a row; until then ("predicted") the
+        box it reports is at most the last supported one's size and its confidence falls. Returns the
+        status, the row's box and its confidence (the filter's own estimate and state are left as they are)."""
+        cfg, support = self.config.support, self.support
+        support.note(supported, estimate[2:4])
+        if supported:
+            return status, estimate, confidence
+        # frame_rate: the same duration
+        limit = frames_for(cfg.lost_unsupported, self.clock.typical) if cfg.lost_unsupported > 0 else None
+        if support.expired(limit) and status != "lost":
+            status = self.life.lose()  # as a miss: restarted by reacquire_frames matches, as after colour's misses
+        if status != "predicted":
+            return status, estimate, confidence
+        if cfg.size_holds:
+            factor = support.shrink(estimate[2:4])
+            if factor < 1.0:
+                estimate = estimate.copy()
+                estimate[2:4] *= factor
+        if cfg.confidence_falls:
+            confidence = support.confidence(confidence, limit)
+        return status, estimate, confidence
 
     def _predict(self, prev: np.ndarray, plane: GroundPlane | None) -> None:
         """Select by the previous weights (systematic resampling), then eq. (2)'s transition."""

@@ -82,4 +82,6 @@ def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, fra
 
 def _write_json(path: Path, data: dict) -> None:
     """Strict JSON: a metric that is undefined (no truth, no match) is null, not NaN."""
-    path.write_text(json.dumps(finite_json(data), indent=2, allow_nan=False) + "\n")
+    from trackreplay.replay.core.outputs import write_bytes  # NAME.partial, renamed when complete
+
+    write_bytes(path, (json.dumps(finite_json(data), indent=2, allow_nan=False) + "\n").encode())

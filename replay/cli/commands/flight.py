@@ -88,7 +88,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {args.out}: {rows.height} rows")
     if args.report:
         args.report.parent.mkdir(parents=True, exist_ok=True)
-        args.report.write_text(json.dumps(finite_json(fit.report.as_dict()), indent=2, allow_nan=False) + "\n")
+        from trackreplay.replay.core.outputs import write_bytes  # NAME.partial, renamed when complete
+
+        write_bytes(args.report, (json.dumps(finite_json(fit.report.as_dict()), indent=2, allow_nan=False) + "\n").encode())
     if args.rrd:
         from trackreplay.replay.views.flight import write_flight_rrd
 

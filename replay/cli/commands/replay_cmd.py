@@ -16,6 +16,16 @@ from trackreplay.replay.core.export import METHODS, fill_gaps, trajectory_format
 from trackreplay.replay.core.outputs import write_json
 
 
+def _rerun_url(text: str) -> str:
+    """A --connect URL, checked before the replay (a scheme Rerun does not take: one sentence)."""
+    from trackreplay.replay.views.rerun_sink import check_connect_url
+
+    try:
+        return check_connect_url(text)
+    except TrackreplayError as err:
+        raise argparse.ArgumentTypeError(str(err).removeprefix("--connect ")) from None
+
+
 # The replay finished but skipped damaged or undecodable frames (docs/exit_codes.md).
 DAMAGED_INPUT = 7
 
@@ -44,7 +54,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("log", type=Path)
     add_replay_arguments(p)
     p.add_argument("--rrd", type=Path, help="write every intermediate to this Rerun .rrd file")
-    p.add_argument("--connect", metavar="URL", nargs="?", const="rerun+http://127.0.0.1:9876/proxy",
+    p.add_argument("--connect", metavar="URL", nargs="?", const="rerun+http://127.0.0.1:9876/proxy", type=_rerun_url,
                    help="also stream to a running Rerun viewer (default URL rerun+http://127.0.0.1:9876/proxy)")
     p.add_argument("--spawn", action="store_true", help="start a Rerun viewer and stream to it (needs a display)")
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
@@ -118,6 +128,8 @@ def run(args: argparse.Namespace) -> int:
     if result.report.out_of_order:
         print(f"warning: {args.log}: the images' write order and log_time order disagree at {len(result.report.out_of_order)} "
               f"place(s) (first: before frame {result.report.out_of_order[0]}); they are replayed in log_time order", file=sys.stderr)
+    for sentence in result.report.channel_conflicts.values():
+        print(f"warning: {args.log}: {sentence}", file=sys.stderr)
     if args.expect_digest and args.expect_digest.lower() != result.digest:
         raise DigestMismatch(f"digest mismatch for {args.log}: expected {args.expect_digest.lower()}, got {result.digest}")
     if result.report.lost:

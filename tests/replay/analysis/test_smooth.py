@@ -286,3 +286,67 @@ def test_a_filled_group_rows_velocity_is_its_positions_rate() -> None:
     fill = ~np.isfinite(x)
     assert np.allclose(_interp(f, x, fill)[fill], [10.0, 20.0, 30.0, 43.0])
     assert np.allclose(_interp_rate(f, x, fill)[fill], [10.0, 10.0, 10.0, 2.0])  # the slope of the very line drawn
+
+
+def _bench_smooth():
+    """benchmarks/bench_smooth.py: its synthetic trajectories and the filterpy smoother the batched one
+    replaced (one track, one grid point at a time), kept there as the reference."""
+    import importlib.util
+
+    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_smooth.py"
+    spec = importlib.util.spec_from_file_location("bench_smooth", path)
+    module = importlib.util.module_from_spec(spec)
+    import sys
+
+    sys.modules["bench_smooth"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.parametrize("tracker, rows", [("colorpf", 240), ("flow", 120), ("groups", 400)])
+def test_batched_smoother_gives_the_filterpy_smoothers_results(tracker: str, rows: int) -> None:
+    """Issue 33: every track and grid point at once (replay/analysis/rts.py, rts_space.py) gives what the
+    per-track filterpy smoother gave, on tracks of different lengths with gaps, absent frames and
+    wrong blobs: the same grid point, outliers, fills and statuses, positions within 1e-9."""
+    bench = _bench_smooth()
+    table = bench.synthetic_trajectory(rows, tracker, tracks=3, seed=5)
+    old, old_fits = bench.run_reference(table)
+    new, new_fits = smooth_trajectory(table)
+    agreement = bench.compare(old, new, old_fits, new_fits)
+    assert agreement["fits_equal"] and agreement["other_columns_equal"]
+    assert agreement["max_abs_diff_position"] <= 1e-9 and agreement["max_abs_diff_any_column"] <= 1e-8
+    assert agreement["max_abs_diff_log_likelihood"] <= 1e-8
+    assert sum(f.outliers for f in new_fits) > 0 and new["fill"].to_list().count("rts_gap") > 0  # the cases are exercised
+
+
+@pytest.mark.parametrize("name", ["flow", "colorpf", "golf", "groups"])
+def test_golden_trajectories_smooth_as_with_filterpy(name: str) -> None:
+    bench = _bench_smooth()
+    table = pl.read_parquet(GOLDEN / f"{name}.trajectory.parquet")
+    old, old_fits = bench.run_reference(table)
+    new, new_fits = smooth_trajectory(table)
+    agreement = bench.compare(old, new, old_fits, new_fits)
+    assert agreement["fits_equal"] and agreement["other_columns_equal"]
+    assert agreement["max_abs_diff_any_column"] <= 1e-9
+
+
+def test_a_track_smooths_the_same_alone_or_beside_longer_ones() -> None:
+    """Tracks are filtered side by side in lanes, a shorter one padded: the padding changes nothing."""
+    df, _ = _noisy_track()
+    other, _ = _noisy_track(gap=(20, 25), seed=3)
+    longer = pl.concat([other, other.with_columns(pl.col("frame") + 120, pl.col("t_ns") + 120 * 33_333_333)])
+    both = pl.concat([df, longer.with_columns(pl.lit(2, dtype=pl.Int64).alias("track_id"))])
+    alone, fits_alone = smooth_trajectory(df)
+    together, fits = smooth_trajectory(both)
+    mine = together.filter(pl.col("track_id") == 1)
+    assert fits[0] == fits_alone[0]
+    assert np.abs(mine.select("x", "y", "vx", "vy").to_numpy() - alone.select("x", "y", "vx", "vy").to_numpy()).max() < 1e-9
+    assert mine.select("status", "fill").equals(alone.select("status", "fill"))
+
+
+def test_lanes_put_tracks_of_similar_length_together() -> None:
+    from trackreplay.replay.analysis.smooth import _lanes
+
+    lanes = _lanes([10, 1000, 600, 400, 9, 5], width=8)
+    assert lanes == [[1, 2], [3], [0, 4, 5]]  # longest first; none padded to more than twice its length
+    assert _lanes([5] * 5, width=2) == [[0, 1], [2, 3], [4]]

@@ -65,3 +65,14 @@ def test_a_streamed_log_cut_before_its_footer_is_still_truncated(tmp_path: Path)
     cut.write_bytes(data[:len(data) // 2] + data[-8:])  # closing magic, but no footer before it
     with pytest.raises(TruncatedLogError, match="recover"):
         LogReader(cut)
+
+
+def test_an_indexed_log_whose_summary_start_is_zeroed_is_damaged_not_streamed(tmp_path: Path) -> None:
+    data = bytearray(GOLDEN.read_bytes())
+    footer = len(data) - 8 - 29
+    data[footer + 9:footer + 17] = bytes(8)  # summary_start = 0, the CRC left as it was
+    bad = tmp_path / "zeroed.mcap"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(TruncatedLogError):
+        LogReader(bad)
+    assert log_info(bad, partial_ok=True)["truncated"]

@@ -132,7 +132,7 @@ GROUPS = GOLF.parent / "groups-crossing-320x240.mcap"
 def test_a_multi_object_tracker_gets_the_metrics_of_eval_mot(tmp_path: Path) -> None:
     """A review: groups rows paired track 1 with person 1 (centre error 301 px, AUC 0); a tracker of
     many objects is scored as `eval --mot` scores its exported trajectory."""
-    from trackreplay.replay.runs.batch import MOT_METRICS, SINGLE_METRICS, run_task, summary_table
+    from trackreplay.replay.runs.batch import MOT_METRICS, SINGLE_METRICS, multi_object_metrics, run_task, summary_table
     from trackreplay.replay.log.groundtruth import groundtruth_with_frames
     from trackreplay.replay.analysis.mot import hota_metrics, mot_metrics
     from trackreplay.replay.log.reader import LogReader
@@ -149,6 +149,8 @@ def test_a_multi_object_tracker_gets_the_metrics_of_eval_mot(tmp_path: Path) -> 
     assert (row["mota_3d"], row["motp_3d"], row["idf1_3d"]) == (space.mota, space.motp, space.idf1)
     assert row["hota_3d"] == hota_metrics(traj, gt, space="3d", frames=annotated["frame"]).hota
     assert 0 < row["mota_3d"] <= 1 and row["hota"] > 0
+    assert {k: v for k, v in multi_object_metrics(traj, gt, annotated["frame"]).items() if k in MOT_METRICS} == \
+        {m: row[m] for m in MOT_METRICS}  # the public function `evaluate` scores its multi-object cases with
     table = summary_table([row], [task])
     assert set(MOT_METRICS) <= set(table.columns) and table["id_switches"].dtype == pl.Int64
     (single,) = plan([GOLF], "golf", [0], [])
@@ -248,3 +250,13 @@ def test_ctrl_c_on_ray_returns_the_finished_rows(local_ray, short_sim: Path, tmp
     with pytest.raises(BatchInterrupted) as stop:
         run_ray(tasks, BatchOptions(out=tmp_path))
     assert len(stop.value.rows) == 1 and next(iter(stop.value.rows.values()))["status"] == "ok"
+
+
+def test_an_error_is_one_sentence_in_a_row() -> None:
+    """`batch` and `evaluate` rows carry the error as one line: a TrackreplayError's own sentence, any
+    other exception prefixed with its type."""
+    from trackreplay.replay.runs.batch import one_line
+
+    assert one_line(TrackreplayError("x.mcap: no frames\n  at all")) == "x.mcap: no frames at all"
+    assert one_line(ValueError("bad  value")) == "ValueError: bad value"
+    assert one_line(RuntimeError()) == "RuntimeError:"

@@ -106,7 +106,8 @@ def test_the_repository_corpora_load() -> None:
     for path in sorted(CORPORA.glob("*.toml")):
         corpus = load_corpus(path)
         assert corpus.cases
-        names |= {c.name for c in corpus.cases}
+        if not path.name.startswith("docs-"):  # a docs page's own cases (its marks), not the developer corpus
+            names |= {c.name for c in corpus.cases}
     developer = {c.name for c in load_corpus(CORPORA / "developer.toml").cases}
     assert developer == names  # the developer corpus is every case of the others
     targets = {c.target for c in load_corpus(CORPORA / "developer.toml").cases}

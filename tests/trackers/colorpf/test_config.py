@@ -19,13 +19,14 @@ def test_paper_overrides_change_only_the_default_departures():
     assert paper.reference.exclude == 0.0 and ours.reference.exclude >= 1.0
     assert not paper.hold.enabled and ours.hold.enabled
     assert not paper.camera.compensate and ours.camera.compensate
+    assert paper.support.lost_unsupported == 0 and ours.support.lost_unsupported > 0
     assert paper.frame_rate is None and ours.frame_rate == 30.0  # per frame, whatever the rate
     assert (paper.reacquire_frames, paper.min_box_pixels) == (1, 0) and ours.reacquire_frames > 1 and ours.min_box_pixels > 0
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
                                neighbour_check=True, refine=ours.refine, hold=ours.hold, camera=ours.camera,
                                frame_rate=ours.frame_rate, reacquire_frames=ours.reacquire_frames,
-                               min_box_pixels=ours.min_box_pixels) == ours
+                               min_box_pixels=ours.min_box_pixels, support=ours.support) == ours
     assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 

@@ -52,7 +52,7 @@ def test_broadcast_approach_one_mark_at_frame_20(tmp_path):
 def test_broadcast_approach_the_empty_cup_is_never_measured(tmp_path, mark, encoding):
     """Two reviews: one mark at 12 measured pieces of the empty cup's liner on 213-219 and 224 (up to
     31 px off); the clip recorded losslessly (PNG) measured the liner on 219-233. The ball rolls over
-    the liner from 208 and is in the hole from 217 (docs/golf_real.py, HOLED): nothing is measured there
+    the liner from 208 and is in the hole from 217 (docs/golf_real.md): nothing is measured there
     (the liner was beside the ball before the loss: seen_before). (Today nothing from 207 on either.)"""
     log = marked_log(tmp_path, APPROACH, mark, encoding)
     traj = replay(ReplayRequest(log=log, tracker="golf")).trajectory

@@ -1,0 +1,139 @@
+"""Memory and time of a replay, and of `eval`, against the length of the log (issue 33, "Scale").
+
+A tiny synthetic flow scene (a 5x5 square circling on a 32x32 textured background, ground truth
+every frame, the target marked on frame 0), written with the recorder's LogWriter at 1k, 20k and
+200k frames. Each measurement runs in a fresh process and reports its peak RSS (ru_maxrss):
+
+- ``replay_summary``: `trackreplay replay LOG --tracker flow --summary S.json` (trajectory, digest and
+  per-frame digests go to temporary Parquet row groups past a bound; the sidecar is copied row group by
+  row group)
+- ``replay_export``: the same with `--export T.parquet` (gap filling reads the whole table back: core/export.py)
+- ``eval``: `trackreplay eval T.parquet LOG --json M.json`
+
+Goal: from 1k to 200k frames the peak RSS grows by at most 50 MB; eval linear in time.
+
+Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000]
+Writes benchmarks/results/long_log.json and prints a table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.machine import describe  # noqa: E402
+from trackreplay.recorder.image_codec import compressed_image  # noqa: E402
+from trackreplay.recorder.writer import LogWriter  # noqa: E402
+from trackreplay.schemas import topics as T  # noqa: E402
+from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject, InitRegion, init_annotations_pb  # noqa: E402
+
+SIZE, PERIOD, SQUARE = 32, 50, 5
+
+CLI = """
+import resource, sys, time
+sys.path.insert(0, {root!r})
+from trackreplay.replay.cli.main import main
+started = time.perf_counter()
+code = main({argv!r})
+print(code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.perf_counter() - started)
+"""
+
+
+def write_long_log(path: Path, frames: int) -> None:
+    """The scene: PERIOD pre-encoded PNG pictures cycled (the square's circle repeats every PERIOD frames)."""
+    background = cv2.GaussianBlur(np.random.default_rng(0).integers(40, 120, (SIZE, SIZE), dtype=np.uint8), (3, 3), 0)
+    t = np.arange(PERIOD)
+    c = (SIZE - 1) / 2
+    centres = np.round(np.stack([c + 6 * np.cos(2 * np.pi * t / PERIOD), c + 6 * np.sin(2 * np.pi * t / PERIOD)], 1)).astype(int)
+    pictures = []
+    for x, y in centres:
+        image = background.copy()
+        image[y - SQUARE // 2:y + SQUARE // 2 + 1, x - SQUARE // 2:x + SQUARE // 2 + 1] = 200
+        pictures.append(cv2.imencode(".png", image)[1].tobytes())
+    with LogWriter(path, flush_every=300) as log:
+        for i in range(frames):
+            t_ns = i * 1_000_000_000 // 30
+            x, y = (float(v) for v in centres[i % PERIOD])
+            if i == 0:
+                mark = InitRegion(0, t_ns, x, y, float(SQUARE), float(SQUARE), "target")
+                log.write(T.ANNOTATIONS_INIT, init_annotations_pb([mark], t_ns), t_ns)
+            log.write(T.CAMERA_IMAGE, compressed_image(pictures[i % PERIOD], "png", t_ns, "camera"), t_ns)
+            truth = GroundTruthObject(id=1, x=x, y=y, w=float(SQUARE), h=float(SQUARE), vx=None, vy=None, visible=True)
+            log.write(T.GROUNDTRUTH, GroundTruthFrame(i, t_ns, (truth,)).to_pb(), t_ns)
+
+
+def measure(code: str) -> tuple[str, int, float]:
+    """(first printed word, peak RSS KiB, seconds) of a fresh process running ``code``."""
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
+    return out[-3], int(out[-2]), float(out[-1])
+
+
+def run_size(tmp: Path, frames: int) -> dict[str, object]:
+    log = tmp / f"long-{frames}.mcap"
+    started = time.perf_counter()
+    write_long_log(log, frames)
+    written = time.perf_counter() - started
+    traj, summary, metrics = tmp / f"t-{frames}.parquet", tmp / f"s-{frames}.json", tmp / f"m-{frames}.json"
+    root = str(ROOT)
+    replay = ["replay", str(log), "--tracker", "flow", "--quiet", "--summary", str(summary)]
+    code, rss_replay, s_replay = measure(CLI.format(root=root, argv=replay))
+    digest = json.loads(summary.read_text())["digest"]
+    code_export, rss_export, s_export = measure(CLI.format(root=root, argv=[*replay, "--export", str(traj)]))
+    code_eval, rss_eval, s_eval = measure(CLI.format(root=root, argv=["eval", str(traj), str(log), "--json", str(metrics)]))
+    return {
+        "frames": frames, "log_bytes": log.stat().st_size, "write_s": round(written, 2),
+        "replay_summary": {"exit": int(code), "peak_rss_kib": rss_replay, "seconds": round(s_replay, 2), "digest": digest,
+                           "us_per_frame": round(1e6 * s_replay / frames, 1)},
+        "replay_export": {"exit": int(code_export), "peak_rss_kib": rss_export, "seconds": round(s_export, 2),
+                          "same_digest": json.loads(summary.read_text())["digest"] == digest},
+        "eval": {"exit": int(code_eval), "peak_rss_kib": rss_eval, "seconds": round(s_eval, 2),
+                 "us_per_frame": round(1e6 * s_eval / frames, 1)},
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "long_log.json")
+    args = ap.parse_args()
+    sizes = [int(x) for x in args.frames.split(",")]
+    load_before = [round(x, 2) for x in __import__("os").getloadavg()]
+    with tempfile.TemporaryDirectory() as tmp:
+        runs = []
+        for n in sizes:
+            runs.append(run_size(Path(tmp), n))
+            print(json.dumps(runs[-1]), flush=True)
+    first, last = runs[0], runs[-1]
+    growth = {k: round((last[k]["peak_rss_kib"] - first[k]["peak_rss_kib"]) / 1024, 1)
+              for k in ("replay_summary", "replay_export", "eval")}
+    results = {
+        "machine": describe(),
+        "load_average_before": load_before,
+        "load_average_after": [round(x, 2) for x in __import__("os").getloadavg()],
+        "scene": f"{SIZE}x{SIZE} grey PNG, a {SQUARE}x{SQUARE} square on a circle of period {PERIOD} frames, flow tracker",
+        "runs": runs,
+        "peak_rss_growth_mb": {"from_frames": first["frames"], "to_frames": last["frames"], **growth, "target": "<= 50"},
+    }
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    for r in runs:
+        print(f"{r['frames']:>7} frames: replay --summary {r['replay_summary']['peak_rss_kib'] / 1024:.0f} MB "
+              f"{r['replay_summary']['seconds']:.1f} s; with --export {r['replay_export']['peak_rss_kib'] / 1024:.0f} MB; "
+              f"eval {r['eval']['peak_rss_kib'] / 1024:.0f} MB {r['eval']['seconds']:.1f} s")
+    print(f"peak RSS growth {first['frames']} -> {last['frames']} frames (MB): {growth} (target <= 50)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

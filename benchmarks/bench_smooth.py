@@ -1,0 +1,287 @@
+"""Offline smoothing rate (issue 33): rows per second of ``trackreplay smooth``'s smoother before and
+after batching it over tracks and noise grid points (``replay/analysis/rts.py``, ``rts_space.py``).
+
+Synthetic trajectories, one per track model: ``colorpf`` (image constant velocity, positions with a
+confidence), ``flow`` (the same with the tracker's velocity observed: a 4× larger noise grid) and
+``groups`` (3-D constant velocity). Each has several tracks with short predicted/lost gaps, a few
+long lost runs, absent frames and 1 % wrong blobs (outliers). The old path is the filterpy smoother
+it replaced (one track, one grid point at a time), kept below as the reference; it runs only on a
+short table (``--old-rows``, it costs 10-100 ms a row) and its outputs are compared with the new
+path's there. The new path runs on 10k and 60k rows, each timed (best of ``--repeats``) and its
+peak traced allocation measured in a separate run (tracemalloc).
+Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2]
+Writes benchmarks/results/smooth.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import time
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+from filterpy.kalman import KalmanFilter
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from benchmarks.machine import describe  # noqa: E402
+from trackreplay.replay.analysis import smooth  # noqa: E402
+from trackreplay.replay.core.trajectory import SCHEMA  # noqa: E402
+
+MODELS = ("colorpf", "flow", "groups")
+MISSING_VAR = 1e12
+
+
+def synthetic_trajectory(rows: int, tracker: str, tracks: int = 6, seed: int = 0) -> pl.DataFrame:
+    """``tracks`` tracks of ``tracker`` over about ``rows`` rows: curved motion, noise growing as the
+    confidence falls, gaps (3 predicted frames then lost, up to 25 frames), absent frames, outliers."""
+    rng = np.random.default_rng(seed)
+    cols: dict[str, list] = {c: [] for c in SCHEMA}
+    for tid in range(1, tracks + 1):
+        n = rows // tracks + (rows % tracks if tid == tracks else 0)
+        k = np.arange(n, dtype=float)
+        phase = rng.uniform(0.0, 2 * math.pi)
+        x, y = 320 + 150 * np.cos(k / 90.0 + phase) + 0.02 * k, 240 + 100 * np.sin(k / 70.0 + phase)
+        conf = rng.uniform(0.3, 1.0, n)
+        status = np.full(n, "measured", dtype=object)
+        g = 0
+        while g < n:
+            g += int(rng.integers(20, max(21, min(200, n // 2))))
+            length = int(rng.choice([2, 5, 10, 25]))
+            status[g:g + min(3, length)] = "predicted"
+            status[g + 3:g + length] = "lost"
+            g += length
+        mx, my = x + rng.normal(0, 1.5, n) / np.sqrt(conf), y + rng.normal(0, 1.5, n) / np.sqrt(conf)
+        wrong = rng.random(n) < 0.01
+        mx[wrong] += rng.choice([-60.0, 60.0], wrong.sum())
+        pos, keep = status != "lost", rng.random(n) >= 0.005
+        frame = int(rng.integers(0, 50)) + np.arange(n)
+        nan = np.full(n, np.nan)
+        values = {"tracker": np.full(n, tracker, dtype=object), "track_id": np.full(n, tid), "frame": frame,
+                  "t_ns": frame * 33_333_333, "status": status, "confidence": np.where(pos, conf, nan)}
+        image = tracker != "groups"
+        values.update({"x": np.where(pos, mx if image else 1.0, nan), "y": np.where(pos, my if image else 1.0, nan),
+                       "w": np.where(pos, 20.0, nan), "h": np.where(pos, 20.0, nan),
+                       "vx": np.where(pos, np.gradient(x) + rng.normal(0, 0.3, n), nan) if image else nan,
+                       "vy": np.where(pos, np.gradient(y) + rng.normal(0, 0.3, n), nan) if image else nan,
+                       "X": nan if image else np.where(pos, mx / 100, nan), "Y": nan if image else np.where(pos, my / 100, nan),
+                       "Z": nan if image else np.where(pos, 5 + 0.001 * k, nan), "dx": nan, "dy": nan, "dz": nan})
+        for c in SCHEMA:
+            cols[c].extend(values[c][keep].tolist())
+    df = pl.DataFrame(cols).cast(SCHEMA)
+    return df.with_columns(pl.col(c).fill_nan(None) for c, t in SCHEMA.items() if t == pl.Float64)
+
+
+# --- the reference: the filterpy smoother this replaced, one track and one grid point at a time ---
+
+def _reference_run(z, r, q, sigma, sigma_v, smooth_it):
+    have = np.isfinite(z)
+    first = int(np.flatnonzero(have[:, 0])[0])
+    kf = KalmanFilter(dim_x=4, dim_z=4)
+    model = smooth.DEFAULT_SMOOTHING
+    kf.F, kf.H, kf.Q = model.F(), model.H(), model.Q(q)
+    s0 = sigma * sigma * r[first]
+    kf.x = np.array([z[first, 0], 0.0, z[first, 1], 0.0])
+    kf.P = np.diag([s0 + 1e4, 1e2, s0 + 1e4, 1e2])
+    base = np.array([sigma, sigma, sigma_v, sigma_v]) ** 2
+    zs = [None if not have[k].any() else np.where(have[k], z[k], 0.0) for k in range(len(z))]
+    Rs = [np.diag(base) if zs[k] is None else np.diag(np.where(have[k], base * r[k], MISSING_VAR)) for k in range(len(z))]
+    means, covs, means_p, covs_p = kf.batch_filter(zs, Rs=Rs)
+    ll = 0.0
+    for k in range(len(z)):
+        if zs[k] is None or k == first:
+            continue
+        sel = have[k]
+        y = (zs[k] - kf.H @ means_p[k])[sel]
+        S = (kf.H @ covs_p[k] @ kf.H.T + Rs[k])[np.ix_(sel, sel)]
+        ll -= 0.5 * (float(y @ np.linalg.solve(S, y)) + math.log(np.linalg.det(S)) + sel.sum() * math.log(2.0 * math.pi))
+    if not smooth_it:
+        return ll, None, None
+    xs, Ps, _, _ = kf.rts_smoother(means, covs)
+    return ll, xs, Ps
+
+
+def _reference_track(z, r, cfg):
+    def select():
+        best = (cfg.q_grid[0], cfg.sigma_grid[0], cfg.sigma_v_grid[0], -math.inf)
+        for q in cfg.q_grid:
+            for s in cfg.sigma_grid:
+                for sv in cfg.sigma_v_grid if np.isfinite(z[:, 2:]).any() else cfg.sigma_v_grid[:1]:
+                    ll = _reference_run(z, r, q, s, sv, False)[0]
+                    best = (q, s, sv, ll) if ll > best[3] else best
+        return best
+
+    observed = np.isfinite(z[:, :2]).all(axis=1)
+    fit = select()
+    _, xs, Ps = _reference_run(z, r, *fit[:3], True)
+    outliers = np.zeros(len(z), bool)
+    if observed.sum() > 4:
+        bad = observed & (np.sqrt(((z[:, :2] - xs[:, [0, 2]]) ** 2).sum(axis=1) / (2.0 * fit[1] ** 2 * r)) > cfg.outlier_sigma)
+        if bad.any() and (observed & ~bad).sum() >= 2:
+            outliers, z[bad] = bad, np.nan
+            fit = select()
+            _, xs, Ps = _reference_run(z, r, *fit[:3], True)
+    return xs, np.stack([Ps[:, i, i] for i in range(4)], axis=1), outliers, fit
+
+
+def reference_smooth_tracks(zs, confidences, cfg=smooth.SmoothConfig()):
+    """The old ``smooth_track`` on every track in turn (filterpy)."""
+    out = []
+    for z, c in zip(zs, confidences):
+        z = np.array(z, dtype=np.float64)
+        z = np.concatenate([z, np.full_like(z, np.nan)], axis=1) if z.shape[1] == 2 else z
+        z[~np.isfinite(z[:, :2]).all(axis=1)] = np.nan
+        out.append(_reference_track(z, 1.0 / np.where(np.isfinite(c), np.maximum(c, cfg.min_confidence), 1.0), cfg))
+    return out
+
+
+def _reference_space_run(model, z, R, accel, smooth_it):
+    have = np.isfinite(z).all(axis=1)
+    first = int(np.flatnonzero(have)[0])
+    kf = KalmanFilter(dim_x=6, dim_z=3)
+    kf.F, kf.H, kf.Q = model.F(), model.H(), model.Q(accel)
+    kf.x = np.zeros(6)
+    kf.x[[0, 2, 4]] = z[first]
+    kf.P = np.diag([1.0, 0.05, 1.0, 0.05, 1.0, 0.05]) ** 2 + np.kron(R[first], np.diag([1.0, 0.0]))
+    means, covs, means_p, covs_p = kf.batch_filter([z[k] if have[k] else None for k in range(len(z))],
+                                                   Rs=[R[k] if have[k] else np.eye(3) for k in range(len(z))])
+    ll = 0.0
+    for k in np.flatnonzero(have):
+        if k != first:
+            y, S = z[k] - kf.H @ means_p[k], kf.H @ covs_p[k] @ kf.H.T + R[k]
+            ll -= 0.5 * (float(y @ np.linalg.solve(S, y)) + math.log(np.linalg.det(S)) + 3 * math.log(2.0 * math.pi))
+    return (ll, *kf.rts_smoother(means, covs)[:2]) if smooth_it else (ll, None, None)
+
+
+def reference_fit_space(model, tracks, cfg):
+    """The old per-track ``_fit_space`` (filterpy), in the batched one's interface."""
+    out = []
+    for t in tracks:
+        z, R0, ok = t.z, t.R0, t.ok.copy()
+        best = (model.accel_grid[0], t.grid[0], -math.inf)
+        for accel in model.accel_grid:
+            for s in t.grid:
+                ll = _reference_space_run(model, z, R0 * s * s, accel, False)[0]
+                best = (accel, s, ll) if ll > best[2] else best
+        accel, s, ll = best
+        _, xs, Ps = _reference_space_run(model, z, R0 * s * s, accel, True)
+        outliers = np.zeros(len(z), bool)
+        if ok.sum() > 4:
+            resid = z - xs[:, [0, 2, 4]]
+            d2 = np.array([float(resid[k] @ np.linalg.solve(R0[k] * s * s, resid[k])) / 3.0 if ok[k] else 0.0
+                           for k in range(len(z))])
+            bad = ok & (np.sqrt(d2) > cfg.outlier_sigma)
+            if bad.any() and (ok & ~bad).sum() >= 2:
+                outliers, z[bad], R0[bad], ok = bad, np.nan, np.eye(3), ok & ~bad
+                _, xs, Ps = _reference_space_run(model, z, R0 * s * s, accel, True)
+        out.append((accel, s, ll, xs, Ps, ok, outliers))
+    return out
+
+
+def run_reference(table: pl.DataFrame):
+    """``smooth_trajectory`` with the filterpy kernels in place of the batched ones."""
+    saved = smooth.smooth_tracks, smooth._fit_space
+    smooth.smooth_tracks, smooth._fit_space = reference_smooth_tracks, reference_fit_space
+    try:
+        return smooth.smooth_trajectory(table)
+    finally:
+        smooth.smooth_tracks, smooth._fit_space = saved
+
+
+# --- measurement ---
+
+def compare(old: pl.DataFrame, new: pl.DataFrame, old_fits, new_fits) -> dict:
+    """Largest absolute difference per float column, and whether every other column and fit agree."""
+    diffs = {}
+    for c in old.columns:
+        if old[c].dtype == pl.Float64:
+            a, b = old[c].to_numpy().astype(float), new[c].to_numpy().astype(float)
+            assert np.array_equal(np.isnan(a), np.isnan(b)), f"{c}: nulls differ"
+            diffs[c] = float(np.max(np.abs(a - b)[~np.isnan(a)], initial=0.0))
+    same = all(old[c].equals(new[c]) for c in old.columns if old[c].dtype != pl.Float64)
+    fits = [(f.q, f.sigma, f.observations, f.outliers, f.filled) for f in old_fits] == \
+           [(f.q, f.sigma, f.observations, f.outliers, f.filled) for f in new_fits]
+    worst_ll = max((abs(a.log_likelihood - b.log_likelihood) for a, b in zip(old_fits, new_fits)), default=0.0)
+    image = ("x", "y") if "X_std" not in diffs or old["X_std"].null_count() == old.height else ("X", "Y", "Z")
+    return {"max_abs_diff_position": max(diffs[c] for c in image), "max_abs_diff_any_column": max(diffs.values()),
+            "worst_column": max(diffs, key=diffs.get), "other_columns_equal": same, "fits_equal": fits,
+            "max_abs_diff_log_likelihood": worst_ll}
+
+
+def timed(table: pl.DataFrame, repeats: int) -> tuple[float, float]:
+    """Best wall and best CPU seconds of ``repeats`` runs (on a shared machine the CPU time is the
+    work; the wall time also counts the waits for a core)."""
+    wall, cpu = math.inf, math.inf
+    for _ in range(repeats):
+        t0, c0 = time.perf_counter(), time.process_time()
+        smooth.smooth_trajectory(table)
+        wall, cpu = min(wall, time.perf_counter() - t0), min(cpu, time.process_time() - c0)
+    return wall, cpu
+
+
+def peak_bytes(table: pl.DataFrame) -> int:
+    tracemalloc.start()
+    smooth.smooth_trajectory(table)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    return peak
+
+
+def bench_model(tracker: str, old_rows: int, sizes: tuple[int, ...], repeats: int) -> dict:
+    smooth.smooth_trajectory(synthetic_trajectory(300, tracker, tracks=2))  # imports, registry
+    short = synthetic_trajectory(old_rows, tracker, seed=1)
+    t0, c0 = time.perf_counter(), time.process_time()
+    old, old_fits = run_reference(short)
+    t_old, c_old = time.perf_counter() - t0, time.process_time() - c0
+    t_new, c_new = timed(short, repeats)
+    new, new_fits = smooth.smooth_trajectory(short)
+    n = short.height
+    result = {"old": {"rows": n, "seconds": t_old, "cpu_seconds": c_old, "rows_per_s": n / t_old,
+                      "rows_per_cpu_s": n / c_old},
+              "new_same_rows": {"seconds": t_new, "cpu_seconds": c_new, "rows_per_s": n / t_new,
+                                "rows_per_cpu_s": n / c_new},
+              "agreement": compare(old, new, old_fits, new_fits), "new": {}}
+    for rows in sizes:
+        table = synthetic_trajectory(rows, tracker, seed=2)
+        wall, cpu = timed(table, repeats)
+        result["new"][str(rows)] = {"rows": table.height, "seconds": wall, "cpu_seconds": cpu,
+                                    "rows_per_s": table.height / wall, "rows_per_cpu_s": table.height / cpu,
+                                    "peak_traced_bytes": peak_bytes(table)}
+    result["speedup_vs_old_cpu"] = result["new"][str(sizes[-1])]["rows_per_cpu_s"] / result["old"]["rows_per_cpu_s"]
+    return result
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--old-rows", type=int, default=600)
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 60_000])
+    ap.add_argument("--repeats", type=int, default=2)
+    ap.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "smooth.json")
+    args = ap.parse_args()
+    load_before = os.getloadavg()
+    results = {m: bench_model(m, args.old_rows, tuple(args.sizes), args.repeats) for m in args.models}
+    out = {"machine": describe(), "load_average_before": load_before, "load_average_after": os.getloadavg(),
+           "tracks_per_table": 6, "models": results}
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(out, indent=2))
+    for m, r in results.items():
+        rates = ", ".join(f"{k} rows {v['rows_per_s']:.0f}/s wall, {v['rows_per_cpu_s']:.0f}/s CPU "
+                          f"(peak {v['peak_traced_bytes'] / v['rows']:.0f} B/row)" for k, v in r["new"].items())
+        a = r["agreement"]
+        print(f"{m}: old {r['old']['rows_per_cpu_s']:.1f} rows/s CPU; new {rates}; {r['speedup_vs_old_cpu']:.0f}x; "
+              f"position diff {a['max_abs_diff_position']:.2g}, any column {a['max_abs_diff_any_column']:.2g} "
+              f"({a['worst_column']}), other columns equal {a['other_columns_equal']}, fits equal {a['fits_equal']}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
