@@ -15,7 +15,7 @@ def replay_log(log: str | Path, tracker: str, *, config: ConfigSource = None, se
 
     ``config`` is None (the tracker's defaults), its config dataclass, a dict nested like the
     config (``{"particles": {"n": 500}}``) or a TOML file (the tracker's table or the top level).
-    Returns the trajectory as a Polars DataFrame (``.trajectory``; past 8192 rows the replay keeps it
+    Returns the trajectory as a Polars DataFrame (``.trajectory``; past 2048 rows the replay keeps it
     in a temporary Parquet file and each access reads it back, ``.scan_trajectory()`` queries it
     lazily in bounded memory: docs/memory.md), the ``.digest`` the CLI
     prints for the same log, config and seed, the frame count and the tracker's ``.notices``;

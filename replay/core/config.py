@@ -206,8 +206,9 @@ def read_toml(path: str | Path) -> dict[str, Any]:
 def config_from_toml(cls: type[C], path: str | Path, table: str | None = None) -> C:
     """Read ``path`` into ``cls``: its ``[table]`` (with sub-tables) when present, else the top level."""
     data = read_toml(path)
-    if table is not None and isinstance(data.get(table), dict):
-        return config_from_dict(cls, tracker_table(data, table, path), str(path), table)
+    if table is not None:  # (its [table], or the top level unless that configures another tracker)
+        return config_from_dict(cls, tracker_table(data, table, path), str(path),
+                                table if isinstance(data.get(table), dict) else "")
     return config_from_dict(cls, data, str(path))
 
 
@@ -215,6 +216,12 @@ def tracker_table(data: dict, table: str, path: str | Path) -> dict:
     """A TOML file's ``[table]`` when it has one (else the whole file); anything beside that table
     is refused: a review's [flow] table beside [groups] was silently ignored (also by ``batch --set``)."""
     if not isinstance(data.get(table), dict):
+        from trackreplay.replay.core import registry  # (the names of the trackers, registered ones too)
+
+        configured = sorted(k for k, v in data.items() if k in registry.NAMES and isinstance(v, dict))
+        if configured:  # (a [golf] table read as the flow tracker's keys said "unknown key golf")
+            raise TrackreplayError(f"{path}: this file configures {', '.join(configured)}, not the {table} tracker; "
+                                   f"give --tracker {configured[0]} or a file with a [{table}] table")
         return data
     others = sorted(k for k in data if k != table)
     if others:

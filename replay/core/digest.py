@@ -24,7 +24,7 @@ from typing import Any, BinaryIO
 import numpy as np
 import polars as pl
 
-from trackreplay.replay.core.trajectory import SpilledTrajectory, canonical_parts
+from trackreplay.replay.core.trajectory import SpilledTrajectory, canonical_parts, remove_spill
 
 
 def portable_floats(values: np.ndarray) -> np.ndarray:
@@ -267,7 +267,7 @@ def leaf_values(value: Any, path: str = "") -> Iterator[tuple[str, Any]]:
 
 # Per-frame digests a replay keeps in memory (~1 KB a frame) before they go to a temporary Parquet file
 # (docs/memory.md).
-SPILL_FRAMES = 2048
+SPILL_FRAMES = 512
 
 
 class FrameDigests:
@@ -321,9 +321,15 @@ class FrameDigests:
         if self._writer is None:
             fd, self._path = tempfile.mkstemp(prefix="trackreplay-frame-digests-", suffix=".parquet")
             os.close(fd)
-            weakref.finalize(self, os.unlink, self._path)
+            weakref.finalize(self, remove_spill, self._path)
             self._writer = pq.ParquetWriter(self._path, table.schema)
         self._writer.write_table(table, row_group_size=max(table.num_rows, 1))
+        # the group just written stays readable without the file (still open for writing): diff's
+        # lock step reads the last frame after each one
+        group = FrameDigests()
+        group.frames = self.frames[self._spilled:]
+        group._paths, group._hashes, group._sizes, group._values = self._paths, self._hashes, self._sizes, self._values
+        self._group = (self._spilled // self._spill_frames, group)
         self._spilled += len(self._paths)
         self._paths, self._hashes, self._sizes, self._values = [], [], [], []
 
@@ -334,9 +340,9 @@ class FrameDigests:
             return self, i - self._spilled
         import pyarrow.parquet as pq
 
-        self._finish_spill()
         group = i // self._spill_frames
         if self._group is None or self._group[0] != group:
+            self._finish_spill()  # (no frame is added after an earlier one is read)
             part = pl.from_arrow(pq.ParquetFile(self._path).read_row_group(group))
             self._group = (group, FrameDigests.from_table(part))
         return self._group[1], i - group * self._spill_frames

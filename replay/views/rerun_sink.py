@@ -1,11 +1,14 @@
 """The Rerun stream of a replay: camera images on ``frame``/``log_time`` timelines, to an .rrd file.
 
-Built only when ``--rrd`` is given; without it no Rerun object is ever constructed.
+Built only when `--rrd`, `--connect` or `--spawn` is given; without them no Rerun object is ever constructed.
 """
 
 from __future__ import annotations
 
 import hashlib
+import os
+import socket
+import sys
 from collections.abc import Callable
 from datetime import timedelta
 from pathlib import Path
@@ -20,6 +23,8 @@ from trackreplay.recorder.atomic import claim_partial
 from trackreplay.schemas.errors import OutputError, TrackreplayError
 from trackreplay.trackers.frame import Frame
 
+VIEWER_PORT = 9876
+VIEWER_URL = f"rerun+http://127.0.0.1:{VIEWER_PORT}/proxy"
 RERUN_SCHEMES = ("rerun://", "rerun+http://", "rerun+https://")  # what the SDK's gRPC sink accepts
 
 CAMERA = "camera/image"
@@ -414,6 +419,39 @@ def check_connect_url(url: str) -> str:
     return url
 
 
+def missing_display() -> str | None:
+    """Why a viewer window cannot open here (Linux without X11 or Wayland), else None."""
+    displays = ("DISPLAY", "WAYLAND_DISPLAY", "WAYLAND_SOCKET")
+    if sys.platform.startswith("linux") and not any(os.environ.get(v) for v in displays):
+        return "no display (DISPLAY and WAYLAND_DISPLAY are unset)"
+    return None
+
+
+def _viewer_listening(port: int) -> bool:
+    try:
+        with socket.create_connection(("127.0.0.1", port), timeout=1.0):
+            return True
+    except OSError:
+        return False
+
+
+def spawn_viewer(rec: rr.RecordingStream) -> str | None:
+    """Start a Rerun viewer for ``rec`` (the SDK's global spawn ignores a stream that is not the global
+    one); None once it listens, else why it did not start."""
+    reason = missing_display()
+    if reason is None:
+        beside = Path(sys.executable).with_name("rerun")  # the SDK's own viewer, when the venv is not on PATH
+        try:
+            rr.spawn(port=VIEWER_PORT, connect=False, hide_welcome_screen=True, recording=rec,
+                     executable_path=str(beside) if beside.is_file() else None)
+        except Exception as err:  # no viewer executable: the SDK's refusal is a paragraph, keep its first line
+            reason = str(err).strip().splitlines()[0].rstrip(".")
+        else:
+            if not _viewer_listening(VIEWER_PORT):
+                reason = f"the viewer it started is not listening on port {VIEWER_PORT}"
+    return None if reason is None else f"cannot open a Rerun viewer: {reason}"
+
+
 def _stream(recording_id: str) -> rr.RecordingStream:
     rec = rr.RecordingStream("trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher())
     # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
@@ -445,12 +483,14 @@ class RerunSink:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.partial = claim_partial(self.path)  # this process's own: another replay to the same path has its own
             sinks.append(rr.FileSink(str(self.partial)))
+        self.viewer_error: str | None = None  # raised by `close`, once the .rrd is written
         if spawn:
-            try:
-                rr.spawn(connect=False, hide_welcome_screen=True)
-            except Exception as err:  # no viewer binary or no display: the .rrd (if any) still gets written
-                raise OutputError(f"cannot spawn a Rerun viewer ({err}); use --rrd FILE or --connect URL") from None
-            connect = connect or "rerun+http://127.0.0.1:9876/proxy"
+            self.viewer_error = spawn_viewer(self.rec)
+            if self.viewer_error is not None and self.path is None and connect is None:
+                raise OutputError(f"{self.viewer_error}; use --rrd FILE (and `rerun FILE` where there is a display) "
+                                  "or --connect URL")  # nothing else to write: fail before the replay
+            if self.viewer_error is None:
+                connect = connect or VIEWER_URL
         if connect is not None:
             sinks.append(rr.GrpcSink(check_connect_url(connect)))
         self.rec.set_sinks(*sinks, default_blueprint=blueprint)
@@ -482,6 +522,10 @@ class RerunSink:
         self.rec.disconnect()
         if self.partial is not None:
             self.partial.replace(self.path)
+        if self.viewer_error is not None:
+            where = (f"; {self.path} was written: open it with `rerun {self.path}` where there is a display"
+                     if self.path is not None else "")
+            raise OutputError(self.viewer_error + where)
 
 
 def canonical_chunks(path: str | Path) -> "rc.ChunkStore":

@@ -9,7 +9,13 @@ from pathlib import Path
 from trackreplay.recorder.image_codec import ENCODINGS
 from trackreplay.recorder.record import RecordTopics, record
 from trackreplay.recorder.sources.groundtruth import FORMATS
-from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.schemas.errors import OutputError, TrackreplayError
+
+
+def check_output_folder(out: Path) -> None:
+    """A log is written only into a folder that exists (exit 5, as every output that cannot be written)."""
+    if not out.parent.is_dir():
+        raise OutputError(f"cannot write {out}: output folder {out.parent} does not exist")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -61,6 +67,7 @@ def parse_topics(items: list[str]) -> RecordTopics:
 def run(args: argparse.Namespace) -> int:
     if args.flush_every < 1:
         raise TrackreplayError("--flush-every must be at least 1")
+    check_output_folder(args.out)
     report = record(
         args.out, video=args.video, images=args.images, stereo=tuple(args.stereo) if args.stereo else None,
         fps=args.fps, t0_ns=args.t0, timestamps=args.timestamps, calibration=args.calibration,

@@ -14,6 +14,10 @@ from trackreplay.replay.core import registry
 from trackreplay.replay.core.engine import ReplayRequest, replay
 from trackreplay.replay.core.export import METHODS, fill_gaps, trajectory_format, write_trajectory
 from trackreplay.replay.core.outputs import write_json
+from trackreplay.replay.log.frames import read_hints
+from trackreplay.replay.log.reader import LogReader
+from trackreplay.replay.runs.batch_config import apply_sets, parse_assignment, refuse_repeats
+from trackreplay.schemas import topics as T
 
 
 def _rerun_url(text: str) -> str:
@@ -35,8 +39,11 @@ class DigestMismatch(TrackreplayError):
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
+    p.add_argument("--tracker", choices=registry.NAMES, help="tracker to run (default: the one the log's marks are "
+                   "labelled for, e.g. flow for `target` marks; else it must be given)")
     p.add_argument("--config", type=Path, help="tracker config TOML (keys of the tracker's config dataclass)")
+    p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                   help="a config value, over --config's (e.g. golf.particles.n=500); repeatable")
     p.add_argument("--seed", type=seed_int, default=0, help="seed of the tracker's random generator (default 0)")
     p.add_argument("--image-topic", help="image topic (default /camera/image, else the stereo left, else the log's "
                    "only image topic)")
@@ -70,13 +77,32 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
+def choose_tracker(log: Path) -> str:
+    """The tracker the log's marks are labelled for (the one tracker whose ``mark_labels`` hold them all),
+    said on stderr; without one, a sentence asking for ``--tracker``."""
+    labels = sorted({mark.label for mark in read_hints(LogReader(log), T.ANNOTATIONS_INIT)})
+    claims = [name for name in registry.NAMES
+              if labels and (known := registry.get(name).mark_labels) is not None and set(labels) <= set(known)]
+    if len(claims) != 1:
+        marks = f"marks labelled {', '.join(repr(x) for x in labels)}" if labels else "no marks"
+        raise TrackreplayError(f"{log} has {marks}, which choose no one tracker: give --tracker "
+                               f"({', '.join(registry.NAMES)})")
+    print(f"trackreplay: tracker {claims[0]} (the log's marks are labelled {', '.join(labels)}; "
+          "--tracker chooses another)", file=sys.stderr)
+    return claims[0]
+
+
 def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayRequest:
     if args.stereo_topics and args.image_topic:  # (the stereo pair's left is the image topic)
         raise TrackreplayError("--stereo-topics and --image-topic both name the images; give one")
     if args.start is not None and args.end is not None and args.end <= args.start:
         raise TrackreplayError(f"--end {args.end:g} must be after --start {args.start:g}")
+    tracker = args.tracker or choose_tracker(args.log)
+    sets = [parse_assignment(text) for text in args.sets]
+    refuse_repeats([key for key, _ in sets], tracker, "give it once")
+    config = apply_sets(tracker, args.config, dict(sets)) if sets else args.config
     return ReplayRequest(
-        log=args.log, tracker=args.tracker, config=args.config, seed=args.seed, rrd=rrd,
+        log=args.log, tracker=tracker, config=config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
         connect=getattr(args, "connect", None), spawn=getattr(args, "spawn", False),
         stereo_topics=tuple(args.stereo_topics) if args.stereo_topics else None,

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from trackreplay.replay.cli.commands.record import check_output_folder
 from trackreplay.replay.cli.commands.values import non_negative_float, non_negative_int, positive_float, positive_int
 from trackreplay.recorder.synth.colorpf import SCENES as COLORPF_SCENES
 from trackreplay.recorder.synth.colorpf import ColorPfSceneConfig, write_colorpf_scene
@@ -34,7 +35,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the procedural scene (default 0)")
     flow = p.add_argument_group("flow-sim scenes")
     flow.add_argument("--background", default=None, choices=("texture", *PHOTOS),
-                      help="procedural texture (default) or a photo bundled with scikit-image")
+                      help="procedural texture (default) or a photo bundled with scikit-image (the `scenes` extra)")
     flow.add_argument("--encoding", default=None, choices=("png", "jpeg", "raw"), help="image encoding (default png, lossless)")
     flow.add_argument("--frames", type=positive_int, default=None, help="number of frames, t = 0..frames-1 (paper: 51)")
     golf = p.add_argument_group("golf-teeshot (--fps and --duration also for groups-*: default 48 fps, 4 s after a 10-frame lead-in)")
@@ -61,7 +62,17 @@ def _reject(args: argparse.Namespace, options: tuple[tuple[str, str], ...], scen
             raise TrackreplayError(f"{flag} does not apply to scene {scene}")
 
 
+def _check_photos(name: str) -> None:
+    """The photos come with scikit-image, an optional extra: say which, before anything is written."""
+    try:
+        import skimage.data  # noqa: F401
+    except ImportError:
+        raise TrackreplayError(f"--background {name} is a photo bundled with scikit-image, which is not installed: "
+                               "pip install 'trackreplay[scenes]' (or -e '.[scenes]' in a clone)") from None
+
+
 def run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out)
     if args.scene in GROUP_SCENES:
         return _run_groups(args)
     if args.scene == GOLF_SCENE:
@@ -69,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
     if args.scene in COLORPF_SCENES:
         return _run_colorpf(args)
     _reject(args, _GOLF_ONLY, args.scene)
+    if args.background in PHOTOS:
+        _check_photos(args.background)
     cfg = FlowSimConfig(
         scene=args.scene, seed=args.seed, background=args.background or "texture", encoding=args.encoding or "png",
         frames=51 if args.frames is None else args.frames,
@@ -89,8 +102,6 @@ def _run_golf(args: argparse.Namespace) -> int:
         encoder_noise=not args.exact_encoders,
     )
     cfg.validate()
-    if not args.out.parent.is_dir():
-        raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
     bar = None
     if sys.stderr.isatty():
         from tqdm import tqdm
@@ -114,8 +125,6 @@ def _run_golf(args: argparse.Namespace) -> int:
 def _run_colorpf(args: argparse.Namespace) -> int:
     """Colour-PF scenes take --seed and --frames (walking frames, default 96)."""
     _reject(args, _GOLF_ONLY + (("background", "--background"), ("encoding", "--encoding")), args.scene)
-    if not args.out.parent.is_dir():
-        raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
     cfg = ColorPfSceneConfig(scene=args.scene, seed=args.seed, frames=96 if args.frames is None else args.frames)
     try:
         cfg.validate()
@@ -131,8 +140,6 @@ def _run_groups(args: argparse.Namespace) -> int:
     from trackreplay.recorder.synth.groups.scene import GroupSceneConfig, write_group_scene
 
     _reject(args, tuple(o for o in _FLOW_ONLY + _GOLF_ONLY if o[0] not in ("fps", "duration")), args.scene)
-    if not args.out.parent.is_dir():
-        raise TrackreplayError(f"cannot write {args.out}: directory {args.out.parent} does not exist")
     cfg = GroupSceneConfig(scene=args.scene, seed=args.seed, fps=48.0 if args.fps is None else args.fps,
                            duration=4.0 if args.duration is None else args.duration)
     try:

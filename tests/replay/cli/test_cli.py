@@ -44,8 +44,8 @@ def test_start_end_select_a_time_range(short_sim: Path, tmp_path: Path) -> None:
     "argv, message",
     [
         (["replay", "missing.mcap"], "missing.mcap does not exist"),
-        (["replay", "{log}", "--image-topic", "/nope"], "has no topic /nope; topics present:"),
-        (["replay", "{log}", "--config", "{cfg}"], "c.toml: unknown key bogus; known: "),
+        (["replay", "{log}", "--tracker", "flow", "--image-topic", "/nope"], "has no topic /nope; topics present:"),
+        (["replay", "{log}", "--tracker", "flow", "--config", "{cfg}"], "c.toml: unknown key bogus; known: "),
         (["eval", "{traj}", "{log}"], "does not exist"),
     ],
 )

@@ -152,7 +152,7 @@ def test_an_empty_time_range_is_refused(short_sim: Path, capsys) -> None:
     (["record", "OUT", "--images", "IMAGES", "--fps", "30", "--t0", "99999999999999999999", "--quiet"],
      "the first frame time must be at most 2^62 ns"),
     (["annotate", "LOG", "--frame", "0", "--box", "10,10,nan,10", "--out", "OUT"], "must be four finite numbers"),
-    (["replay", "LOG", "--start", "100", "--quiet"], "--start 100 s is after the log's end"),
+    (["replay", "LOG", "--tracker", "flow", "--start", "100", "--quiet"], "--start 100 s is after the log's end"),
     # a review: a wrong --export suffix was refused only after the whole replay (and its 166 MB .rrd)
     (["replay", "LOG", "--export", "OUT.json", "--rrd", "OUT", "--quiet"], "unknown trajectory format"),
     # a review: --duration 1e9 ran until killed

@@ -89,6 +89,18 @@ def test_replay_spilling_gives_the_same_digest_table_and_frame_digests(short_sim
     assert pl.read_parquet(out).equals(a.table())
 
 
+def test_the_last_frame_stays_readable_while_frames_spill() -> None:
+    """``diff_runs`` reads each side's last frame after adding it, in lock step, while the replay goes on."""
+    spilling, whole = FrameDigests(spill_frames=4), FrameDigests()
+    for i in range(11):
+        leaves = [("states.len", bytes(8), [1.0]), ("intermediates.x", i.to_bytes(8, "big"), [float(i)])]
+        spilling.add(i, leaves)
+        whole.add(i, leaves)
+        assert spilling.fields(-1) == whole.fields(-1)
+    assert spilling._spilled == 8 and spilling.fields(2) == whole.fields(2)
+    assert spilling.table().equals(whole.table())
+
+
 @pytest.mark.parametrize("field", ["spill_rows", "spill_frames"])
 def test_spill_bounds_must_be_positive(short_sim: Path, field: str) -> None:
     with pytest.raises(TrackreplayError, match=field):
