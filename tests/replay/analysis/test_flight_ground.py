@@ -11,6 +11,8 @@ from trackreplay.recorder.synth.golf.flight import ROLL, BallModel, Launch, simu
 from trackreplay.replay.analysis.flight import G, NAMES, FlightConfig, Observations, _fly, _initial, fit_flight, simulate
 from trackreplay.trackers.golf.ball_flight import FittedLift, acceleration
 
+pytestmark = pytest.mark.slow  # minutes of synthetic scenes: run by `pytest -m slow` (CI runs both)
+
 CAMERA = np.array([-10.0, -2.0, 2.5])  # behind the tee, as the synthetic scenes' "behind" camera
 FPS, T_LAUNCH = 30.0, 0.5
 

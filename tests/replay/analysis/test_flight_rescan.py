@@ -16,6 +16,8 @@ from trackreplay.replay.analysis.flight_rescan import ExpectedBall, RescanConfig
 from trackreplay.replay.log.groundtruth import read_groundtruth
 from trackreplay.replay.log.reader import LogReader
 
+pytestmark = pytest.mark.slow  # minutes of synthetic scenes: run by `pytest -m slow` (CI runs both)
+
 IDENTITY = np.eye(3)
 SIZE = 160
 

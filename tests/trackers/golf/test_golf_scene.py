@@ -19,6 +19,8 @@ from trackreplay.replay.log.groundtruth import read_groundtruth  # noqa: E402
 from trackreplay.replay.log.reader import LogReader  # noqa: E402
 from trackreplay.trackers.golf import GolfConfig, GolfTracker  # noqa: E402
 
+pytestmark = pytest.mark.slow  # minutes of synthetic scenes: run by `pytest -m slow` (CI runs both)
+
 # A short shot at 640x360, the operator zoomed in twice as far as his 720p default so the ball has
 # the same pixel size as there (3.5 px in the climb, 5 px at landing).
 SHOT = dict(

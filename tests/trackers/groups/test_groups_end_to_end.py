@@ -13,6 +13,8 @@ from trackreplay.replay.log.groundtruth import read_groundtruth
 from trackreplay.replay.analysis.mot import mot_metrics
 from trackreplay.replay.log.reader import LogReader
 
+pytestmark = pytest.mark.slow  # minutes of synthetic scenes: run by `pytest -m slow` (CI runs both)
+
 
 @pytest.fixture(scope="module")
 def passing(tmp_path_factory):
