@@ -253,34 +253,25 @@ def input_cases(folder: Path, log: Path) -> list[tuple[str, list[str]]]:
     ]
 
 
+def _log_mutations():
+    """tests/fuzz/log_mutations.py, loaded by path (the tests are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("log_mutations", ROOT / "tests" / "fuzz" / "log_mutations.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def structure_logs(folder: Path, log: Path) -> list[tuple[str, Path, bool]]:
     """(name, log, usable as it stands) rewritten from ``log``: streamed without a summary section,
     log times at and beyond 2**63, a channel id declared twice with different schemas."""
-    from mcap.records import Channel
-    from mcap.writer import IndexType, Writer
+    mutations = _log_mutations()
 
     def rewrite(name: str, streamed: bool = False, chunked: bool = True, time: int | None = None,
                 redeclare: bool = False) -> Path:
-        dst = folder / f"structure-{name}.mcap"
-        options = dict(index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False,
-                       use_statistics=False, use_summary_offsets=False) if streamed else {}
-        with open(log, "rb") as fh, open(dst, "wb") as out:
-            reader = make_reader(fh)
-            writer = Writer(out, use_chunking=chunked, **options)
-            writer.start(profile=reader.get_header().profile, library="reliability")
-            ids: dict[tuple[str, int], int] = {}
-            for k, (schema, channel, msg) in enumerate(reader.iter_messages(log_time_order=False)):
-                if ("s", schema.id) not in ids:
-                    ids["s", schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-                if ("c", channel.id) not in ids:
-                    ids["c", channel.id] = writer.register_channel(channel.topic, channel.message_encoding, ids["s", schema.id])
-                if redeclare and k == 20:
-                    other = writer.register_schema("reliability.Other", "jsonschema", b"{}")
-                    writer._Writer__chunk_builder.add_channel(Channel(ids["c", channel.id], channel.topic, "json", {}, other))
-                t = time if time is not None and k == 5 else msg.log_time
-                writer.add_message(ids["c", channel.id], t, msg.data, t, msg.sequence)
-            writer.finish()
-        return dst
+        return mutations.rewrite(log, folder / f"structure-{name}.mcap", streamed=streamed, chunked=chunked, time=time,
+                                 redeclare=redeclare, library="reliability")
 
     return [("streamed, no summary", rewrite("streamed", streamed=True), True),
             ("streamed, no chunks", rewrite("unchunked", streamed=True, chunked=False), True),

@@ -163,6 +163,20 @@ def _error(j: dict[str, np.ndarray]) -> np.ndarray:
     return np.hypot(j["est_x"] - j["x"], j["est_y"] - j["y"])
 
 
+def _honesty(visible: np.ndarray, measured: np.ndarray, predicted: np.ndarray, wrong: np.ndarray,
+             rel: Reliability) -> dict[str, float | int]:
+    """What boxes and points share: how often ``measured`` / ``predicted`` rows are wrong, calibration
+    and coverage, with their counts."""
+    n_visible = int(visible.sum())
+    return dict(
+        wrong_rate=_rate(int(np.sum(measured & wrong)), int(measured.sum())),
+        predicted_wrong_rate=_rate(int(np.sum(predicted & wrong)), int(predicted.sum())),
+        ece=rel.ece, coverage=_rate(int(np.sum(visible & measured)), n_visible),
+        n_truth_frames=int(visible.size), n_visible=n_visible, n_measured=int(measured.sum()),
+        n_wrong=int(np.sum(measured & wrong)), n_predicted=int(predicted.sum()),
+        n_predicted_wrong=int(np.sum(predicted & wrong)), n_calibrated=int(rel.bin_count.sum()))
+
+
 def truth_has_boxes(truth: pl.DataFrame) -> bool:
     """Whether a truth gives boxes (score with :func:`box_scores`) rather than points (:func:`point_scores`):
     some visible row has a box of positive size."""
@@ -201,12 +215,7 @@ def box_scores(track: pl.DataFrame, truth: pl.DataFrame) -> BoxScores:
     return BoxScores(
         success_auc=float(success.mean()), precision_20px=_rate(int(np.sum(err_v <= PRECISION_PX)), n_visible),
         mean_iou=float(ious.mean()) if n_visible else float("nan"),
-        wrong_rate=_rate(int(np.sum(measured & wrong)), int(measured.sum())),
-        predicted_wrong_rate=_rate(int(np.sum(predicted & wrong)), int(predicted.sum())),
-        ece=rel.ece, coverage=_rate(int(np.sum(visible & measured)), n_visible),
-        n_truth_frames=int(visible.size), n_visible=n_visible, n_measured=int(measured.sum()),
-        n_wrong=int(np.sum(measured & wrong)), n_predicted=int(predicted.sum()),
-        n_predicted_wrong=int(np.sum(predicted & wrong)), n_calibrated=int(rel.bin_count.sum()),
+        **_honesty(visible, measured, predicted, wrong, rel),
         success_curve=success, precision_curve=precision, ious=ious, reliability=rel)
 
 
@@ -229,10 +238,5 @@ def point_scores(track: pl.DataFrame, truth: pl.DataFrame) -> PointScores:
     return PointScores(
         within_5px=near5, within_10px=near10,
         median_error_px=float(np.median(errors)) if errors.size else float("nan"),
-        wrong_rate=_rate(int(np.sum(measured & wrong)), int(measured.sum())),
-        predicted_wrong_rate=_rate(int(np.sum(predicted & wrong)), int(predicted.sum())),
-        ece=rel.ece, coverage=_rate(int(np.sum(visible & measured)), n_visible),
-        n_truth_frames=int(visible.size), n_visible=n_visible, n_measured=int(measured.sum()),
-        n_wrong=int(np.sum(measured & wrong)), n_predicted=int(predicted.sum()),
-        n_predicted_wrong=int(np.sum(predicted & wrong)), n_calibrated=int(rel.bin_count.sum()),
+        **_honesty(visible, measured, predicted, wrong, rel),
         errors=errors, reliability=rel)

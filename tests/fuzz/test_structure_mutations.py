@@ -8,40 +8,22 @@ One short synthetic log rewritten record by record; the same cases on every run,
 
 from __future__ import annotations
 
+import importlib.util
 import json
 from pathlib import Path
 
 import pytest
-from mcap.reader import make_reader
-from mcap.records import Channel
-from mcap.writer import IndexType, Writer
 
 from trackreplay.replay.cli.main import INTERNAL_ERROR, main
 
 
-def rewrite(src: Path, dst: Path, *, streamed: bool = False, chunked: bool = True, time: int | None = None,
-            redeclare: bool = False) -> Path:
-    """``src`` written again: without summary or indexes (``streamed``), with the sixth message at log
-    time ``time``, or with its image channel declared a second time with another schema (``redeclare``)."""
-    options = dict(index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False, use_statistics=False,
-                   use_summary_offsets=False) if streamed else {}
-    with open(src, "rb") as fh, open(dst, "wb") as out:
-        reader = make_reader(fh)
-        writer = Writer(out, use_chunking=chunked, chunk_size=64 * 1024, **options)
-        writer.start(profile=reader.get_header().profile, library="fuzz")
-        ids: dict[tuple[str, int], int] = {}
-        for k, (schema, channel, msg) in enumerate(reader.iter_messages(log_time_order=False)):
-            if ("s", schema.id) not in ids:
-                ids["s", schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-            if ("c", channel.id) not in ids:
-                ids["c", channel.id] = writer.register_channel(channel.topic, channel.message_encoding, ids["s", schema.id])
-            if redeclare and k == 20:
-                other = writer.register_schema("fuzz.Other", "jsonschema", b"{}")
-                writer._Writer__chunk_builder.add_channel(Channel(ids["c", channel.id], channel.topic, "json", {}, other))
-            t = time if time is not None and k == 5 else msg.log_time
-            writer.add_message(ids["c", channel.id], t, msg.data, t, msg.sequence)
-        writer.finish()
-    return dst
+spec = importlib.util.spec_from_file_location("log_mutations", Path(__file__).with_name("log_mutations.py"))
+MUTATIONS = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(MUTATIONS)
+
+
+def rewrite(src: Path, dst: Path, **options) -> Path:
+    return MUTATIONS.rewrite(src, dst, chunk_size=64 * 1024, **options)
 
 
 CASES = {  # name: (rewrite options, exit statuses documented for it, the same digest as the source when 0)

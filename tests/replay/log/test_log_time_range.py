@@ -1,11 +1,10 @@
 """Issue 33, defect 3: a log time of 2**63 or more (a negative time written as unsigned wraps there)
 is refused in one sentence naming the file, topic and message, not an internal OverflowError."""
 
+import importlib.util
 from pathlib import Path
 
 import pytest
-from mcap.reader import make_reader
-from mcap.writer import Writer
 
 from trackreplay.replay.cli.main import main
 from trackreplay.replay.log.info import log_info
@@ -13,24 +12,14 @@ from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas.errors import LogError
 
 GOLDEN = Path(__file__).resolve().parents[2] / "golden" / "flow-sim1-24f.mcap"
+_SPEC = importlib.util.spec_from_file_location("log_mutations", GOLDEN.parents[1] / "fuzz" / "log_mutations.py")
+MUTATIONS = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(MUTATIONS)
 
 
 def with_time(dst: Path, log_time: int, at: int = 5) -> Path:
     """The golden flow log with message ``at`` (file order) moved to ``log_time``."""
-    with open(GOLDEN, "rb") as fh, open(dst, "wb") as out:
-        reader = make_reader(fh)
-        writer = Writer(out)
-        writer.start(profile=reader.get_header().profile, library="test")
-        ids: dict[tuple[str, int], int] = {}
-        for k, (schema, channel, msg) in enumerate(reader.iter_messages(log_time_order=False)):
-            if ("s", schema.id) not in ids:
-                ids["s", schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
-            if ("c", channel.id) not in ids:
-                ids["c", channel.id] = writer.register_channel(channel.topic, channel.message_encoding, ids["s", schema.id])
-            t = log_time if k == at else msg.log_time
-            writer.add_message(ids["c", channel.id], t, msg.data, t, msg.sequence)
-        writer.finish()
-    return dst
+    return MUTATIONS.rewrite(GOLDEN, dst, time=log_time, at=at, library="test")
 
 
 @pytest.mark.parametrize("log_time", [2**63, 2**64 - 5], ids=["2^63", "negative-wrapped"])
