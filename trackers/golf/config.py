@@ -359,6 +359,25 @@ class ReinitConfig:
 
 
 @dataclass(frozen=True)
+class WorldBehindConfig:
+    """How many recent pictures make the world behind the ball, and how far a blob must stand out
+    (:mod:`.world_behind`)."""
+
+    frames: int = 6  # recent pictures kept (0: off)
+    min_frames: int = 3  # pictures of the same view needed for a median (fewer: no judgement)
+    # a recent picture whose median pixel (over small copies) changed by more than this many grey levels
+    # is of another view (fixed views in the ball corpus: 0-1; a hand-held camera: 4-10)
+    max_change: float = 2.0
+    noise_sigmas: float = 6.0  # how far (robust σ of |Y - world| over the region) a blob must stand out
+
+    def __post_init__(self) -> None:
+        if self.frames < 0 or not 1 <= self.min_frames:
+            raise ValueError("world_behind.frames must be >= 0 (0: off) and min_frames >= 1")
+        if not self.max_change >= 0 or not self.noise_sigmas > 0:
+            raise ValueError("world_behind.max_change must be >= 0 and noise_sigmas > 0")
+
+
+@dataclass(frozen=True)
 class GolfConfig:
     """The whole tracker: shared scalars here, one table per stage."""
 
@@ -379,6 +398,7 @@ class GolfConfig:
     reinit: ReinitConfig = field(default_factory=ReinitConfig)
     validate: ValidateConfig = field(default_factory=ValidateConfig)
     snap: SnapConfig = field(default_factory=SnapConfig)
+    world_behind: WorldBehindConfig = field(default_factory=WorldBehindConfig)
 
     def __post_init__(self) -> None:
         if not self.reference_height > 0 or not self.reference_ball_px >= 0:

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -67,15 +68,28 @@ class Sightings:
     count: int = 0
     last_step: tuple[int, float, float] | None = None  # frame, x, y of the last one (None: no step of the ball's since)
     last: LastSighting | None = None  # the frame it was last measured on (:mod:`.seen_before`)
+    first: tuple[float, float] | None = None  # where it was first measured since the (re)start
+    moved: bool = False  # measured more than a diameter from there since
 
     def restart(self) -> None:
         """A mark re-anchors the track: nothing seen since."""
-        self.count, self.last_step, self.last = 0, None, None
+        self.count, self.last_step, self.last, self.first, self.moved = 0, None, None, None, False
 
     def add(self, index: int, x: float, y: float, sighting: LastSighting) -> None:
         self.count += 1
         self.last_step = (index, x, y)
         self.last = sighting
+        if self.first is None:
+            self.first = (x, y)
+        self.moved = self.moved or math.hypot(x - self.first[0], y - self.first[1]) > sighting.diameter
+
+    def resting(self, index: int) -> tuple[float, float, float] | None:
+        """(x, y, diameter) of the ball measured on the frame before ``index`` when it has not moved
+        since it was first measured (a ball marked at rest, waiting to be struck); else None."""
+        last = self.last
+        if self.moved or self.last_step is None or last is None or self.last_step[0] != index - 1:
+            return None
+        return self.last_step[1], self.last_step[2], last.diameter
 
 
 @dataclass(frozen=True, eq=False)

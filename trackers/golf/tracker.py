@@ -60,6 +60,7 @@ from trackreplay.trackers.golf.silhouette import (CONTRAST, LutSilhouette, box_s
 from trackreplay.trackers.golf.streak import whole_streak
 from trackreplay.trackers.golf.trail import Trail
 from trackreplay.trackers.golf.validate import Validation, Validator
+from trackreplay.trackers.golf.world_behind import WorldBehind, WorldBehindCrop
 from trackreplay.trackers.lifecycle import TrackLife
 
 NAN3 = np.full(3, np.nan)
@@ -90,6 +91,7 @@ class Extraction:
     seen: InGate  # the validation gate's first look (:meth:`Validator.seen_in_gate`)
     motion: ApparentMotion | None
     hat: Callable[[], np.ndarray]
+    behind: WorldBehindCrop | None = None  # the world behind the region (:mod:`.world_behind`; None: no judgement)
 
     @property
     def measures(self) -> bool:
@@ -116,6 +118,7 @@ class GolfTracker(TrackerBase):
         self.trail = Trail(config.trail_length)
         self.validator = Validator(config.validate, config.blobs)
         self.scenery = Scenery(config.validate.still_px)
+        self.world = WorldBehind(config.world_behind)
         self.notices = Notices()
         # the track, carried from frame to frame (:mod:`.memory`)
         self.started = False
@@ -152,6 +155,7 @@ class GolfTracker(TrackerBase):
         los = view.camera.line_of_sight(np.array([box[:2]]))[0] if view.camera is not None else NAN3
         self._remember(view, ball, found.gated, box[:2] if status == "measured" else None, los)
         self.previous = PreviousFrame.of(frame)
+        self._keep_picture(frame)
         self.intermediates = GolfIntermediates(
             "ptz" if view.camera is not None else "image", reinit, ball.search, found.silhouette, found.gated,
             ParticleSet(self.pf.particles, self.pf.weights, estimate), EkfState.of(self.ekf, view.camera),
@@ -187,6 +191,7 @@ class GolfTracker(TrackerBase):
         """Nothing marked yet: no track."""
         self.intermediates = GolfIntermediates.idle(notice)
         self.previous = PreviousFrame.of(frame)
+        self._keep_picture(frame)
         return []
 
     def _follow_camera(self, view: FrameView, reinit: Reinit) -> None:
@@ -220,8 +225,9 @@ class GolfTracker(TrackerBase):
         moving = (lambda: self._moving(view, ycc, offset, ball, hat)) if cfg.contrast.moving else (lambda: None)
         if ball.lost and (mask := moving()) is not None:
             sil = dataclasses.replace(sil, mask=sil.mask | mask)
-        gated, seen = self._blobs(sil, ball, view.size, ball.lost, motion)
-        found = Extraction(sil, ycc, gated, seen, motion, hat)
+        behind = self._world_behind(view, ycc, offset)
+        gated, seen = self._blobs(sil, ball, view.size, ball.lost, motion, behind)
+        found = Extraction(sil, ycc, gated, seen, motion, hat, behind)
         if not ball.lost and not found.measures:
             found = self._other_silhouettes(found, ball, view.size, moving) or found
         return found
@@ -442,14 +448,17 @@ class GolfTracker(TrackerBase):
         return ApparentMotion(velocity, float(np.max(spread)))
 
     def _blobs(self, sil: LutSilhouette, ball: Expected, size: tuple[int, int], lost: bool,
-               motion: ApparentMotion | None) -> tuple[GatedBlobs, InGate]:
-        """§2.1's blob gate (:func:`select_ball`), then still scenery refused (:mod:`.scenery`), and the
-        validation gate's first look (:meth:`Validator.seen_in_gate`, which changes nothing)."""
+               motion: ApparentMotion | None, behind: WorldBehindCrop | None) -> tuple[GatedBlobs, InGate]:
+        """§2.1's blob gate (:func:`select_ball`), then still scenery and blobs that do not stand out from
+        the world behind them refused (:mod:`.scenery`, :mod:`.world_behind`), and the validation gate's
+        first look (:meth:`Validator.seen_in_gate`, which changes nothing)."""
         centre = ball.search.centre
         gated = select_ball(sil.mask, sil.offset, centre, self.look.targets, self.life.misses, self.config.blobs, ball.scale,
                             lost=lost, motion=motion)
         if len(self.scenery.points):
             gated = refuse(gated, self.scenery.on_scenery(gated.blobs, ball.scale), STILL, centre)
+        if behind is not None and len(gated.blobs):
+            gated = refuse(gated, behind.still(gated.blobs, gated.accepted), STILL, centre)
         seen = self.validator.seen_in_gate(gated=gated, predicted=centre, spread=ball.search.spread,
                                            diameter=ball.diameter, size=size, scale=ball.scale, lost=lost)
         return gated, seen
@@ -464,7 +473,7 @@ class GolfTracker(TrackerBase):
         sil, ycc = found.silhouette, found.ycc
         for name in (n for n in self.luts.names if n != sil.lut_name and self._background_here(sil, n)):
             other = LutSilhouette(name, sil.lut_scores, named_silhouette(ycc, self.luts, name), sil.offset)
-            alt = dataclasses.replace(found, silhouette=other, **self._gate_fields(other, ball, size, found.motion))
+            alt = dataclasses.replace(found, silhouette=other, **self._gate_fields(other, ball, size, found))
             if alt.measures:
                 self.look.lut_name = name
                 return alt
@@ -476,15 +485,14 @@ class GolfTracker(TrackerBase):
             if mask is None:
                 continue
             other = LutSilhouette(CONTRAST, sil.lut_scores, mask, sil.offset)
-            alt = dataclasses.replace(found, silhouette=other, **self._gate_fields(other, ball, size, found.motion))
+            alt = dataclasses.replace(found, silhouette=other, **self._gate_fields(other, ball, size, found))
             if alt.measures:
                 return alt
         return None
 
-    def _gate_fields(self, sil: LutSilhouette, ball: Expected, size: tuple[int, int],
-                     motion: ApparentMotion | None) -> dict:
+    def _gate_fields(self, sil: LutSilhouette, ball: Expected, size: tuple[int, int], found: Extraction) -> dict:
         """:meth:`_blobs` of a silhouette tried while not lost, as :class:`Extraction` fields."""
-        gated, seen = self._blobs(sil, ball, size, False, motion)
+        gated, seen = self._blobs(sil, ball, size, False, found.motion, found.behind)
         return {"gated": gated, "seen": seen}
 
     def _background_here(self, sil: LutSilhouette, name: str) -> bool:
@@ -492,6 +500,21 @@ class GolfTracker(TrackerBase):
         score in :meth:`GolfLuts.choose`): a LUT says nothing about colours it never saw around the ball."""
         share = float(sil.lut_scores[LUT_NAMES.index(name)])
         return share >= self.config.lut.other_min_share  # (NaN, a LUT not built: False)
+
+    def _world_behind(self, view: FrameView, ycc: np.ndarray, offset: np.ndarray) -> WorldBehindCrop | None:
+        """The world behind the search region (:mod:`.world_behind`) on a frame without a pose and
+        without a mark (the user says where the ball is), with where the ball rests if it has not
+        moved since it was first measured (:meth:`Sightings.resting`); None: no judgement."""
+        frame = view.frame
+        if frame.camera is not None or self.marks.on(frame.index) or ycc.size == 0:
+            return None
+        return self.world.behind(frame.index, frame.image, ycc[..., 0], (int(offset[0]), int(offset[1])),
+                                 self.sightings.resting(frame.index))
+
+    def _keep_picture(self, frame: Frame) -> None:
+        """The frame's picture joins the recent ones (:mod:`.world_behind`; without a pose only)."""
+        if frame.camera is None:
+            self.world.push(frame.index, frame.image)
 
     def _moving(self, view: FrameView, ycc: np.ndarray, offset: np.ndarray, ball: Expected,
                 hat: Callable[[], np.ndarray]) -> np.ndarray | None:

@@ -9,7 +9,7 @@ import numpy as np
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
-from trackreplay.trackers.golf.config import ParticleConfig, SnapConfig, ValidateConfig
+from trackreplay.trackers.golf.config import ParticleConfig, SnapConfig, ValidateConfig, WorldBehindConfig
 from trackreplay.trackers.golf.blobs import BlobTargets, disc_circularity, roundness
 from trackreplay.trackers.foreground.blobs import measure_blobs
 
@@ -340,9 +340,15 @@ def test_a_white_thing_beside_the_ball_before_the_loss_is_not_confirmed_after_it
     out = [(tracker.step(f), tracker.intermediates) for f in frames]
     assert statuses(out)[:15].count("measured") >= 13
     assert "measured" not in statuses(out)[15:]
+    # The world behind the ball (trackers/golf/world_behind.py) refuses the still liner before this check
+    # is asked; without it, this check alone keeps the liner out:
+    alone = GolfConfig(world_behind=WorldBehindConfig(frames=0))
+    tracker = GolfTracker(alone, np.random.default_rng(0))
+    out = [(tracker.step(f), tracker.intermediates) for f in frames]
+    assert "measured" not in statuses(out)[15:]
     assert "seen_before" in [inter.validation.verdict for _, inter in out]
-    off = GolfTracker(GolfConfig(validate=ValidateConfig(confirm_not_seen_before=False)), np.random.default_rng(0))
-    assert "measured" in [off.step(f)[0].status for f in frames][15:]  # without the check the liner is taken
+    off = GolfTracker(dataclasses.replace(alone, validate=ValidateConfig(confirm_not_seen_before=False)), np.random.default_rng(0))
+    assert "measured" in [off.step(f)[0].status for f in frames][15:]  # without either the liner is taken
 
 
 def test_a_mark_round_no_ball_is_refused(backdrop, draw_ball):

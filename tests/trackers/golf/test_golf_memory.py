@@ -12,6 +12,7 @@ from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.marks import Marks
 from trackreplay.trackers.golf.memory import BallLook, FrameView, PreviousFrame, Sightings
 from trackreplay.trackers.golf.particles import SampleMoments
+from trackreplay.trackers.golf.seen_before import LastSighting
 from trackreplay.trackers.golf.tracker import GolfTracker
 
 from .conftest import NS
@@ -64,13 +65,33 @@ def test_the_pixel_scale_is_the_height_s_or_the_marked_ball_s_never_past_the_mar
     assert look.scale(540, 1080, 0.0) == 0.5  # reference_ball_px 0: the height alone
 
 
+def _seen(x, y, diameter=6.0):
+    return LastSighting(np.zeros((4, 4, 3), np.uint8), None, (x, y), diameter, 28.0)
+
+
 def test_sightings_restart_on_a_mark():
     sightings = Sightings()
-    sightings.add(4, 1.0, 2.0, "seen")
-    sightings.add(5, 3.0, 4.0, "seen again")
-    assert (sightings.count, sightings.last_step, sightings.last) == (2, (5, 3.0, 4.0), "seen again")
+    first, again = _seen(1.0, 2.0), _seen(3.0, 4.0)
+    sightings.add(4, 1.0, 2.0, first)
+    sightings.add(5, 3.0, 4.0, again)
+    assert (sightings.count, sightings.last_step, sightings.last) == (2, (5, 3.0, 4.0), again)
     sightings.restart()
-    assert (sightings.count, sightings.last_step, sightings.last) == (0, None, None)
+    assert (sightings.count, sightings.last_step, sightings.last, sightings.first) == (0, None, None, None)
+
+
+def test_a_ball_rests_until_it_moves_a_diameter_from_where_it_was_first_seen():
+    sightings = Sightings()
+    sightings.add(4, 100.0, 50.0, _seen(100.0, 50.0))
+    assert sightings.resting(5) == (100.0, 50.0, 6.0)  # marked at rest: waiting to be struck
+    assert sightings.resting(6) is None  # not measured on the frame before
+    sightings.add(5, 104.0, 50.0, _seen(104.0, 50.0))
+    assert sightings.resting(6) == (104.0, 50.0, 6.0)  # 4 px: still within a diameter
+    sightings.add(6, 120.0, 50.0, _seen(120.0, 50.0))
+    sightings.add(7, 101.0, 50.0, _seen(101.0, 50.0))
+    assert sightings.resting(8) is None  # it moved: a ball at rest after that is not taken on trust
+    sightings.restart()
+    sightings.add(9, 101.0, 50.0, _seen(101.0, 50.0))
+    assert sightings.resting(10) == (101.0, 50.0, 6.0)  # a new mark: at rest again
 
 
 def test_the_log_s_marks_are_remembered_once_per_tuple_and_a_list_each_time():

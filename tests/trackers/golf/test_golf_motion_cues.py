@@ -11,7 +11,7 @@ from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import to_ycbcr
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
-from trackreplay.trackers.golf.config import ContrastConfig, ParticleConfig
+from trackreplay.trackers.golf.config import ContrastConfig, ParticleConfig, WorldBehindConfig
 from trackreplay.trackers.golf.particles import motion
 from trackreplay.trackers.golf.silhouette import contrast_silhouette, moving_silhouette, previous_in_pose
 
@@ -81,10 +81,13 @@ def assert_followed(rows, path):
         assert abs(s.x - x) < 3 and abs(s.y - y) < 3
 
 
-def track(frames, **particles):
-    """The golf tracker's rows over ``frames`` with the default config, ``particles`` fields replaced."""
+def track(frames, world_behind=None, **particles):
+    """The golf tracker's rows over ``frames`` with the default config, ``particles`` fields replaced
+    (and the world behind the ball's config, when given)."""
     cfg = GolfConfig()
     cfg = dataclasses.replace(cfg, particles=dataclasses.replace(cfg.particles, **particles))
+    if world_behind is not None:
+        cfg = dataclasses.replace(cfg, world_behind=world_behind)
     tracker = GolfTracker(cfg, np.random.default_rng(0))
     return [tracker.step(f)[0] for f in frames]
 
@@ -95,7 +98,9 @@ def test_a_followed_ball_that_stops_in_the_picture_is_still_measured(backdrop, d
     # ball stopped). The mixed state's stopped samples are already where it is: every frame measured.
     path = [(400.0 + 25 * k, 360.0) for k in range(10)] + [(625.0, 360.0)] * 10
     frames = marked_sequence(backdrop, draw_ball, path)
-    assert_followed(track(frames), path)
+    # The backdrop here stands still, so the world behind the ball (trackers/golf/world_behind.py) would
+    # rightly refuse a ball at rest after it moved; this test is about the samples, so it is off.
+    assert_followed(track(frames, world_behind=WorldBehindConfig(frames=0)), path)
     # Constant-velocity samples alone run on past it: predicted as soon as it stops, and found
     # again only by the evidence a jump needs (a tentative track, three frames).
     moving_only = track(frames, stop_share=0.0)
