@@ -364,7 +364,7 @@ class WorldBehindConfig:
     (:mod:`.world_behind`)."""
 
     frames: int = 6  # recent pictures kept (0: off)
-    min_frames: int = 3  # pictures of the same view needed for a median (fewer: no judgement)
+    min_frames: int = 3  # pictures of the same view needed for a median (fewer: no judgement): half of frames
     # a recent picture whose median pixel (over small copies) changed by more than this many grey levels
     # is of another view (fixed views in the ball corpus: 0-1; a hand-held camera: 4-10)
     max_change: float = 2.0
