@@ -19,6 +19,7 @@ from trackreplay.recorder.image_codec import ENCODINGS, compressed_image, image_
 from trackreplay.recorder.sources.base import FrameClock, ImageFrame, check_fps, read_timestamps
 from trackreplay.recorder.sources.encoders import read_encoders, read_lens_table
 from trackreplay.recorder.sources.ground_plane import read_ground_plane
+from trackreplay.recorder.sources.ground_plane_truth import fit_truth_plane, truth_plane
 from trackreplay.recorder.sources.groundtruth import GroundTruthTable, read_groundtruth
 from trackreplay.recorder.sources.images import check_count, list_images, read_images
 from trackreplay.recorder.sources.stereo import Calibration, StereoSource, load_calibration, pose_message
@@ -61,6 +62,7 @@ class RecordReport:
     end_ns: int | None = None
     warnings: tuple[str, ...] = ()
     frames_lost: bool = False  # the source had frames that could not be decoded (named in warnings)
+    notes: tuple[str, ...] = ()  # what the recording derived (a ground plane fitted to the truth, and how well)
 
 
 def _image_pb(frame: ImageFrame, encoding: str, frame_id: str):
@@ -111,6 +113,7 @@ def record(
     gt_format: str = "auto",
     gt_first_frame: int = 0,
     ground_plane: str | Path | None = None,
+    ground_plane_from_truth: bool = False,
     encoding: str = "jpeg",
     flush_every: int = 30,
     topics: RecordTopics = RecordTopics(),
@@ -120,7 +123,8 @@ def record(
 
     Frame times: ``timestamps`` file values as they are, else ``t0_ns + i / fps`` (``fps``
     defaults to a video's own rate). JPEG/PNG files keep their bytes; video frames and other
-    image files are encoded as ``encoding``.
+    image files are encoded as ``encoding``. ``ground_plane_from_truth``: the ground plane is fitted
+    to the truth's foot points and ground positions (:mod:`.sources.ground_plane_truth`).
     """
     out = Path(out_path)
     given = [name for name, v in (("video", video), ("images", images), ("stereo", stereo)) if v is not None]
@@ -152,6 +156,9 @@ def record(
         read_lens_table(lens_table)
     gt = read_groundtruth(groundtruth, gt_format, gt_first_frame) if groundtruth is not None else None
     plane, plane_warnings = read_ground_plane(ground_plane) if ground_plane is not None else (None, ())
+    if ground_plane_from_truth and (gt is None or ground_plane is not None):
+        raise SourceError("--ground-plane-from-truth fits the plane to the ground truth: give --groundtruth, and no --ground-plane")
+    truth_fit = fit_truth_plane(gt) if ground_plane_from_truth and gt is not None else None
     inputs = {Path(p).resolve() for p in (video, images, timestamps, calibration, encoders, lens_table, groundtruth, ground_plane, *(stereo or ())) if p is not None}
     if out.resolve() in inputs:
         raise SourceError(f"output {out} is also an input; choose another output path")
@@ -185,6 +192,7 @@ def record(
                     rec.write(topics.encoders, pending.to_pb(), pending.t_ns)
                     pending = next(ptz, None)
                 if frames == 0:
+                    plane = truth_plane(truth_fit, *left.size) if truth_fit is not None else plane
                     _write_once(rec, topics, left, right is not None, calib, lens_table, plane)
                     gt = gt.in_pixels(*left.size) if gt is not None else None  # (TrackNet's normalised centres)
                 if right is None:
@@ -213,7 +221,8 @@ def record(
     writer.close()
     lost = losses.warnings() if video is not None else ()
     return RecordReport(out, frames, writer.messages_written, dict(rec.counts), rec.start, rec.end,
-                        plane_warnings + lost + _warnings(gt, sources), frames_lost=bool(lost))
+                        plane_warnings + lost + _warnings(gt, sources), frames_lost=bool(lost),
+                        notes=(truth_fit.summary(str(groundtruth)),) if truth_fit is not None else ())
 
 
 def _write_once(rec: _Recording, topics: RecordTopics, first: ImageFrame, stereo: bool, calib: Calibration | None, lens_table,

@@ -88,7 +88,7 @@ class TrackerBase(ABC):
         """This frame's track states; sets ``self.intermediates``."""
 
 
-NEEDS = ("", "mark", "stereo")
+NEEDS = ("", "mark", "stereo", "depth")
 # A tracker's raw measurements of one step as smoother observation rows, keyed by the columns of
 # ``trackreplay.replay.core.observations.OBS_SCHEMA`` without ``tracker`` and ``frame`` (the replay
 # adds them): ``(intermediates, states, stereo rig or None, config as replayed) -> rows``.
@@ -111,7 +111,8 @@ class TrackerSpec:
     # which trackers do not import; the registry imports the name).
     view: Any
     # What it cannot start without: "" (nothing), "mark" (a marked box on a replayed frame), "stereo"
-    # (a calibrated stereo pair). The replay refuses a log that lacks it before any frame is decoded.
+    # (a calibrated stereo pair), "depth" (a calibrated stereo pair, or one camera with a ground plane).
+    # The replay refuses a log that lacks it before any frame is decoded.
     needs: str = ""
     mark_labels: tuple[str, ...] | None = None  # the mark labels it reads; None: every label
     # It follows one object: two different marks on a frame, neither labelled start/init, are refused.

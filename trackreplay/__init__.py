@@ -10,6 +10,10 @@ Python API (imported on first use, so ``import trackreplay`` stays light)::
     result.trajectory, result.digest
     for step in trackreplay.iter_steps(trackreplay.ReplayRequest(log="clip.mcap", tracker="flow")):
         step.frame, step.states, step.intermediates
+    log = trackreplay.open_log("clip.mcap")
+    log.frames[0], log.truth, log.marks
+    trackreplay.evaluate("clip.mcap", result)            # the metrics as a DataFrame (or a corpus .toml)
+    trackreplay.export(trackreplay.smooth(result, "clip.mcap"), "smooth.parquet")
 """
 
 from __future__ import annotations
@@ -29,6 +33,11 @@ _API = {
     "ReplayRequest": "trackreplay.replay.core.engine",
     "ReplayResult": "trackreplay.replay.core.engine",
     "ReplayStep": "trackreplay.replay.core.engine",
+    "open_log": "trackreplay.replay.core.api",
+    "OpenedLog": "trackreplay.replay.core.api",
+    "export": "trackreplay.replay.core.api",
+    "evaluate": "trackreplay.replay.runs.notebook",
+    "smooth": "trackreplay.replay.runs.notebook",
 }
 __all__ = ["__version__", *_API]
 

@@ -1,4 +1,8 @@
-"""Trajectory vs ground truth: centre error, IoU (OTB success), velocity error."""
+"""Trajectory vs ground truth: what the tracker measured (share of frames measured within 5 and 10 px,
+or with IoU >= 0.5), centre error, IoU (OTB success), velocity error.
+
+``measured`` rows are the tracker's own sightings; ``frames tracked`` also counts the rows it
+predicted and those the gap filling interpolated, so it is never the headline."""
 
 from __future__ import annotations
 
@@ -13,6 +17,8 @@ from trackreplay.trackers.geometry.box import iou as box_iou
 
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
 PRECISION_PX = 20.0
+NEAR_PX = (5.0, 10.0)  # measured within these distances: the headline
+RIGHT_IOU = 0.5  # a measured box is right at this IoU or more
 
 
 @dataclass(frozen=True)
@@ -33,6 +39,10 @@ class EvalSummary:
     velocity_rmse_y: float | None
     velocity_error_mean: float | None
     velocity_frames: int
+    measured_frames: int = 0  # visible truth frames with a measured row
+    measured_within_5px: float | None = None  # share of visible truth frames with a measured row within 5 px
+    measured_within_10px: float | None = None
+    measured_iou_50: float | None = None  # share of visible truth frames with a measured box of IoU >= 0.5 (box truth only)
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -64,6 +74,22 @@ def _pick_gt(gt: pl.DataFrame, gt_id: int | None) -> pl.DataFrame:
     if obj.is_empty():
         raise TrackreplayError(f"the ground truth has no object {gt_id}")
     return obj
+
+
+def object_followed(traj: pl.DataFrame, gt: pl.DataFrame, track_id: int) -> int | None:
+    """The truth object ``track_id`` lies on most often: its centre inside the object's box (within
+    ``NEAR_PX[1]`` of a point truth) on the most frames; None when it lies on none."""
+    track = traj.filter((pl.col("track_id") == track_id) & pl.col("x").is_not_null()).select(
+        "frame", pl.col("x").alias("tx"), pl.col("y").alias("ty"))
+    obj = gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))
+    j = obj.join(track, on="frame", how="inner")
+    half_w = (pl.col("w") / 2).fill_null(NEAR_PX[1])
+    half_h = (pl.col("h") / 2).fill_null(NEAR_PX[1])
+    on = j.filter(((pl.col("tx") - pl.col("x")).abs() <= half_w) & ((pl.col("ty") - pl.col("y")).abs() <= half_h))
+    if on.is_empty():
+        return None
+    counts = on.group_by("id").len().sort(["len", "id"], descending=[True, False])
+    return int(counts["id"][0])
 
 
 def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] = ("the trajectory", "the ground truth")) -> None:
@@ -126,6 +152,12 @@ def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = Non
     # A frame the tracker missed counts as IoU 0 and as beyond the precision radius (OTB convention).
     n = visible.height
     ious_all = np.concatenate([ious, np.zeros(n - ious.size)]) if n else ious
+    measured = tracked.filter(pl.col("status") == "measured")
+    near = [float(np.sum(measured["centre_error"].to_numpy() <= r) / n) if n else None for r in NEAR_PX]
+    mboxes = boxes.filter(pl.col("status") == "measured")
+    mious = (box_iou(mboxes.select("est_x", "est_y", "est_w", "est_h").to_numpy(), mboxes.select("x", "y", "w", "h").to_numpy(),
+                     centred=True) if mboxes.height else np.array([]))
+    n_boxes = visible.filter(pl.col("w").is_not_null()).height
     vel = tracked.filter(pl.col("vx").is_not_null() & pl.col("est_vx").is_not_null())
     ex, ey = vel["vx_error"].to_numpy(), vel["vy_error"].to_numpy()
     summary = EvalSummary(
@@ -145,6 +177,9 @@ def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = Non
         velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
         velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
         velocity_frames=int(ex.size),
+        measured_frames=measured.height,
+        measured_within_5px=near[0], measured_within_10px=near[1],
+        measured_iou_50=float(np.sum(mious >= RIGHT_IOU) / n) if n_boxes else None,
     )
     return summary, frames
 
@@ -153,9 +188,20 @@ def format_summary(s: EvalSummary) -> str:
     def fmt(v, unit=""):
         return "n/a" if v is None else (f"{v:.3f}{unit}" if isinstance(v, float) else f"{v}{unit}")
 
+    def share(v, n=s.gt_frames):
+        return "n/a" if v is None else f"{round(v * n)} of {n} visible ({100 * v:.1f}%)"
+
+    def pct(part):
+        return f"{100 * part / s.gt_frames:.1f}%" if s.gt_frames else "n/a"
+
     rows = [
         ("tracker / track", f"{s.tracker} / {s.track_id} vs ground-truth object {s.gt_id}"),
-        ("frames tracked", f"{s.tracked_frames} of {s.gt_frames} visible ({100 * s.coverage:.1f}%)"),
+        ("measured within 5 px", share(s.measured_within_5px)),
+        ("measured within 10 px", share(s.measured_within_10px)),
+        *([("measured with IoU >= 0.5", share(s.measured_iou_50))] if s.measured_iou_50 is not None else []),
+        ("measured", f"{s.measured_frames} of {s.gt_frames} visible ({pct(s.measured_frames)})"),
+        ("frames tracked (measured, predicted or interpolated)",
+         f"{s.tracked_frames} of {s.gt_frames} visible ({100 * s.coverage:.1f}%)"),
         ("centre error mean / median / RMSE", f"{fmt(s.centre_error_mean)} / {fmt(s.centre_error_median)} / {fmt(s.centre_error_rmse)} px"),
         ("precision @ 20 px", fmt(s.precision_at_20px)),
         ("IoU mean / success AUC", f"{fmt(s.iou_mean)} / {fmt(s.success_auc)}"),

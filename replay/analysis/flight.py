@@ -56,6 +56,7 @@ Without PTZ encoders and a lens table there are no lines of sight: :class:`Fligh
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 
@@ -611,8 +612,10 @@ class _Problem:
         return _solve(theta, obs, self.cfg, self.t_end, basis, free, max_nfev, self.upper)
 
 
-def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float = 30.0) -> FlightFit:
+def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float = 30.0,
+               progress: Callable[[str], None] | None = None) -> FlightFit:
     """Fit the shot to the observations (see the module docstring). Deterministic.
+    ``progress(stage)`` is told each stage as it starts (``flight`` prints it); it changes nothing.
 
     Stages: a start (:func:`_initial`), the launch velocity from a few guesses (:func:`_launch_velocity`),
     every parameter free (:func:`_refine`), the 1-σ of parameters and reported quantities
@@ -624,10 +627,15 @@ def fit_flight(obs: Observations, cfg: FlightConfig = FlightConfig(), fps: float
     upper[0] = t_hi
     if math.isfinite(t_hi):
         notes.append(f"launch held before {t_hi:.3f} s, one frame after the last frame with the ball on the tee")
+    tell = progress or (lambda stage: None)
     problem = _Problem(obs, cfg, t_end, _basis(obs.los), upper)
+    tell("launch velocity")
     theta = _launch_velocity(problem, theta)
+    tell("every parameter")
     theta, res = _refine(problem, theta, notes)
+    tell("uncertainty")
     cov, base, dstd, pstd = _uncertainty(theta, res, cfg, t_end)
+    tell("jackknife")
     cov, dstd, pstd = _jackknife(problem, theta, cov, dstd, pstd, notes)
     shot = simulate(theta, cfg, t_end)
     theta_out = _unseen(shot, obs, theta, base, dstd, pstd, notes)

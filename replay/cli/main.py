@@ -80,7 +80,33 @@ def _detail(err: BaseException) -> str:
     return f": {err}" if str(err) else ""
 
 # Verb modules in help order; each has add_parser(subparsers) and run(args).
-VERBS = ("record", "synth", "info", "recover", "annotate", "frame", "filter", "replay_cmd", "config_cmd", "batch", "evaluate", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
+VERBS = ("record", "synth", "info", "cat", "recover", "annotate", "frame", "filter", "merge", "replay_cmd", "config_cmd", "batch", "evaluate", "diff", "export", "smooth", "flight", "eval_cmd", "overlay", "bench", "demo")
+
+
+# The libraries' own log lines (Rerun's Rust logger; Ray's start-up warnings, e.g. its token
+# authentication notice) stay off the terminal unless --debug: the verbs say what matters in one sentence.
+QUIET_LOGGERS = ("ray._private.authentication",)
+
+
+def _quiet_libraries() -> dict[str, int]:
+    """Silence them in this process; returns the logger levels to restore (main also runs inside tests).
+
+    ``RUST_LOG`` (unless the user set one) stays set for the process: Rerun's Rust logger reads it once,
+    at its first event, which may come at exit (a viewer connection given up on) after main returned."""
+    import logging
+
+    os.environ.setdefault("RUST_LOG", "off")
+    levels = {name: logging.getLogger(name).level for name in QUIET_LOGGERS}
+    for name in QUIET_LOGGERS:
+        logging.getLogger(name).setLevel(logging.ERROR)
+    return levels
+
+
+def _restore_loggers(levels: dict[str, int]) -> None:
+    import logging
+
+    for name, level in levels.items():
+        logging.getLogger(name).setLevel(level)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -98,8 +124,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run one verb; every failure becomes one sentence on stderr and a documented exit status."""
+    # before parsing: an argument's check may import Rerun, whose logger reads RUST_LOG once
+    quieted = None if "--debug" in (sys.argv[1:] if argv is None else argv) else _quiet_libraries()
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except BaseException:  # --help, a usage error (argparse exits)
+        if quieted is not None:
+            _restore_loggers(quieted)
+        raise
     previous = (signal.signal(signal.SIGTERM, _terminate), signal.signal(signal.SIGINT, _interrupted)) if _main_thread() else None
     # Logs written by this verb record the command line in their provenance.
     token = command_line.set(shlex.join(["trackreplay", *(sys.argv[1:] if argv is None else argv)]))
@@ -139,6 +172,8 @@ def main(argv: list[str] | None = None) -> int:
         return INTERNAL_ERROR
     finally:
         sys.stdout = stdout
+        if quieted is not None:
+            _restore_loggers(quieted)
         command_line.reset(token)
         if previous is not None:
             signal.signal(signal.SIGTERM, previous[0])

@@ -35,13 +35,15 @@ from trackreplay.replay.core.config_toml import config_toml
 from trackreplay.replay.core.digest import SPILL_FRAMES, FrameDigests, ReplayDigest
 from trackreplay.replay.core.observations import observation_rows, observations_table
 from trackreplay.replay.log.frames import (BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints,
-                                       read_stereo_rig)
+                                       read_ground_plane, read_stereo_rig)
 from trackreplay.replay.log.marks import check_can_track, check_labels, check_one_start_per_frame
+from trackreplay.replay.log.groundtruth import read_groundtruth
 from trackreplay.replay.log.prefetch import prefetch
 from trackreplay.replay.log.reader import LogReader
 from trackreplay.replay.core.trajectory import SPILL_ROWS, SpilledTrajectory, TrajectoryRows, state_row
 from trackreplay.trackers.base import Tracker, TrackState
 from trackreplay.trackers.frame import Frame
+from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import TrackreplayError
 
 
@@ -71,6 +73,8 @@ class ReplayRequest:
     rrd: Path | None = None
     connect: str | None = None  # stream to a running Rerun viewer at this gRPC URL (as well as, or instead of, rrd)
     spawn: bool = False  # start a Rerun viewer and stream to it
+    truth: bool = True  # the log's ground truth (when it has one) goes to the .rrd/viewer under truth/ (views.truth)
+    rrd_full: bool = False  # views send every raster raw (groups: masks, disparity) instead of compressed
     start_s: float | None = None  # seconds from the first message of the log
     end_s: float | None = None
     image_topic: str | None = None
@@ -204,7 +208,8 @@ class ReplaySteps(Iterator[ReplayStep]):
         inside = marks_in_window(marks, start_ns, end_ns)
         check_one_start_per_frame(inside, self.spec, f"{req.log}: topic {topics.hints}")
         check_can_track(self.spec, inside, len(inside) < len(marks),
-                        self.spec.needs != "stereo" or read_stereo_rig(reader, topics) is not None, req.log)
+                        self.spec.needs not in ("stereo", "depth") or read_stereo_rig(reader, topics) is not None, req.log,
+                        has_ground=self.spec.needs == "depth" and read_ground_plane(reader, topics.ground_plane) is not None)
         outside = len(marks) - len(inside)
         self.notice = (f"{outside} of the log's {len(marks)} mark(s) are on frames outside --start/--end and are not "
                        "used (a track starts only from a mark on a frame it replays)") if outside else ""
@@ -239,8 +244,23 @@ def _open_sink(req: ReplayRequest, view: Any):
         return None
     from trackreplay.replay.views.rerun_sink import RerunSink
 
-    return RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", view.blueprint(req.tracker),
-                     connect=req.connect, spawn=req.spawn)
+    sink = RerunSink(req.rrd, f"{Path(req.log).stem}-{req.tracker}-{req.seed}", view.blueprint(req.tracker),
+                     connect=req.connect, spawn=req.spawn, truth=_truth(req))
+    sink.logger.rrd_full = req.rrd_full  # read by the views that compress by default (views/groups.py FULL)
+    return sink
+
+
+def _truth(req: ReplayRequest) -> pl.DataFrame | None:
+    """The log's ground truth for the Rerun stream, when asked for and the log has one (a truth that
+    cannot be read is left out, said once: the replay does not need it)."""
+    reader = LogReader(req.log)
+    if not req.truth or T.GROUNDTRUTH not in reader.topics():
+        return None
+    try:
+        return read_groundtruth(reader)
+    except TrackreplayError as err:
+        print(f"warning: the log's ground truth is left out of the Rerun stream: {err}", file=sys.stderr)
+        return None
 
 
 def _note(notices: list[str], notice: str, who: str) -> None:

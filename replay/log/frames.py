@@ -323,7 +323,8 @@ class _Bundler:
             hints_by_frame.setdefault(region.frame, []).append(region)
         calibration = read_ground_plane(reader, topics.ground_plane)
         ground = None if calibration is None else GroundPlane(
-            calibration.matrix, calibration.camera_ground, calibration.camera_height)
+            calibration.matrix, calibration.camera_ground, calibration.camera_height,
+            calibration.principal_point, calibration.focal_px)
         rig = read_stereo_rig(reader, topics)
         ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, start_ns), ptz_tolerance_ns) if topics.ptz else None
         return cls(reader, topics, report, strict, lens, zoom_range, hints, hints_by_frame, calibration, ground, rig, ptz)

@@ -1,8 +1,9 @@
 """What a log holds: topics, counts, rates, time gaps, stereo pairing, encoder coverage.
 
 Streams the file once without decoding any payload (only log times are kept, for image and
-encoder topics), so it works on truncated logs too: it reports what is readable and flags
-``truncated``.
+encoder topics), so it works on damaged and truncated logs too: it reports what is readable and says
+which is true — stretches ``damaged`` (a chunk failing its CRC) while the end is intact, or a file
+``truncated`` (it ends early, with no MCAP footer), or both.
 """
 
 from __future__ import annotations
@@ -16,7 +17,6 @@ import numpy as np
 from mcap.records import Attachment, Channel, Footer, Header, Message, Metadata, Schema
 
 from trackreplay.recorder.mcap_scan import MCAP_MAGIC, ChunkRecords, Damage, open_mapped, scan
-from trackreplay.recorder.recover import truncation_message
 from trackreplay.replay.log.reader import MAX_LOG_TIME, time_out_of_range
 from trackreplay.schemas.errors import LogError, TruncatedLogError
 from trackreplay.schemas.messages import IMAGE_SCHEMAS
@@ -158,29 +158,37 @@ def _time_checks(topics: dict[str, dict[str, Any]], sorted_times: dict[str, np.n
 def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
     """Everything ``info`` reports, as JSON-ready data.
 
-    A truncated or damaged log raises ``TruncatedLogError`` unless ``partial_ok``, in which case
-    the result covers the readable part and has ``truncated: True`` and ``error``.
+    A truncated or damaged log raises ``TruncatedLogError`` (:func:`problem_message`) unless
+    ``partial_ok``, in which case the result covers the readable part with ``complete: False``,
+    ``truncated`` (the file ends early: no footer), ``damaged`` (unreadable stretches, the chunks they
+    cover numbered from 1 in file order), ``messages`` (readable) beside ``messages_expected`` (the
+    summary's count, when the summary is readable) and ``error``.
     """
     from trackreplay.recorder.log_summary import log_file
 
     path = log_file(path)
     tally = _tally(path)
-    truncated = bool(tally.damage) or not tally.ended
-    error = tally.error
-    if truncated and not partial_ok:
-        raise TruncatedLogError(truncation_message(path))
+    chunking = _chunking(path)
+    damaged = [{"start_byte": d.start, "end_byte": d.end, "reason": d.reason,
+                "chunks": [i + 1 for i, offset in enumerate(chunking["chunk_offsets"] or []) if d.start <= offset < d.end]}
+               for d in tally.damage]
+    messages = sum(tally.counts.values())
+    if (tally.damage or not tally.ended) and not partial_ok:
+        raise TruncatedLogError(problem_message(path, not tally.ended, damaged, messages, chunking))
     topics, sorted_times = _topic_table(tally)
     starts = [e["first_ns"] for e in topics.values() if e["first_ns"] is not None]
     ends = [e["last_ns"] for e in topics.values() if e["last_ns"] is not None]
     start, end = (min(starts), max(ends)) if starts else (None, None)
     return {
         "path": str(path),
-        "truncated": truncated,
-        "error": error,
-        "damaged": [{"start_byte": d.start, "end_byte": d.end, "reason": d.reason} for d in tally.damage],
+        "complete": tally.ended and not tally.damage,
+        "truncated": not tally.ended,  # the file ends early: no footer
+        "error": tally.error,
+        "damaged": damaged,  # unreadable stretches (a file whose end is intact may have some)
         "channel_conflicts": tally.conflicts,
         "library": tally.header.library if tally.header else None,
-        "messages": sum(tally.counts.values()),
+        "messages": messages,  # readable ones
+        "messages_expected": chunking["messages_expected"],  # the summary's count, when it has one
         "start_ns": start,
         "end_ns": end,
         "duration_s": (end - start) / 1e9 if start is not None else None,
@@ -190,14 +198,41 @@ def log_info(path: str | Path, *, partial_ok: bool = False) -> dict[str, Any]:
         "metadata": tally.metadata,
         "metadata_values": tally.metadata_values,
         "file_bytes": path.stat().st_size,
-        **_chunking(path),
+        "chunks": chunking["chunks"],
+        "compression": chunking["compression"],
     }
 
 
+def problem_message(path: Path, truncated: bool, damaged: list[dict[str, Any]], messages: int,
+                    chunking: dict[str, Any]) -> str:
+    """One sentence on what is wrong with a log, by what is true: it ends early (``truncated``: no
+    MCAP end), or stretches of it are unreadable while its end is intact (``damaged``)."""
+    parts = []
+    if damaged:
+        total = chunking["chunks"]
+        where = []
+        for d in damaged[:LIST_LIMIT]:
+            nums = d["chunks"]
+            what = (f"chunk{'s' if len(nums) > 1 else ''} {', '.join(map(str, nums))}{f' of {total}' if total else ''} at "
+                    if nums else "")
+            where.append(f"{what}bytes {d['start_byte']}-{d['end_byte']}" + ("" if nums else f" ({d['reason']})"))
+        more = f" and {len(damaged) - LIST_LIMIT} more" if len(damaged) > LIST_LIMIT else ""
+        parts.append(f"{'; '.join(where)}{more} unreadable")
+    parts.append("it ends early (no valid MCAP end)" if truncated else "the log's end is intact")
+    expected = chunking["messages_expected"]
+    parts.append(f"{messages} of {expected} messages readable" if expected is not None and not truncated
+                 else f"{messages} messages readable")
+    state = "truncated" if truncated else "damaged"
+    return (f"{path} is {state}: {'; '.join(parts)}; run `trackreplay recover {path} OUT.mcap` "
+            f"to salvage every intact chunk")
+
+
 def _chunking(path: Path) -> dict[str, Any]:
-    """Chunk count and compression from the summary's chunk index (None when it cannot be read)."""
+    """Chunk count, compression, the chunks' byte offsets (in file order) and the message count from
+    the summary section (None when it cannot be read)."""
     from mcap.reader import make_reader
 
+    stats = None
     try:
         with open(path, "rb") as fh:
             summary = make_reader(fh).get_summary()
@@ -205,12 +240,16 @@ def _chunking(path: Path) -> dict[str, Any]:
             from trackreplay.recorder.mcap_summary import streamed_summary
 
             summary = streamed_summary(path)
+        else:
+            stats = summary.statistics
         indexes = summary.chunk_indexes if summary else None
     except Exception:  # a truncated log: the scan above already says what is readable
         indexes = None
     if indexes is None:
-        return {"chunks": None, "compression": None}
-    return {"chunks": len(indexes), "compression": sorted({ci.compression or "none" for ci in indexes}) or ["none"]}
+        return {"chunks": None, "compression": None, "chunk_offsets": None, "messages_expected": None}
+    return {"chunks": len(indexes), "compression": sorted({ci.compression or "none" for ci in indexes}) or ["none"],
+            "chunk_offsets": sorted(ci.chunk_start_offset for ci in indexes),
+            "messages_expected": stats.message_count if stats is not None else None}
 
 
 def _calendar(t: int | None) -> str:
@@ -306,7 +345,8 @@ def _listed(items: list, fmt) -> list[str]:
 
 def format_info(info: dict[str, Any]) -> str:
     """A human-readable report of ``log_info``'s result."""
-    lines = [f"{info['path']}" + ("  [TRUNCATED: showing the readable part]" if info["truncated"] else "")]
+    state = "TRUNCATED" if info["truncated"] else "DAMAGED" if info["damaged"] else None
+    lines = [f"{info['path']}" + (f"  [{state}: showing the readable part]" if state else "")]
     dur = info["duration_s"]
     if info.get("file_bytes") is not None:
         chunks = "-" if info.get("chunks") is None else info["chunks"]
@@ -351,9 +391,18 @@ def format_info(info: dict[str, Any]) -> str:
     if info.get("channel_conflicts"):
         lines.append(f"  WARNING: {len(info['channel_conflicts'])} channel declaration(s) contradict an earlier one")
         lines += _listed(info["channel_conflicts"], str)
+    return "\n".join(lines + _problem_lines(info))
+
+
+def _problem_lines(info: dict[str, Any]) -> list[str]:
+    """What is unreadable, by what is true: damaged stretches (the end intact or not), or an early end."""
     if info["damaged"]:
-        lines.append(f"  DAMAGED: {len(info['damaged'])} unreadable stretch(es) skipped (their chunks' messages are not counted above)")
-        lines += _listed(info["damaged"], lambda d: f"bytes {d['start_byte']}-{d['end_byte']}: {d['reason']}")
-    elif info["truncated"]:
-        lines.append(f"  stopped reading: {info['error']}")
-    return "\n".join(lines)
+        end = "the file ends early (no valid MCAP end)" if info["truncated"] else "the log's end is intact"
+        expected = info.get("messages_expected")
+        readable = (f"{info['messages']} of {expected} messages readable" if expected is not None and not info["truncated"]
+                    else f"{info['messages']} messages readable")
+        return [f"  DAMAGED: {len(info['damaged'])} unreadable stretch(es) skipped (their chunks' messages are not "
+                f"counted above); {end}; {readable}",
+                *_listed(info["damaged"], lambda d: (f"chunk {', '.join(map(str, d['chunks']))}: " if d.get("chunks") else "")
+                         + f"bytes {d['start_byte']}-{d['end_byte']}: {d['reason']}")]
+    return [f"  TRUNCATED: {info['error']}"] if info["truncated"] else []

@@ -40,10 +40,12 @@ def check_one_start_per_frame(marks: Iterable, spec: TrackerSpec, where: str) ->
                            "follows one ball: keep one, or label the one to start from `start` (--label start)")
 
 
-def check_can_track(spec: TrackerSpec, marks: Sequence, windowed: bool, has_stereo: bool, log) -> None:
+def check_can_track(spec: TrackerSpec, marks: Sequence, windowed: bool, has_stereo: bool, log,
+                    has_ground: bool = False) -> None:
     """Refuse a replay its tracker cannot start on: one that starts only from a mark (``needs =
     "mark"``) on a log (or ``--start``/``--end`` window) that marks nothing, one that needs a
-    calibrated stereo pair (``needs = "stereo"``) on a log without one. Refused before any frame is
+    calibrated stereo pair (``needs = "stereo"``) on a log without one, or depth (``needs = "depth"``: a
+    stereo pair or a ground plane) on a log with neither. Refused before any frame is
     decoded: a trajectory with no row is no answer to a replay."""
     needs, tracker = spec.needs, spec.name
     if needs == "mark" and not marks:
@@ -55,6 +57,11 @@ def check_can_track(spec: TrackerSpec, marks: Sequence, windowed: bool, has_ster
         raise LogError(f"{log}: the {tracker} tracker needs a calibrated stereo pair (/stereo/left/image and "
                        "/stereo/right/image with their calibration, or a ROS 2 pair with camera_info; "
                        "--stereo-topics names other topics) and the log has none")
+    if needs == "depth" and not (has_stereo or has_ground):
+        raise LogError(f"{log}: the {tracker} tracker needs a calibrated stereo pair (/stereo/left/image and "
+                       "/stereo/right/image with their calibration; --stereo-topics names other topics) or one fixed "
+                       "camera with a ground plane (/camera/ground_plane: record --ground-plane FILE, or "
+                       "--ground-plane-from-truth with --groundtruth) and the log has neither")
 
 
 def check_inside(boxes: Iterable[tuple[int, float, float, float, float]], width: int, height: int, where: str) -> None:

@@ -83,6 +83,8 @@ def source_key(case: Case, code: str) -> str:
     h = hashlib.sha256(code.encode())
     options = {"source": case.source, "synth": case.synth, "seed": case.seed, "options": list(case.synth_options),
                "fps": case.fps, "truth_format": case.truth_format, "truth_first_frame": case.truth_first_frame}
+    if case.ground_plane:  # (a key only when given: the logs of cases without one keep their names)
+        options["ground_plane"] = "truth" if case.ground_plane == "truth" else "file"
     h.update(json.dumps(options, sort_keys=True, default=str).encode())
     for path in case.files():
         h.update(b"\0file\0")
@@ -108,8 +110,10 @@ def record_case(case: Case, logs: Path, code: str) -> tuple[Path, str]:
     else:
         from trackreplay.recorder.record import record
 
+        plane = case.ground_plane
         record(out, video=case.video, images=case.images, fps=case.fps, groundtruth=case.truth,
-               gt_format=case.truth_format, gt_first_frame=case.truth_first_frame, quiet=True)
+               gt_format=case.truth_format, gt_first_frame=case.truth_first_frame, quiet=True,
+               ground_plane=plane if plane not in ("", "truth") else None, ground_plane_from_truth=plane == "truth")
     return out, key
 
 

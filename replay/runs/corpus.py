@@ -61,6 +61,9 @@ class Case:
     marks: str = "truth"  # truth: marks from the truth (the log's own removed); log: the log's own marks
     label: str = "target"  # the marks' label (the flow tracker reads only `target`)
     baseline: bool = True  # OpenCV CSRT beside the trackers on box cases
+    # the fixed camera's ground plane: "" none, "truth" fitted to the truth's feet and ground positions
+    # (record --ground-plane-from-truth), else a ground-plane JSON file (record --ground-plane)
+    ground_plane: str = ""
     notes: str = ""
 
     @property
@@ -69,7 +72,8 @@ class Case:
 
     def files(self) -> tuple[Path, ...]:
         """The files the case reads (none for a synthetic scene)."""
-        return tuple(p for p in (self.video, self.images, self.log, self.truth) if p is not None)
+        plane = Path(self.ground_plane) if self.ground_plane not in ("", PLANE_FROM_TRUTH) else None
+        return tuple(p for p in (self.video, self.images, self.log, self.truth, plane) if p is not None)
 
     def missing(self) -> Path | None:
         return next((p for p in self.files() if not p.exists()), None)
@@ -86,6 +90,7 @@ class Corpus:
 KNOWN_CASE_KEYS = tuple(f.name for f in fields(Case))
 KNOWN_CORPUS_KEYS = ("name", "data_root", "description", "include")
 PATH_KEYS = ("video", "images", "log", "truth")
+PLANE_FROM_TRUTH = "truth"
 
 
 def load_corpus(path: str | Path, environ: dict[str, str] | None = None, _seen: tuple[Path, ...] = ()) -> Corpus:
@@ -168,6 +173,12 @@ def parse_case(table: Any, base: Path, where: str) -> Case:
     values |= _source_options(table, where)
     values |= _truth_options(table, where)
     values |= _start_options(table, where)
+    if "ground_plane" in table:
+        plane = table["ground_plane"]
+        _check(isinstance(plane, str) and bool(plane), where, f"ground_plane must be \"{PLANE_FROM_TRUTH}\" or a path, not {plane!r}")
+        _check("video" in table or "images" in table, where, "ground_plane applies to video and images only")
+        _check(plane != PLANE_FROM_TRUTH or "truth" in table, where, "ground_plane = \"truth\" needs truth (a file)")
+        values["ground_plane"] = plane if plane == PLANE_FROM_TRUTH else str((base / plane).resolve())
     return Case(**values)
 
 

@@ -27,10 +27,12 @@ from typing import Any
 import numpy as np
 import polars as pl
 
+from trackreplay.replay.analysis.group_ground import GROUND_SCHEMA, group_ground_scores
 from trackreplay.replay.analysis.metrics import BoxScores, PointScores, box_scores, point_scores
 from trackreplay.replay.runs.batch import MOT_METRICS, multi_object_metrics, one_line
 from trackreplay.replay.runs.case_logs import PreparedCase, prepare_case, truth_table
 from trackreplay.replay.runs.corpus import Case, Corpus
+from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import TrackreplayError
 
 BASELINE = "csrt"
@@ -55,6 +57,7 @@ CASES_SCHEMA: dict[str, Any] = {
     **{c: pl.Int64 if c in COUNTS else pl.Float64 for c in COMMON},
     **{m: pl.Int64 if m.startswith("id_switches") else pl.Float64 for m in MOT_METRICS},
     **{c: pl.List(t) for c, t in LISTS.items()},
+    **GROUND_SCHEMA,
 }
 TIMINGS_SCHEMA = {"case": pl.String, "tracker": pl.String, "seed": pl.Int64, "frames": pl.Int64,
                   "seconds": pl.Float64, "ms_per_frame": pl.Float64}
@@ -146,8 +149,12 @@ def score(prep: PreparedCase, log: Path, traj: pl.DataFrame) -> dict[str, Any]:
         from trackreplay.replay.log.groundtruth import groundtruth_with_frames
         from trackreplay.replay.log.reader import LogReader
 
-        gt, annotated = groundtruth_with_frames(LogReader(log))
-        return {k: v for k, v in multi_object_metrics(traj, gt, annotated["frame"]).items() if k != "error"}
+        reader = LogReader(log)
+        gt, annotated = groundtruth_with_frames(reader)
+        out = {k: v for k, v in multi_object_metrics(traj, gt, annotated["frame"]).items() if k != "error"}
+        if T.CAMERA_GROUND_PLANE in reader.topics() and gt["X"].drop_nulls().len():  # groups on the ground, in metres
+            out |= group_ground_scores(traj, gt, annotated["frame"].to_list()).row()
+        return out
     truth = truth_table(log).filter(pl.col("id") == prep.object)
     first = _first_frame(prep, log)
     if first is not None:

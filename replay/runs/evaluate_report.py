@@ -36,6 +36,12 @@ HEADLINE = {"box": "success_auc", "point": "within_10px", "objects": "hota"}
 TITLES = {"box": "Box cases (OTB success and precision)", "point": "Point cases (a ball's centre)",
           "objects": "Multi-object cases (CLEAR MOT, IDF1, HOTA)"}
 ERROR_CDF_PX = np.arange(0.0, 51.0)
+# groups on the ground plane, in metres (replay.analysis.group_ground): on cases whose log has one
+GROUND_COLUMNS = [("ground_person_coverage", "person coverage"), ("ground_person_coverage_min", "least person"),
+                  ("ground_people_at_goal", "people ≥ 80 %"), ("ground_wrong_rate", "wrong measured"),
+                  ("ground_group_mota", "group MOTA"), ("ground_group_idf1", "group IDF1"),
+                  ("ground_group_id_switches", "group ID sw"), ("ground_merges_found", "merges found"),
+                  ("ground_merges", "merges"), ("ground_splits_found", "splits found"), ("ground_splits", "splits")]
 
 
 def _fmt(mean: float | None, spread: float | None = None) -> str:
@@ -88,6 +94,22 @@ def per_case(ok: pl.DataFrame, target: str) -> list[list[str]]:
     return out
 
 
+def ground_section(ok: pl.DataFrame) -> list[str]:
+    """Per case, the group scores on the ground (metres) where a case has them (its log has a ground plane)."""
+    if "ground_person_coverage" not in ok.columns:
+        return []
+    rows = ok.filter(pl.col("ground_person_coverage").is_not_null())
+    if rows.is_empty():
+        return []
+    names = [c for c, _ in GROUND_COLUMNS]
+    lines = []
+    for (case, tracker), mine in rows.group_by(["case", "tracker"], maintain_order=True):
+        lines.append([case, tracker, str(mine.height),
+                      *(_fmt(*_seed_spread(mine.select(pl.col(c).cast(pl.Float64).fill_nan(None)), c)) for c in names)])
+    return ["## Groups on the ground plane (metres; person within 1.5 m of a measured row)", "",
+            _table(["case", "tracker", "seeds", *(label for _, label in GROUND_COLUMNS)], lines), ""]
+
+
 def summary_markdown(table: pl.DataFrame, *, title: str, command: str, seeds: list[int], jitter: float,
                      skipped: list[str], notes: list[str]) -> str:
     """``summary.md``: aggregate per tracker and per case for each kind of case, failures, skipped cases."""
@@ -106,6 +128,7 @@ def summary_markdown(table: pl.DataFrame, *, title: str, command: str, seeds: li
         parts += [f"## {TITLES[target]}", "", "Aggregate per tracker:", "",
                   _table(["tracker", "cases", *header, "worst case"], aggregate(rows, target)), "",
                   "Per case:", "", _table(["case", "tracker", "seeds", *header], per_case(rows, target)), ""]
+    parts += ground_section(ok)
     failed = table.filter(pl.col("status") != "ok").group_by(["case", "tracker", "error"], maintain_order=True).agg("seed")
     if failed.height:
         parts += ["## Failed replays", "", _table(["case", "tracker", "seeds", "error"],

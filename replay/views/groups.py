@@ -1,29 +1,42 @@
 """Rerun view of the group tracker (seed 003), under ``trackers/<name>/…``:
 
-- ``right/image``: the right view (the left is ``camera/image``);
-- ``foreground/left``, ``foreground/right``: the background-subtraction masks (segmentation images);
+- the right view is the sink's ``camera/right`` (the left ``camera/image``);
+- ``foreground/left``, ``foreground/right``: the background-subtraction masks;
 - ``disparity``: the subtraction-stereo disparity (grey, 0 = none), ``crops``: the SGBM crops;
 - ``klt/features``: every KLT feature; ``klt/tracks``: the observation points' window tracks,
   coloured by their group (grey unassigned);
 - ``world/points``: the observation points in 3-D (left camera frame), coloured by group;
   ``world/groups``: each group's 2σ extent ellipsoid Σ, ``world/ekf``: its 2σ EKF position ellipsoid;
 - ``events``: births, merges, deletions. Tracks are ``tracks/{id}`` (cleared when a group ends).
+
+Masks and disparity are sent as lossless PNG (``EncodedImage``; a mask as a magenta RGBA overlay,
+transparent off the foreground, at the segmentation image's opacity): raw they are 4 bytes a pixel
+a stereo frame of the viewer's memory (178 of the 485 MB a 4 s ``synth groups-crossing`` replay
+holds; 4.4 MB as PNG). The .rrd file compresses its chunks too, so on disk they were never the bulk:
+that was the right image, logged here as well as by the sink (186 MB of 490 MB), now only by the
+sink. ``replay --rrd-full`` (``ReplayRequest.rrd_full``, which sets ``FULL`` on the logger) sends
+masks and disparity raw, as segmentation and grey images.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+import cv2
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
 
-from trackreplay.replay.views.rerun_sink import FrameLogger
+from trackreplay.replay.views.rerun_sink import RIGHT, FrameLogger
 from trackreplay.replay.views import parts
 from trackreplay.trackers.base import TrackState
 from trackreplay.trackers.frame import Frame
 
 POS = [0, 2, 4]
+FULL = "rrd_full"  # the logger attribute that asks for raw masks and disparity
+FOREGROUND = (255, 60, 200)  # RGB
+MASK_OPACITY = 0.35
+_PNG = [cv2.IMWRITE_PNG_COMPRESSION, 1]  # fast; a mostly empty raster compresses well at any level
 
 
 def colour_of(gid: int) -> tuple[int, int, int]:
@@ -40,8 +53,9 @@ def blueprint(name: str) -> rrb.Blueprint:
         rrb.Horizontal(
             rrb.Vertical(
                 rrb.Spatial2DView(name="left + groups", origin="/",
-                                  contents=["camera/**", "tracks/**", f"{root}/foreground/left", f"{root}/klt/**", f"{root}/crops"]),
-                rrb.Spatial2DView(name="right", origin=f"{root}/right"),
+                                  contents=["camera/**", f"- {RIGHT}", "tracks/**", f"{root}/foreground/left",
+                                            f"{root}/klt/**", f"{root}/crops"]),
+                rrb.Spatial2DView(name="right", origin=RIGHT, contents=[RIGHT, f"{root}/foreground/right"]),
             ),
             rrb.Vertical(
                 rrb.Spatial2DView(name="disparity", origin=f"{root}/disparity"),
@@ -62,14 +76,7 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
         for stage in ("foreground", "disparity", "crops", "klt", "world"):
             parts.clear(rec, f"{root}/{stage}", recursive=True)
         return
-    if frame.right is not None:
-        rec.log(f"{root}/right/image", rr.Image(frame.right, color_model="BGR" if frame.right.ndim == 3 else "L"))
-    parts.annotation_context(rec, f"{root}/foreground", [(1, "foreground", (255, 60, 200))])
-    rec.log(f"{root}/foreground/left", rr.SegmentationImage(inter.fg_left.astype(np.uint8), opacity=0.35))
-    rec.log(f"{root}/foreground/right", rr.SegmentationImage(inter.fg_right.astype(np.uint8), opacity=0.35))
-    d = inter.disparity
-    top = float(np.nanmax(d)) if np.isfinite(d).any() else 1.0
-    rec.log(f"{root}/disparity", rr.Image(parts.to_uint8(d, 0.0, max(top, 1.0)), color_model="L"))
+    _rasters(rec, root, inter)
     c = np.asarray(inter.crops, dtype=np.float64).reshape(-1, 4)
     parts.boxes(rec, f"{root}/crops", (c[:, :2] + c[:, 2:]) / 2, c[:, 2:] - c[:, :2], colors=[(255, 255, 0)])
     parts.particles(rec, f"{root}/klt/features", np.asarray(inter.features_uv, dtype=np.float64))
@@ -88,3 +95,41 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
                                 g.P[:, POS][:, :, POS] if len(g.ids) else np.zeros((0, 3, 3)), colors=gc)
     for e in inter.events:
         rec.log(f"{root}/events", rr.TextLog(e))
+
+
+def _png(image: np.ndarray) -> bytes:
+    ok, data = cv2.imencode(".png", image, _PNG)
+    if not ok:
+        raise ValueError(f"cannot PNG-encode a {image.shape} {image.dtype} raster")
+    return data.tobytes()
+
+
+def mask_overlay(mask: np.ndarray) -> bytes:
+    """A foreground mask as a PNG: :data:`FOREGROUND` where set, transparent elsewhere."""
+    bgra = np.zeros((*mask.shape, 4), np.uint8)
+    bgra[mask.astype(bool)] = (*FOREGROUND[::-1], 255)
+    return _png(bgra)
+
+
+def _rasters(rec: FrameLogger, root: str, inter) -> None:
+    """The foreground masks and the disparity: PNG, or raw when the logger says :data:`FULL`."""
+    d = inter.disparity
+    top = float(np.nanmax(d)) if np.isfinite(d).any() else 1.0
+    grey = parts.to_uint8(d, 0.0, max(top, 1.0))
+    if getattr(rec, FULL, False):
+        parts.annotation_context(rec, f"{root}/foreground", [(1, "foreground", FOREGROUND)])
+        rec.log(f"{root}/foreground/left", rr.SegmentationImage(inter.fg_left.astype(np.uint8), opacity=MASK_OPACITY))
+        rec.log(f"{root}/foreground/right", rr.SegmentationImage(inter.fg_right.astype(np.uint8), opacity=MASK_OPACITY))
+        rec.log(f"{root}/disparity", rr.Image(grey, color_model="L"))
+        return
+    for side, mask in (("left", inter.fg_left), ("right", inter.fg_right)):
+        _encoded(rec, f"{root}/foreground/{side}", mask_overlay(mask), opacity=MASK_OPACITY)
+    _encoded(rec, f"{root}/disparity", _png(grey))
+
+
+def _encoded(rec, path: str, png: bytes, **params) -> None:
+    """A PNG at ``path``: through the logger's image template, or ``rr.log``'s way on a bare stream."""
+    if isinstance(rec, FrameLogger):
+        rec.image(path, rr.EncodedImage, png, media_type="image/png", **params)
+    else:
+        rec.log(path, rr.EncodedImage(contents=png, media_type="image/png", **params))

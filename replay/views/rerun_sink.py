@@ -14,6 +14,7 @@ from datetime import timedelta
 from pathlib import Path
 
 import numpy as np
+import polars as pl
 import pyarrow as pa
 import rerun as rr
 import rerun.blueprint as rrb
@@ -22,6 +23,7 @@ import rerun.chunk as rc
 from trackreplay.recorder.atomic import claim_partial
 from trackreplay.schemas.errors import OutputError, TrackreplayError
 from trackreplay.trackers.frame import Frame
+from trackreplay.replay.views.truth import TruthStream, show_truth
 
 VIEWER_PORT = 9876
 VIEWER_URL = f"rerun+http://127.0.0.1:{VIEWER_PORT}/proxy"
@@ -452,6 +454,56 @@ def spawn_viewer(rec: rr.RecordingStream) -> str | None:
     return None if reason is None else f"cannot open a Rerun viewer: {reason}"
 
 
+WEB_PORT = 9090  # the SDK's default for its web viewer
+
+
+def _port_free(port: int) -> bool:
+    """Whether ``port`` can be listened on (the SDK's gRPC server only logs a taken port, then serves nothing)."""
+    with socket.socket() as probe:
+        try:
+            probe.bind(("0.0.0.0", port))
+        except OSError:
+            return False
+    return True
+
+
+class WebViewer:
+    """Rerun's gRPC message proxy (it buffers what replays stream to it, for viewers that connect
+    later) and the SDK's web viewer over HTTP, pointed at it: for a machine without a display, open
+    ``url`` in a browser (over an SSH tunnel of both ports from elsewhere). Replays stream to
+    ``connect_url``; the proxy lives as long as this object's recording, so ``serve`` keeps the
+    process up after the replay."""
+
+    def __init__(self, grpc_port: int = VIEWER_PORT, web_port: int = WEB_PORT, memory_limit: str = "25%") -> None:
+        from urllib.parse import quote
+
+        for flag, port in (("--grpc-port", grpc_port), ("--web-port", web_port)):
+            if not _port_free(port):
+                raise OutputError(f"port {port} is in use; choose another with {flag}")
+        self._holder = rr.RecordingStream("trackreplay-web", send_properties=False)
+        self.connect_url = self._holder.serve_grpc(grpc_port=grpc_port, server_memory_limit=memory_limit)
+        try:
+            rr.serve_web_viewer(web_port=web_port, open_browser=False, connect_to=self.connect_url)
+        except RuntimeError as err:  # a port taken since the check
+            self.close()
+            raise OutputError(f"cannot serve the web viewer on port {web_port} ({err})") from None
+        self.url = f"http://127.0.0.1:{web_port}/?url={quote(self.connect_url, safe='')}"
+
+    def serve(self, seconds: float | None = None) -> None:
+        """Keep serving for ``seconds`` (None: until Ctrl-C, which stops it without an error)."""
+        import time
+
+        deadline = None if seconds is None else time.monotonic() + seconds
+        try:
+            while deadline is None or time.monotonic() < deadline:
+                time.sleep(0.2 if deadline is None else max(0.0, min(0.2, deadline - time.monotonic())))
+        except KeyboardInterrupt:
+            pass
+
+    def close(self) -> None:
+        self._holder.disconnect()
+
+
 def _stream(recording_id: str) -> rr.RecordingStream:
     rec = rr.RecordingStream("trackreplay", recording_id=recording_id, send_properties=False, batcher_config=_batcher())
     # Rerun's own `log_time` is the wall clock at logging; ours is the capture time from the log.
@@ -470,14 +522,18 @@ class RerunSink:
     """
 
     def __init__(self, path: str | Path | None, recording_id: str, blueprint: rrb.Blueprint, *,
-                 connect: str | None = None, spawn: bool = False) -> None:
+                 connect: str | None = None, spawn: bool = False, truth: pl.DataFrame | None = None) -> None:
         """Write to ``path`` (an .rrd), and/or stream live to the viewer at ``connect`` (a gRPC URL such
-        as ``rerun+http://127.0.0.1:9876/proxy``) or to one ``spawn`` starts (needs a display)."""
+        as ``rerun+http://127.0.0.1:9876/proxy``) or to one ``spawn`` starts (needs a display).
+        ``truth`` (the log's ground-truth table) goes under ``truth/`` at the frames logged (views.truth)."""
         self.path = None if path is None else Path(path)
         self.partial = None
         self.recording_id = recording_id
-        self.blueprint = blueprint
         self.rec = _stream(recording_id)
+        self.truth = None if truth is None or truth.is_empty() else TruthStream(self.rec, truth)
+        if self.truth is not None:
+            blueprint = show_truth(blueprint, self.truth.paths)
+        self.blueprint = blueprint
         sinks: list = []
         if self.path is not None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -499,6 +555,8 @@ class RerunSink:
     def begin_frame(self, frame: Frame) -> None:
         logger = self.logger
         logger.set_frame(frame.index, frame.t_ns)
+        if self.truth is not None:
+            self.truth.add_frame(frame.index, frame.t_ns)
         if frame.encoded is not None and frame.encoding in ("jpeg", "png"):
             media = "image/jpeg" if frame.encoding == "jpeg" else "image/png"
             logger.image(CAMERA, rr.EncodedImage, frame.encoded, media_type=media)
@@ -517,6 +575,8 @@ class RerunSink:
             raise OutputError(f"cannot write {self.path} ({err}); no new .rrd was kept") from None
 
     def _close(self) -> None:
+        if self.truth is not None:
+            self.truth.flush()
         self.logger.flush_scalars()
         self.rec.flush()
         self.rec.disconnect()

@@ -15,6 +15,10 @@ larger moving region (``hold.enabled``), and the camera-motion compensation of t
 particle cloud (``camera.compensate``; docs/colorpf_robustness.md).
 The status also checks the estimate's neighbourhood for foreground (``neighbour_check``), and a row
 without support neither grows nor keeps its confidence, and turns "lost" after 2 s (``support``).
+Issue 31 (judged on the colour PF's box corpus, docs/colorpf.md): a grey picture's histogram is grey level
+and gradient direction (``likelihood.grey``), the camera's zoom does not size the target
+(``camera.scale_size``), a region grows the box at most ``refine.max_growth`` per side, N = 100, and the
+confidence is calibrated (``calibrate``).
 ``PAPER`` is the overrides that restore the paper's pipeline exactly (uniform pixel weights, no
 foreground cue, a fixed reference, the plain early median, no neighbour check, no refinement, no hold, a still camera,
 no rules for rows without support). The other switches of ours
@@ -44,13 +48,16 @@ from trackreplay.trackers.lifecycle import LifecycleConfig
 # of the status, no foreground-region refinement and no hold, per-frame constants whatever the frame rate, a
 # lost track measured again on one frame's match, no smallest box and no rules for rows without support (the
 # other switches of ours are off by default; "not separated from the background -> predicted" and the grey test
-# have no switch).
-PAPER: dict = {"likelihood": {"kernel": "uniform", "foreground": 0.0}, "reference": {"update_rate": 0.0, "exclude": 0.0},
-                "neighbour_check": False, "refine": {"mode": "none"}, "hold": {"enabled": False},
+# have no switch), a grey picture on Pérez et al.'s V histogram (the fallback before issue 31), the paper's N = 40
+# particles and the colour's own confidence.
+PAPER: dict = {"likelihood": {"kernel": "uniform", "foreground": 0.0, "grey": "hsv"},
+                "reference": {"update_rate": 0.0, "exclude": 0.0},
+                "neighbour_check": False, "calibrate": False, "refine": {"mode": "none"}, "hold": {"enabled": False},
                 "camera": {"compensate": False}, "frame_rate": None, "reacquire_frames": 1, "min_box_pixels": 0,
-                "support": {"size_holds": False, "lost_unsupported": 0, "confidence_falls": False}}
+                "support": {"size_holds": False, "lost_unsupported": 0, "confidence_falls": False}, "n_particles": 40}
 
-HISTOGRAMS = ("hs", "hsv")
+HISTOGRAMS = ("hs", "hsv", "gradient")
+GREY_HISTOGRAMS = ("gradient", "hsv")
 REFERENCES = ("mixed", "target")
 BACKGROUNDS = ("auto", "before", "early", "none")
 SIZES = ("geometry", "noise", "fixed")
@@ -71,8 +78,18 @@ TEMPLATE_MASKS = ("foreground", "kernel", "none")
 class LikelihoodConfig:
     """Colour likelihood, eqs. (4)-(5); ``[colorpf.likelihood]``."""
 
-    histogram: str = "hs"  # "hs": 2-D H-S (§3.1); "hsv": Pérez et al.'s H-S of coloured pixels + V of the rest
-    bins: int = 10  # T, bins per axis (H, S and, for "hsv", V)
+    histogram: str = "hs"  # "hs": 2-D H-S (§3.1); "hsv": Pérez et al.'s H-S of coloured pixels + V of the rest;
+    # "gradient" (ours): grey level of flat pixels + gradient direction of edges (appearance.gradient)
+    bins: int = 10  # T, bins per axis (H, S and, for "hsv", V; for "gradient" the grey levels)
+    # What a grey picture uses instead of "hs" (the tracker's grey test: under 0.5 % of the pixels within
+    # 3x the marked box saturated, or single-channel frames): "gradient" (ours, default; issue 31) or
+    # "hsv" (Pérez et al.'s V for uncoloured pixels: the previous fallback, and PAPER's).
+    grey: str = "gradient"
+    # "gradient" only: sectors of the signed gradient direction (8: 45° each, HOG's cell resolution), and
+    # the quantile of the Sobel magnitude within 3x the marked box from which a pixel is an edge (set once
+    # at the mark; 0.5: half of the target's surroundings are edges, half binned by grey level).
+    orientations: int = 8
+    edge_quantile: float = 0.5
     k: float = 20.0  # L = exp(k S^2)
     s_min: float = 0.1  # "hsv" only: Pérez's thresholds (fractions of the S and V ranges) for a coloured pixel
     v_min: float = 0.2
@@ -124,6 +141,10 @@ class LikelihoodConfig:
             raise ValueError(f"likelihood.kernel must be one of {', '.join(KERNELS)}, not {self.kernel!r}")
         if self.parts < 1:
             raise ValueError("likelihood.parts must be >= 1")
+        if self.grey not in GREY_HISTOGRAMS:
+            raise ValueError(f"likelihood.grey must be one of {', '.join(GREY_HISTOGRAMS)}, not {self.grey!r}")
+        if self.orientations < 1 or not 0.0 <= self.edge_quantile < 1.0:
+            raise ValueError("likelihood.orientations must be >= 1 and 0 <= likelihood.edge_quantile < 1")
         if self.histogram not in HISTOGRAMS:
             raise ValueError(f"likelihood.histogram must be one of {', '.join(HISTOGRAMS)}, not {self.histogram!r}")
         if self.bins < 1 or self.k <= 0:
@@ -342,8 +363,17 @@ class RefineConfig:
     # above the background's score renews the budget) kept only part of it (0.60): the faded colour
     # scores below the background. 30: the previous default.
     keep_frames: int | None = None
+    # Ours (issue 31): without a ground plane the area S' the region sets ("area") is at most max_growth^2
+    # times the area of the box of the last "measured" row (the colour vouched for it; at first the mark):
+    # a box grows by at most max_growth per side on the region's word alone. Why: on the greyscale otb_car4
+    # the camera follows the car, every moving edge of the road is foreground, and the placed box grew
+    # from 101x82 to 260x211 px over 120 "predicted" rows on a 90x72 car. 1.5: a walker or a car seen
+    # half as far again; not tuned (no other value tried). None: no bound (the previous behaviour).
+    max_growth: float | None = 1.5
 
     def __post_init__(self) -> None:
+        if self.max_growth is not None and self.max_growth < 1.0:
+            raise ValueError("refine.max_growth must be >= 1 (or absent: no bound)")
         if self.mode not in REFINES:
             raise ValueError(f"refine.mode must be one of {', '.join(REFINES)}, not {self.mode!r}")
         if self.size_follows not in REGION_SIZES:
@@ -432,6 +462,12 @@ class CameraConfig:
     # 0.44, docs/colorpf_robustness.md). A still camera measures the identity: unchanged. False: the
     # paper (and the defaults before this switch). Frames before the mark ("before") are not moved.
     compensate: bool = True
+    # True: the scene's scale change also scales the particles' boxes and S' (a zoom scales the target
+    # with the scene). False (ours, issue 31): the cloud moves with the scene, its size does not: a
+    # camera that drives behind the target (the greyscale otb_car4) sees the road expand while the car
+    # keeps its size, and the box grew with the road to 221x180 px for a 99x75 car. The target's size
+    # then changes on the target's own evidence only (the foreground region, eq. (9) on a plane).
+    scale_size: bool = False
     min_corners: int = 20  # fewer tracked corners: no measurement (the last motion stays)
     # When the key frame the corners are followed from is renewed (colorpf.camera.CameraMotion). LK
     # matches each corner's 15x15 window as a translated copy of the key frame's, which holds only
@@ -490,7 +526,10 @@ class SupportConfig:
 class ColorPfConfig:
     """The whole tracker (``[colorpf]``); each stage gets only its own table."""
 
-    n_particles: int = 40  # N (paper: 40)
+    # N (paper: 40). 100 (ours, issue 31): at 40 the VOT ball's AUC moved 0.53-0.65 between tracker seeds
+    # and the drone clip (uav123_person12_1) lost its small walker; at 100 the ball's spread over seeds
+    # 0-2 is 0.004 and both gain (docs/colorpf.md, "Issue 31"); the step's cost grows ~0.02 ms a particle.
+    n_particles: int = 100
     # Position noise omega_x, omega_y (eq. 2): std as a fraction of the box's width and height
     # respectively, at least min_noise_px. Relative, so a walker coming closer (larger, faster in the
     # image) is followed; per axis, so the particles spread like the box (see motion.py).
@@ -545,6 +584,13 @@ class ColorPfConfig:
     # target (otb_crossing: a passing car), where the colour match does not vouch for the position.
     # Status only; "lost" still counts colour's misses. False in PAPER (the previous statuses).
     neighbour_check: bool = True
+    # Ours (issue 31, colorpf.calibration): a row's reported confidence is the probability that its box
+    # overlaps the target's by IoU >= 0.5, a logistic model of the colour's confidence, the status, the
+    # mark's separation from the background, the particle cloud and the frames without support, fitted
+    # on the colour PF's box corpus with a leave-one-sequence-out check (docs/colorpf.md, "Calibrated
+    # confidence"). The status and the filter's own use of the colour's confidence are unchanged. False:
+    # the colour's confidence (PAPER).
+    calibrate: bool = True
     likelihood: LikelihoodConfig = field(default_factory=LikelihoodConfig)
     reference: ReferenceConfig = field(default_factory=ReferenceConfig)
     size: SizeConfig = field(default_factory=SizeConfig)

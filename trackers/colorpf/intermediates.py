@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+
+from trackreplay.trackers.base import NOT_HASHED
+from trackreplay.trackers.colorpf.calibration import RowEvidence
 
 NAN4 = np.full(4, np.nan)
 
@@ -33,6 +36,9 @@ class ColorPfIntermediates:
     mask_offset: np.ndarray  # (2,) its top-left pixel
     status: str  # "measured" | "predicted" | "lost" | ""
     notice: str = ""
+    # what the calibration reads of the row (None: lost, idle); read-only, not hashed (docs/colorpf_calibration.py
+    # collects it to refit calibration.COEFFICIENTS)
+    evidence: RowEvidence | None = field(default=None, repr=False, metadata=NOT_HASHED)
 
     @classmethod
     def idle(cls, notice: str = "") -> ColorPfIntermediates:

@@ -3,7 +3,8 @@
 Pixels become bin indices once per frame (only inside the union of the particles' boxes), then all
 N box histograms are counted together (:meth:`ColourModel.histograms`). ``"hs"`` bins H and S only (§3.1:
 a uniform brightness change leaves them alone); ``"hsv"`` is Pérez et al.'s H-S + V histogram, the
-paper's comparison in Table 1.
+paper's comparison in Table 1; ``"gradient"`` (ours, for pictures without hue) bins the grey level of
+flat pixels and the gradient direction of edges (:mod:`~trackreplay.trackers.appearance.gradient`).
 
 Two switches of ours weigh the pixels with an Epanechnikov kernel (``likelihood.kernel``, on by
 default; ``"uniform"`` is the paper) and split the box into bands (``likelihood.parts``, off by
@@ -19,15 +20,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from trackreplay.trackers.appearance.color import HSV_RANGES, to_hsv
+from trackreplay.trackers.appearance.gradient import grey_gradient_index
 from trackreplay.trackers.appearance.histogram import box_part_histograms, hs_index, hs_v_index, kernel_and_part
 from trackreplay.trackers.colorpf.config import LikelihoodConfig
 
 
 @dataclass(frozen=True)
 class ColourModel:
-    """Which bins a BGR pixel falls in; ``n_bins`` in all."""
+    """Which bins a BGR pixel falls in; ``n_bins`` in all. ``edge_min``: ``"gradient"`` only, the Sobel
+    magnitude from which a pixel is an edge (set once at the mark, so every histogram bins alike)."""
 
     config: LikelihoodConfig
+    edge_min: float = 1.0
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -36,12 +40,14 @@ class ColourModel:
         t, p = self.config.bins, self.config.parts
         if self.config.histogram == "hs":
             return (p * t, t)
-        return (t * t + t,) if p == 1 else (p, t * t + t)
+        return (self.n_bins,) if p == 1 else (p, self.n_bins)
 
     @property
     def n_bins(self) -> int:
         """Bins of one part's histogram."""
         t = self.config.bins
+        if self.config.histogram == "gradient":
+            return t + self.config.orientations
         return t * t if self.config.histogram == "hs" else t * t + t
 
     @property
@@ -68,10 +74,23 @@ class ColourModel:
     def index(self, bgr: np.ndarray) -> np.ndarray:
         """Bin index per pixel (int32, the image's shape without channels)."""
         cfg = self.config
+        if cfg.histogram == "gradient":
+            return grey_gradient_index(bgr, cfg.bins, cfg.orientations, self.edge_min)[0]
         hsv = to_hsv(bgr)
         if cfg.histogram == "hs":
             return hs_index(hsv, (cfg.bins, cfg.bins), HSV_RANGES)[0]
         return hs_v_index(hsv, (cfg.bins,) * 3, HSV_RANGES, s_min=cfg.s_min, v_min=cfg.v_min)[0]
+
+    def crop_index(self, image: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
+        """:meth:`index` of ``image[y0:y1, x0:x1]``; ``"gradient"`` reads one pixel more on each side where
+        the image has it, so a crop's edge pixels have the derivatives they have in the whole frame."""
+        if self.config.histogram != "gradient":
+            return self.index(image[y0:y1, x0:x1])
+        height, width = image.shape[:2]
+        a0, b0, a1, b1 = max(x0 - 1, 0), max(y0 - 1, 0), min(x1 + 1, width), min(y1 + 1, height)
+        cfg = self.config
+        return grey_gradient_index(image[b0:b1, a0:a1], cfg.bins, cfg.orientations, self.edge_min,
+                                   (x0 - a0, y0 - b0, a1 - x1, b1 - y1))[0]
 
     def pooled_similarity(self, hists: np.ndarray, reference: np.ndarray) -> np.ndarray:
         """Intersection of the parts' mean histogram with the reference's: the colours regardless of
@@ -130,7 +149,7 @@ def measure(model: ColourModel, image: np.ndarray, states: np.ndarray, reference
         n = len(corners)
         zero = np.zeros(n)
         return Measurement(zero, model.likelihood(zero), np.zeros(n, dtype=np.int64))
-    index = model.index(image[y0:y1, x0:x1])  # only the union of the boxes is converted
+    index = model.crop_index(image, x0, y0, x1, y1)  # only the union of the boxes is converted
     local = corners - np.array([x0, y0, x0, y0])
     hists, pixels = model.histograms(index, local, model.config.max_pixels)
     similarity = model.similarity(hists, reference)
@@ -143,7 +162,7 @@ def box_histogram(model: ColourModel, image: np.ndarray, state: np.ndarray) -> n
     x0, y0, x1, y1 = box_corners(state, width, height)[0]
     if x1 <= x0 or y1 <= y0:
         return np.zeros(model.parts * model.n_bins)
-    index = model.index(image[y0:y1, x0:x1])
+    index = model.crop_index(image, x0, y0, x1, y1)
     return model.histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), model.config.max_pixels)[0][0]
 
 
@@ -165,7 +184,7 @@ def mean_shift(model: ColourModel, image: np.ndarray, state: np.ndarray, referen
     best_s, best_state = -1.0, state.copy()
     if ux1 <= ux0 or uy1 <= uy0:
         return state, 0.0
-    index = model.index(image[uy0:uy1, ux0:ux1])
+    index = model.crop_index(image, ux0, uy0, ux1, uy1)
     for i in range(iterations + 1):
         x0, y0, x1, y1 = box_corners(state, width, height)[0]
         if x1 <= x0 or y1 <= y0 or x0 < ux0 or y0 < uy0 or x1 > ux1 or y1 > uy1:

@@ -65,7 +65,7 @@ def box_reference(model: ColourModel, image: np.ndarray, box: np.ndarray) -> Ref
 
 def _box_hist(model: ColourModel, image: np.ndarray, box: np.ndarray) -> np.ndarray:
     x0, y0, x1, y1 = (int(v) for v in box)
-    index = model.index(image[y0:y1, x0:x1])
+    index = model.crop_index(image, x0, y0, x1, y1)
     return model.histograms(index, np.array([[0, 0, x1 - x0, y1 - y0]]), None)[0][0]
 
 
@@ -84,10 +84,11 @@ def subtract_and_mix(model: ColourModel, cfg: ReferenceConfig, image: np.ndarray
     if not cfg.min_fill <= fill <= cfg.max_fill:
         return None, (f"the foreground fills {fill:.0%} of the marked box (usable: {cfg.min_fill:.0%}-"
                       f"{cfg.max_fill:.0%})")
-    index = model.index(image[y0:y1, x0:x1])
+    index = model.crop_index(image, x0, y0, x1, y1)
     lik = model.config
     h_target, w_fg, w_all = image_part_histograms(index, model.n_bins, kernel=lik.kernel, parts=lik.parts, mask=fg)
-    h_back = index_histogram(model.index(background), model.n_bins)  # the whole background
+    whole = model.crop_index(background, 0, 0, background.shape[1], background.shape[0])
+    h_back = index_histogram(whole, model.n_bins)  # the whole background
     if cfg.mode == "mixed":
         # eq. (7) per part with the (kernel-weighted) foreground share: uniform weights and one part
         # give the paper's P_detect / P_square exactly (sums of ones)

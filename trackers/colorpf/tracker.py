@@ -44,7 +44,12 @@ the marked view, the background to each frame's view and the particle cloud with
 a still camera measures the identity and is unchanged; where the background was resampled, the foreground test
 tolerates its 3x3 neighbourhood, ``reference.registration_tolerance``); the constants that describe time (the
 position noise, the hold's memory and horizon, the early median's window) are kept in seconds at the log's frame
-interval (``frame_rate``, :mod:`.timing`; a 30 fps log is unchanged). Off by default,
+interval (``frame_rate``, :mod:`.timing`; a 30 fps log is unchanged). Issue 31 (docs/colorpf.md, "Issue 31"):
+a grey picture is histogrammed by grey level and gradient direction (``likelihood.grey``,
+:mod:`~trackreplay.trackers.appearance.gradient`); the camera's measured zoom moves the cloud but does not
+size the target (``camera.scale_size``); a region grows the box by at most ``refine.max_growth`` per side
+past the last "measured" box; N = 100 particles; the reported confidence is the fitted probability that
+the row is right (``calibrate``, :mod:`.calibration`). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -62,8 +67,10 @@ import numpy as np
 from trackreplay.schemas.errors import LogError
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import saturated_share
+from trackreplay.trackers.appearance.gradient import edge_threshold
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
+from trackreplay.trackers.colorpf.calibration import RowEvidence, calibrated, cloud_evidence
 from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, scale_of, snap, warp
 from trackreplay.trackers.colorpf.config import ColorPfConfig
 from trackreplay.trackers.colorpf.foreground import (IDENTITY, Band, brightness_gain, foreground_contrast,
@@ -89,8 +96,12 @@ GREY_SHARE = 0.005  # fewer saturated pixels than this share around the marked b
 GREY_CONTEXT = 3.0  # ... in the marked box times this per axis: where the particles' boxes will be (a coloured
 # logo or timestamp elsewhere in a grey frame says nothing about the target's colours)
 GREY_NOTICE = ("the marked box and its surroundings have no colour (under 0.5 % of the pixels within 3x the box "
-               "saturated: a grey sequence), so H-S histograms carry nothing; the brightness histogram of Perez et al. "
-               "is used instead (likelihood.histogram = \"hsv\": H-S of coloured pixels, V of the rest)")
+               "saturated: a grey sequence), so H-S histograms carry nothing; ")
+GREY_USES = {"hsv": "the brightness histogram of Perez et al. is used instead (likelihood.histogram = \"hsv\": H-S of "
+                    "coloured pixels, V of the rest)",
+             "gradient": "a grey-level and gradient-direction histogram is used instead (likelihood.histogram = "
+                         "\"gradient\": grey level of flat pixels, direction of edges; likelihood.grey = \"hsv\" for "
+                         "Perez et al.'s brightness histogram)"}
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
@@ -128,6 +139,7 @@ class Score:
     current: np.ndarray
     separated: bool
     telling: bool
+    separation: float = 0.0  # S_mark - S_back (the whole background's score; 0 without a background)
 
 
 def start_mark(hints: tuple[InitRegion, ...]) -> tuple[InitRegion | None, str]:
@@ -172,6 +184,7 @@ class ColorPfTracker(TrackerBase):
         self.velocity = np.zeros(2)  # motion.model = "constant_velocity": smoothed displacement per frame
         self.motion = VouchedMotion()  # hold.enabled: the last vouched estimate, the velocity between them, held frames
         self.support = Support(np.zeros(2))  # [colorpf.support]: frames since the last supported row, its box's size
+        self._vouched_area = float("inf")  # refine.max_growth: the area of the last "measured" row's box (the mark on)
         self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
@@ -263,7 +276,7 @@ class ColorPfTracker(TrackerBase):
         d = t @ np.linalg.inv(self.camera_transform)  # the last frame -> this one
         self.pf.particles[:, :2] = apply(d, self.pf.particles[:, :2])
         s = scale_of(d)
-        if s != 1.0:
+        if s != 1.0 and self.config.camera.scale_size:
             self.pf.particles[:, 2:4] *= s
             if self.size is not None and not self.size.has_distance:
                 self.size.area0 *= s * s
@@ -316,16 +329,23 @@ class ColorPfTracker(TrackerBase):
         return box
 
     def _choose_histogram(self, image: np.ndarray) -> None:
-        """H-S (§3.1) unless the marked box and its surroundings are grey: then Pérez et al.'s H-S + V (said)."""
+        """H-S (§3.1) unless the marked box and its surroundings are grey: then ``likelihood.grey``, the grey-level
+        and gradient-direction histogram (``"gradient"``, its edge threshold from the surroundings) or Pérez et
+        al.'s H-S + V (``"hsv"``), said."""
         cfg, mark = self.config, self.mark
         assert mark is not None
         height, width = image.shape[:2]
         x0, y0, x1, y1 = marked_box((mark.x, mark.y, GREY_CONTEXT * mark.w, GREY_CONTEXT * mark.h), width, height)
         context = image[y0:y1, x0:x1]
-        if cfg.likelihood.histogram == "hs" and saturated_share(context, cfg.likelihood.s_min) < GREY_SHARE:
+        likelihood = cfg.likelihood
+        if likelihood.histogram == "hs" and saturated_share(context, likelihood.s_min) < GREY_SHARE:
             # no hue or saturation to histogram: every box would score alike, and confidently
-            self.model = ColourModel(dataclasses.replace(cfg.likelihood, histogram="hsv"))
-            self._say(GREY_NOTICE)
+            likelihood = dataclasses.replace(likelihood, histogram=likelihood.grey)
+            self._say(GREY_NOTICE + GREY_USES[likelihood.grey])
+        if likelihood.histogram == "gradient":  # edges from the target's surroundings' median magnitude (0.5)
+            self.model = ColourModel(likelihood, edge_threshold(context, likelihood.edge_quantile))
+        elif likelihood is not cfg.likelihood:
+            self.model = ColourModel(likelihood)
 
     def _start_reference(self, image: np.ndarray, box: np.ndarray) -> np.ndarray | None:
         """Eq. (7) now when the background was there "before" the mark (the mask returned), later for an
@@ -420,6 +440,8 @@ class ColorPfTracker(TrackerBase):
             a = cfg.refine.size_rate
             if cfg.refine.size_follows == "area":  # S' from the state and the region's area; R the aspect stage's
                 self.size.area0 = region_area(self.size.area0, region[2:4], a)
+                if cfg.refine.max_growth is not None:  # no more than max_growth per side past the colour's word
+                    self.size.area0 = min(self.size.area0, cfg.refine.max_growth ** 2 * self._vouched_area)
                 wh = np.array(box_from_area(self.size.area0, self.aspect.ratio), dtype=np.float64)  # eq. (12)
             else:  # "box"
                 wh = (1.0 - a) * estimate[2:4] + a * region[2:4]
@@ -521,12 +543,24 @@ class ColorPfTracker(TrackerBase):
         if not weigh_only:
             self._adapt(image, estimate, working, score)
         status = self._status(frame.index, image, view, estimate, score, placed, held, weigh_only)
-        status, shown, confidence = self._unsupported(status, estimate, score.confidence,
-                                                      weigh_only or status == "measured" or placed)
+        supported, unsupported = weigh_only or status == "measured" or placed, self.support.unsupported
+        status, shown, confidence = self._unsupported(status, estimate, score.confidence, supported)
+        evidence = self._evidence(status, supported, score, estimate, unsupported) if status != "lost" else None
+        if self.config.calibrate and evidence is not None:
+            confidence = calibrated(evidence)
+        if status == "measured" or weigh_only:
+            self._vouched_area = float(estimate[2] * estimate[3])
         if self.config.hold.enabled and not weigh_only:
             self._remember(frame.index, estimate, status == "measured" or placed)
-        self.intermediates = self._intermediates(m, shown, score, size, mask, status)
+        self.intermediates = self._intermediates(m, shown, score, size, mask, status, evidence)
         return self._rows(status, shown, prev, confidence, weigh_only)
+
+    def _evidence(self, status: str, supported: bool, score: Score, estimate: np.ndarray,
+                  unsupported: int) -> RowEvidence:
+        """What ``calibrate`` reads of the row (:mod:`.calibration`; in the intermediates either way)."""
+        share, spread = cloud_evidence(self.pf.weights, self.pf.particles, estimate)
+        return RowEvidence(score.confidence, status == "measured", status == "predicted" and supported,
+                           score.separation, share, spread, unsupported)
 
     def _unsupported(self, status: str, estimate: np.ndarray, confidence: float,
                      supported: bool) -> tuple[str, np.ndarray, float]:
@@ -656,7 +690,8 @@ class ColorPfTracker(TrackerBase):
         if weigh_only or self._s_mark is None:
             self._s_mark = s_est  # the marked box's own score (the estimate is the mark here)
         s_back = float(self.model.pooled_similarity(ref.h_back, ref.histogram))
-        separated = self._s_mark - s_back >= cfg.min_separation
+        separation = self._s_mark - s_back
+        separated = separation >= cfg.min_separation
         # the confidence tells the target from the background only with a background-built reference
         # whose mark stands out from it; only then may the reference adapt (reference.update_rate)
         telling = ref.kind != "box" and separated
@@ -668,7 +703,7 @@ class ColorPfTracker(TrackerBase):
                       "\"predicted\", not \"measured\"")
             s_back = 0.0
         confidence = float(np.clip((s_est - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0))
-        return Score(confidence, s_est, current, separated, telling)
+        return Score(confidence, s_est, current, separated, telling, separation)
 
     def _adapt(self, image: np.ndarray, estimate: np.ndarray, working: np.ndarray, score: Score) -> None:
         """Ours: the reference (Nummiaro et al.'s adaptive model) and the template follow a confident estimate."""
@@ -736,7 +771,7 @@ class ColorPfTracker(TrackerBase):
             self.motion.early_rows.append((index, box))
 
     def _intermediates(self, m: Measurement, estimate: np.ndarray, score: Score, size: SizeStage,
-                       mask: np.ndarray | None, status: str) -> ColorPfIntermediates:
+                       mask: np.ndarray | None, status: str, evidence: RowEvidence | None) -> ColorPfIntermediates:
         ref, cfg = self.reference, self.config
         assert ref is not None
         return ColorPfIntermediates(
@@ -745,7 +780,7 @@ class ColorPfTracker(TrackerBase):
             size.area if cfg.size.mode == "geometry" else float("nan"), size.distance, size.update.measured,
             size.update.ratio, size.update.kept, ref.kind, ref.background,
             mask if mask is not None else np.zeros((0, 0), bool),
-            ref.mask_offset.copy() if mask is not None else np.zeros(2, np.int64), status, self._notice())
+            ref.mask_offset.copy() if mask is not None else np.zeros(2, np.int64), status, self._notice(), evidence)
 
     @staticmethod
     def _rows(status: str, estimate: np.ndarray, prev: np.ndarray, confidence: float,

@@ -18,6 +18,8 @@ class GroundPlane:
     image_to_ground: np.ndarray  # 3×3, pixels → metres on the ground
     camera_ground: tuple[float, float] = (0.0, 0.0)  # (X, Y) of the point under the camera
     camera_height: float = 0.0  # metres above the ground
+    principal_point: tuple[float, float] | None = None  # pixels; None: the image centre
+    focal_px: float | None = None  # None: unknown (trackers.groups.ground_depth finds it from the homography)
 
     @property
     def ground_to_image(self) -> np.ndarray:

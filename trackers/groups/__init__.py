@@ -1,4 +1,4 @@
-"""People-group tracking with subtraction stereo, KLT and a per-group EKF (seed 003)."""
+"""People-group tracking with subtraction stereo (or one camera over a ground plane), KLT and a per-group EKF (seed 003)."""
 
 from operator import attrgetter
 
@@ -11,13 +11,13 @@ from trackreplay.trackers.groups.tracker import GroupTracker
 
 
 def position_frame(tracker: GroupTracker) -> str:
-    """"world" when the log carries the rig's pose (Z up), else "camera" (the left camera's frame)."""
+    """"world" when the log carries the rig's pose or a ground plane (Z up), else "camera" (the left camera's frame)."""
     return tracker.position_frame
 
 
 SPEC = TrackerSpec(
     "groups", GroupsConfig, GroupTracker, "trackreplay.replay.views.groups",
-    needs="stereo", position_frame=position_frame, observations=raw_observations,
+    needs="depth", position_frame=position_frame, observations=raw_observations,
     extra_rows=GroupsIntermediates.extra_rows, notice=attrgetter("notice"), smoothing=smoothing_model,
     multi_object=True,
 )

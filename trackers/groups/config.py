@@ -19,6 +19,8 @@ TOML (every table and key optional; ``trackreplay replay LOG --tracker groups --
     gamma = 11.34
     [groups.tracks]
     max_empty_frames = 12
+    [groups.ground]          # one camera over a ground plane instead of a stereo pair
+    background_ratio = 0.7
 """
 
 from __future__ import annotations
@@ -35,7 +37,7 @@ from trackreplay.trackers.lifecycle import LifecycleConfig
 class BackgroundConfig:
     """§2 background subtraction in both views: per-pixel median of the first frames."""
 
-    frames: int = 8  # the log's first frames (empty scene) make the median background
+    frames: int = 8  # the log's first frames (empty scene) make the median background (one camera: MOG2's first frames)
     threshold: float = 22.0  # grey levels, largest channel difference
     open_px: int = 3  # opening that drops isolated noisy pixels
 
@@ -155,6 +157,60 @@ class MergeConfig:
 
 
 @dataclass(frozen=True)
+class GroundConfig:
+    """One fixed camera over a ground plane instead of a stereo pair (:mod:`.ground_depth`): the
+    foreground from OpenCV's MOG2 (it keeps learning, so people standing in the first frames fade out
+    of the background), each region's depth from its foot point on the ground. Used only when the log
+    has a ground plane and no stereo pair; the stereo tables are then unused."""
+
+    history_s: float = 20.0  # seconds MOG2 remembers (history = history_s x the log's rate, frames)
+    var_threshold: float = 16.0  # MOG2's squared Mahalanobis foreground threshold (OpenCV's default)
+    # MOG2's background ratio: the heaviest Gaussians whose weights sum to this are the background. A
+    # person who stops becomes background once the old background's weight falls below it: at OpenCV's
+    # 0.9 after 0.1 x history frames (2 s at 20 s), at 0.7 after 0.36 x history (7 s), at 0.5 after
+    # 0.7 x history (14 s). PETS09 (people stand and talk): person coverage 0.75 / 0.83 / 0.57 and
+    # wrong measured rows 4.5 / 3.6 / 13 % at 0.9 / 0.7 / 0.5 (at 0.5 the people of the first frames,
+    # learnt as background, leave ghosts for long); docs/groups_pets.md
+    background_ratio: float = 0.7
+    # MOG2 marks shadows apart (value 127) and they stay background: a person's shadow on the
+    # ground would move the region's foot point (its lowest pixels) away from the feet
+    shadows: bool = True
+    open_px: int = 3  # opening that drops isolated noisy pixels
+    close_px: int = 5  # closing that joins a person's parts (legs, torso) into one region
+    min_area_px: int = 60  # regions smaller than this are noise, not a person (before any depth)
+    # EKF sigma_d with this depth source: the virtual disparity is the foot's rows below the horizon
+    # (the virtual baseline is the camera's height), so its noise is the foot row's jitter in pixels
+    sigma_foot_px: float = 3.0
+    # A region whose foot, moved sigma_foot_px rows up or down, lands farther than this on the ground
+    # (half the distance between the two) is left out: far from the camera a pixel spans metres of
+    # ground and its depth could not tell people grouping.radius_m apart (ours; 1.0 m = that radius)
+    max_foot_error_m: float = 1.0
+    # Where a region's pixels stand: "box" (its box's bottom-centre: one distance for the region) or
+    # "column" (the region's lowest pixel in the columns within column_m / 2 of the pixel's own, the
+    # width taken at the region's distance: people side by side at different distances stand apart; a
+    # shoulder width, 0.5 m, bridges the gap between one person's legs). PETS09: person coverage /
+    # wrong measured rows / group MOTA 0.826 / 3.6 % / 0.71 with "box", 0.863 / 3.1 % / 0.79 with
+    # "column" (0.3 m: 0.844 / 5.1 % / 0.73; 0.8 m: 0.838 / 3.7 % / 0.73); docs/groups_pets.md
+    foot: str = "column"
+    column_m: float = 0.5
+    # Points needed to start a group with this depth source (grouping.min_points with stereo). A person
+    # far from one 480x360 camera is some 20 x 50 px and carries a dozen corners; 12 started most
+    # groups late or never (PETS09: person coverage 0.59), 8 covers 0.75 and 6 0.83 (docs/groups_pets.md)
+    min_points: int = 6
+
+    def __post_init__(self) -> None:
+        if not (self.history_s > 0 and self.var_threshold > 0 and self.sigma_foot_px > 0 and self.max_foot_error_m > 0):
+            raise ValueError("ground.history_s, ground.var_threshold, ground.sigma_foot_px and ground.max_foot_error_m "
+                             "must be positive")
+        if not 0.0 < self.background_ratio <= 1.0:
+            raise ValueError("ground.background_ratio must be in (0, 1]")
+        if self.foot not in ("box", "column") or not self.column_m >= 0:
+            raise ValueError("ground.foot must be \"box\" or \"column\" and ground.column_m >= 0")
+        if self.open_px < 0 or self.close_px < 0 or self.min_area_px < 1 or self.min_points < 1:
+            raise ValueError("ground.open_px and ground.close_px must be >= 0, ground.min_area_px and ground.min_points >= 1")
+
+
+@dataclass(frozen=True)
 class TrackConfig:
     max_empty_frames: int = 12  # deleted after this many consecutive frames without an update (0.25 s at 48 fps)
 
@@ -176,6 +232,7 @@ class GroupsConfig:
     grouping: GroupingConfig = field(default_factory=GroupingConfig)
     merge: MergeConfig = field(default_factory=MergeConfig)
     tracks: TrackConfig = field(default_factory=TrackConfig)
+    ground: GroundConfig = field(default_factory=GroundConfig)
     rate_hz: float = 48.0  # the frame rate the per-frame values (frame counts, m/frame) are given at
     scale_with_rate: bool = True  # rescale them to the log's frame rate (off: use them as they are)
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from trackreplay.trackers.base import NOT_HASHED
 from trackreplay.trackers.geometry.rig_pose import RigPose
+from trackreplay.trackers.geometry.stereo import StereoRig
 from trackreplay.trackers.groups.features import ObservationPoints
 
 
@@ -46,6 +48,9 @@ class GroupsIntermediates:
     dt_s: float  # seconds since the previous frame (m/frame → m/s)
     notice: str = ""
     world: RigPose | None = None  # the rig's pose: the second table's vectors and extents in the world frame
+    # the rig the step measured with (a stereo pair's, or one camera's virtual rig over the ground
+    # plane: trackers.groups.ground_depth); what the observations are computed from, not a result
+    rig: StereoRig | None = field(default=None, metadata=NOT_HASHED)
 
     @classmethod
     def idle(cls, mode: str, shape: tuple[int, int], notice: str = "", window: int = 2) -> GroupsIntermediates:

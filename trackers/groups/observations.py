@@ -17,12 +17,16 @@ from trackreplay.trackers.groups.intermediates import GroupsIntermediates
 def raw_observations(intermediates: GroupsIntermediates, states: Sequence[TrackState], rig: StereoRig | None,
                      config: GroupsConfig | None = None) -> list[dict]:
     """Rows ``zX zY zZ`` (m) and ``rXX .. rZZ`` (m²), in the world frame (like the trajectory) when the
-    rig's pose is known; ``config`` is the one replayed (None: the defaults)."""
+    rig's pose is known; ``config`` is the one replayed (None: the defaults). ``rig`` is the frame's
+    stereo rig; None (one camera over a ground plane) uses the step's own (``intermediates.rig``)."""
     g = intermediates.groups
+    cfg = config or GroupsConfig()
+    sigma_d = cfg.ekf.sigma_d if rig is not None else cfg.ground.sigma_foot_px
+    rig = rig or intermediates.rig  # one camera over a ground plane: the step's virtual rig
     if rig is None or not len(g.ids):
         return []
-    e = (config or GroupsConfig()).ekf
-    Ruvd = np.diag([e.sigma_u**2, e.sigma_v**2, e.sigma_d**2])
+    e = cfg.ekf
+    Ruvd = np.diag([e.sigma_u**2, e.sigma_v**2, sigma_d**2])
     uvd, labels = intermediates.points.uvd, intermediates.labels
     rows = []
     for k, gid in enumerate(g.ids.tolist()):

@@ -3,7 +3,10 @@
 Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
 
 1. §2 background subtraction in both views (median of the first frames) and subtraction stereo:
-   SGBM on foreground crops only (:mod:`trackreplay.trackers.geometry.subtraction_stereo`).
+   SGBM on foreground crops only (:mod:`.stereo_depth`). A log with one camera and a ground plane
+   (``/camera/ground_plane``) and no stereo pair takes its depth from :mod:`.ground_depth` instead:
+   MOG2 foreground, each region a standing person at its foot point's distance, read as the
+   disparity of a virtual rig (baseline = the camera's height); every later stage is the same.
 2. §3.1 KLT on the left foreground, 3-D from the disparity; observation points = features tracked
    over the whole time window (:mod:`.features`).
 3. §3.2 each group's EKF predicts (:mod:`.ekf`).
@@ -18,7 +21,8 @@ Per stereo pair, the paper's pipeline (Fig. 2), one module per stage:
    own velocities agree across the line of sight (``merge.measured_velocity``); the merged group gets a new id.
 
 Outputs per live group: X Y Z the EKF position (metres) in the world frame (Z up) when the log
-carries the rig's pose (``/stereo/pose``, ``position_frame == "world"``), else in the left camera's
+carries the rig's pose (``/stereo/pose``, ``position_frame == "world"``) or a ground plane (the
+ground's frame: X Y on the ground as the plane gives them, Z up), else in the left camera's
 frame (x right, y down, z forward; ``"camera"``) — the EKF itself runs in the camera frame, as in
 the paper; the image box of the foreground pixels whose 3-D points fall in the group's gate
 (else the projected extent), vx vy the projected EKF velocity (px/frame); "measured" when updated
@@ -29,7 +33,7 @@ extent covariance (the second table, docs/groups.md).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -37,20 +41,23 @@ from trackreplay.trackers.appearance.color import to_grey
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.filters.gaussians import merge_gaussians
 from trackreplay.trackers.filters.gating import mahalanobis_sq
-from trackreplay.trackers.foreground.background import MedianBackground, foreground_mask
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.stereo import StereoRig
-from trackreplay.trackers.geometry.subtraction_stereo import SubtractionStereo, make_matcher, subtraction_stereo
 from trackreplay.trackers.groups.association import associate
-from trackreplay.trackers.groups.config import GroupsConfig
+from trackreplay.trackers.groups.config import EkfConfig, GroupsConfig
 from trackreplay.trackers.groups.ekf import POS, VEL, GroupEkf, state_from
 from trackreplay.trackers.groups.features import KltFeatures, ObservationPoints
+from trackreplay.trackers.groups.ground_depth import DepthView, GroundDepth
 from trackreplay.trackers.groups.grouping import initial_groups
 from trackreplay.trackers.groups.intermediates import GroupsIntermediates, GroupSnapshot
 from trackreplay.trackers.groups.merging import measured_velocities, merge_overlap, merge_sets
+from trackreplay.trackers.groups.stereo_depth import StereoDepth
 from trackreplay.trackers.lifecycle import TrackLife
 
-NO_STEREO = "the log has no stereo pair with calibration (/stereo/{left,right}/image and calibration): groups tracker idle"
+GROUND_NOTICE = ("one camera: depth from the ground plane (each foreground region's people stand at their feet's "
+                 "distance; heights and people one behind the other are not seen, docs/groups_pets.md)")
+NO_STEREO = ("the log has no stereo pair with calibration (/stereo/{left,right}/image and calibration) and no ground "
+             "plane (/camera/ground_plane): groups tracker idle")
 
 
 @dataclass
@@ -96,10 +103,11 @@ class GroupTracker(TrackerBase):
         self.pose = None
         self.learn_t: list[int] = []
         self.rng = rng  # handed in by the engine; nothing here is random
-        self.bg = (MedianBackground(config.background.frames), MedianBackground(config.background.frames))
-        self.models: tuple[np.ndarray, np.ndarray] | None = None
+        self.stereo = StereoDepth(config)
+        self.ground = GroundDepth(config.ground, config.background.frames)
+        self.source = ""  # "stereo" or "ground": the depth source, chosen on the first frame with one
+        self.learnt = False
         self.klt = KltFeatures(config.klt, config.stereo.disparity_window)
-        self.matcher = make_matcher(config.stereo.sgbm)
         self.groups: list[Group] = []
         self.next_id = 1
         self.pair_frames: dict[tuple[int, int], int] = {}
@@ -114,20 +122,20 @@ class GroupTracker(TrackerBase):
         stereo and observation points (§2-§3.1), predict (§3.2), associate and update (§3.3), delete the
         lost, start groups (§3.4), merge (§3.5), the groups' image boxes and the rows."""
         shape = frame.image.shape[:2]
-        rig = frame.stereo
-        if frame.right is None or rig is None:
-            self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, self.config.klt.window)
+        rig = self._rig(frame)
+        if rig is None:
             return []
         self.position_frame = "world" if rig.pose is not None else "camera"
         self.pose = rig.pose
         dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
         self.prev_t = frame.t_ns
-        if self.models is None:  # §2: learn the background of both views
+        if not self.learnt:  # §2: learn the background (of both views)
             window = self.config.klt.window  # (the window before the rate is known, on the last such frame too)
             self._learn(frame)
             self.intermediates = GroupsIntermediates.idle("learning", shape, "", window)
             return []
-        fg_left, fg_right, stereo, points = self._observe(frame, rig)
+        view = self._observe(frame)
+        points = self.klt.observation_points(rig)
         for g in self.groups:  # §3.2
             g.ekf.predict()
         labels = self._associate_and_update(points, rig)  # §3.3
@@ -135,39 +143,68 @@ class GroupTracker(TrackerBase):
         labels = self._start_groups(points, labels, rig, events)  # §3.4
         labels, merged = self._merge(labels, events, points)  # §3.5
         ended = np.array(sorted(ended + merged), np.int64)
-        self._boxes(stereo.disparity, rig)
+        self._boxes(view.disparity, rig)
         point_ids = np.array([self.groups[j].gid if j >= 0 else -1 for j in labels.tolist()], np.int64)
         snapshot = self._snapshot()
         self.intermediates = GroupsIntermediates(
-            "tracking", fg_left, fg_right, stereo.disparity, stereo.crops, self.klt.uv.copy(), points, point_ids,
-            snapshot, ended, tuple(events), dt_s, world=rig.pose)
+            "tracking", view.fg_left, view.fg_right, view.disparity, view.crops, self.klt.uv.copy(), points, point_ids,
+            snapshot, ended, tuple(events), dt_s, notice=GROUND_NOTICE if self.source == "ground" else "", world=rig.pose,
+            rig=rig)
         states = [self._state(g, rig) for g in self.groups]
         states += [TrackState(int(gid), status="lost") for gid in ended.tolist()]
         return sorted(states, key=lambda s: s.track_id)
 
-    def _learn(self, frame: Frame) -> None:
-        """§2: both views' frames into the median backgrounds; once full, the models and the log's rate."""
-        assert frame.right is not None
-        self.bg[0].add(frame.image)
-        self.bg[1].add(frame.right)
-        self.learn_t.append(frame.t_ns)
-        if self.bg[0].full:
-            self.models = (self.bg[0].model(), self.bg[1].model())
-            self.bg[0].clear()
-            self.bg[1].clear()
-            self._set_rate()
+    def _rig(self, frame: Frame) -> StereoRig | None:
+        """The frame's stereo rig, else the virtual rig of one camera over the log's ground plane
+        (:mod:`.ground_depth`); None (the tracker idles, and says why) when the log has neither."""
+        shape = frame.image.shape[:2]
+        if not self.source:
+            self.source = ("stereo" if frame.right is not None and frame.stereo is not None
+                           else "ground" if frame.ground_plane is not None else "")
+        if self.source == "stereo" and frame.right is not None and frame.stereo is not None:
+            return frame.stereo
+        if self.source == "ground" and frame.ground_plane is not None:
+            try:
+                return self.ground.camera(frame.ground_plane, shape)
+            except ValueError as err:
+                notice = f"the log's ground plane gives no camera ({err}): groups tracker idle"
+                self.intermediates = GroupsIntermediates.idle("idle", shape, notice, self.config.klt.window)
+                return None
+        self.intermediates = GroupsIntermediates.idle("idle", shape, NO_STEREO, self.config.klt.window)
+        return None
 
-    def _observe(self, frame: Frame, rig: StereoRig) -> tuple[np.ndarray, np.ndarray, SubtractionStereo, ObservationPoints]:
-        """§2 background subtraction in both views and subtraction stereo; §3.1 KLT on the left
-        foreground and the observation points."""
-        assert self.models is not None and frame.right is not None
-        bgc, stc = self.config.background, self.config.stereo
-        fg_left = foreground_mask(frame.image, self.models[0], bgc.threshold, open_px=bgc.open_px)
-        fg_right = foreground_mask(frame.right, self.models[1], bgc.threshold, open_px=bgc.open_px)
-        stereo = subtraction_stereo(frame.image, frame.right, fg_left, stc.sgbm, right_mask=fg_right,
-                                    margin=stc.margin_px, right_tolerance_px=stc.right_tolerance_px, matcher=self.matcher)
-        self.klt.step(to_grey(frame.image), fg_left, stereo.disparity)
-        return fg_left, fg_right, stereo, self.klt.observation_points(rig)
+    def _learn(self, frame: Frame) -> None:
+        """§2: the frames into the background model(s); once there are enough, the log's rate."""
+        self.learn_t.append(frame.t_ns)
+        if self.source == "stereo":
+            assert frame.right is not None
+            self.stereo.add(frame.image, frame.right)
+            if self.stereo.models is not None:
+                self._set_rate()
+                self.learnt = True
+            return
+        self.ground.add(frame.image)
+        if self.ground.full:
+            self._set_rate()
+            self.ground.start(self.fps)
+            self.learnt = True
+
+    def _observe(self, frame: Frame) -> DepthView:
+        """§2 the foreground and its depth (subtraction stereo, or standing people on the ground);
+        §3.1 KLT on the (left) foreground."""
+        if self.source == "stereo":
+            assert frame.right is not None
+            view = self.stereo.observe(frame.image, frame.right, self.config)
+        else:
+            assert frame.ground_plane is not None
+            view = self.ground.observe(frame.image, frame.ground_plane)
+        self.klt.step(to_grey(frame.image), view.fg_left, view.disparity)
+        return view
+
+    def _ekf_config(self) -> EkfConfig:
+        """The EKF's noises; with the ground's depth, σ_d is the foot row's jitter (``ground.sigma_foot_px``)."""
+        ekf = self.config.ekf
+        return ekf if self.source == "stereo" else replace(ekf, sigma_d=self.config.ground.sigma_foot_px)
 
     def _set_rate(self) -> None:
         """The log's frame rate from the background frames' times; the per-frame parameters rescaled to it."""
@@ -216,14 +253,15 @@ class GroupTracker(TrackerBase):
         gcfg, ecfg = self.config.grouping, self.config.ekf
         free = np.flatnonzero(labels == -1)
         labels = labels.copy()
-        for members in initial_groups(points.xyz[free], gcfg.radius_m, gcfg.min_points):
+        start_points = gcfg.min_points if self.source == "stereo" else self.config.ground.min_points
+        for members in initial_groups(points.xyz[free], gcfg.radius_m, start_points):
             idx = free[members]
             pos, vel = points.xyz[idx].mean(axis=0), points.velocity[idx].mean(axis=0)
             extent = _cov(points.xyz[idx])
             P0 = np.zeros((6, 6))
             P0[np.ix_(POS, POS)] = extent / len(idx) + np.eye(3) * 0.05**2
             P0[np.ix_(VEL, VEL)] = np.eye(3) * ecfg.init_velocity_sigma**2
-            g = Group(self.next_id, GroupEkf(ecfg, rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx),
+            g = Group(self.next_id, GroupEkf(self._ekf_config(), rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx),
                       TrackLife(self.config.tracks.lifecycle))
             self.next_id += 1
             labels[idx] = len(self.groups)

@@ -1,4 +1,10 @@
-"""`trackreplay eval TRAJ LOG`: metrics against the log's ground truth."""
+"""`trackreplay eval TRAJ TRUTH`: metrics against ground truth.
+
+TRAJ is a trajectory table (.parquet, .csv) or a MOTChallenge result (.txt); TRUTH is a log with
+ground truth, or a MOTChallenge sequence (a folder with gt/gt.txt and seqinfo.ini, or a gt.txt).
+One track is scored against one truth object when the trajectory has one track or ``--track``
+names it; a trajectory of several tracks is scored whole with the multi-object metrics. The choice
+is printed first."""
 
 from __future__ import annotations
 
@@ -9,20 +15,29 @@ from pathlib import Path
 import polars as pl
 
 from trackreplay.replay.cli.commands.values import finite_json, positive_float
-from trackreplay.replay.analysis.eval import check_frames, evaluate, format_summary
+from trackreplay.replay.analysis.eval import check_frames, evaluate, format_summary, object_followed
 from trackreplay.replay.core.export import read_trajectory
 from trackreplay.replay.log.frames import image_times
 from trackreplay.replay.log.groundtruth import groundtruth_with_frames
 from trackreplay.replay.analysis.mot import MAX_DISTANCE_M
+from trackreplay.replay.analysis.mot_files import drop_distractor_matches, read_mot_result, read_mot_sequence
 from trackreplay.replay.log.reader import LogReader
+from trackreplay.schemas.errors import TrackreplayError
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
-    p = sub.add_parser("eval", help="centre error, IoU and velocity error against /groundtruth/objects")
-    p.add_argument("trajectory", type=Path, help=".parquet or .csv trajectory")
-    p.add_argument("log", type=Path, help="the log holding the ground truth")
-    p.add_argument("--track-id", type=int, help="track to evaluate (default: the longest)")
-    p.add_argument("--gt-id", type=int, help="ground-truth object (default: the one seen most)")
+    p = sub.add_parser("eval", help="measured share, centre error, IoU and velocity error against ground truth; "
+                                    "CLEAR MOT, IDF1, HOTA over several tracks",
+                       description=__doc__.split("\n\n", 1)[1])
+    p.add_argument("trajectory", type=Path, help=".parquet or .csv trajectory, or a MOTChallenge result .txt "
+                   "(frame,id,bb_left,bb_top,bb_width,bb_height,conf,...; 1-based frames and pixels)")
+    p.add_argument("log", type=Path, metavar="TRUTH", help="the log holding the ground truth, or a MOTChallenge "
+                   "sequence folder (gt/gt.txt, seqinfo.ini) or its gt.txt")
+    p.add_argument("--track", "--track-id", dest="track_id", type=int, metavar="ID",
+                   help="score this track alone (needed to score one of several tracks; without it they are all scored "
+                        "with the multi-object metrics)")
+    p.add_argument("--gt-id", type=int, help="ground-truth object to score one track against (default: the one the track "
+                   "lies on most often; it is printed)")
     p.add_argument("--json", type=Path, help="also write the metrics as JSON")
     p.add_argument("--per-frame", type=Path, help="also write the per-frame errors (.csv or .parquet)")
     p.add_argument("--mot", action="store_true",
@@ -40,19 +55,86 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    traj = read_trajectory(args.trajectory)
-    reader = LogReader(args.log)
-    gt, annotated = groundtruth_with_frames(reader, *([args.gt_topic] if args.gt_topic else []))
-    check_frames(traj, str(args.trajectory), image_times(reader, args.image_topic), annotated, str(args.log))
-    if args.mot:
-        return _run_mot(args, traj, gt, annotated["frame"])
-    summary, frames = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
+    mot_result = args.trajectory.suffix.lower() == ".txt"
+    traj = read_mot_result(args.trajectory) if mot_result else read_trajectory(args.trajectory)
+    if _is_sequence(args.log):
+        traj, gt, frames = _sequence_truth(args, traj)
+    else:
+        reader = LogReader(args.log)
+        gt, annotated = groundtruth_with_frames(reader, *([args.gt_topic] if args.gt_topic else []))
+        times = image_times(reader, args.image_topic)
+        if mot_result:  # a result file carries no times: its frames are the log's images, at their times
+            beyond = traj.filter(~pl.col("frame").is_in(list(times)))
+            if beyond.height:
+                raise TrackreplayError(f"{args.trajectory}: frame {beyond['frame'].min() + 1} (1-based) is not one of the "
+                                       f"{len(times)} frames of {args.log} ({beyond.height} row(s)): a result of another log")
+            traj = traj.with_columns(pl.col("frame").replace_strict(times, return_dtype=pl.Int64).alias("t_ns"))
+        check_frames(traj, str(args.trajectory), times, annotated, str(args.log))
+        frames = annotated["frame"]
+    if args.mot or _score_all(args, traj, gt):
+        return _run_mot(args, traj, gt, frames)
+    summary, per_frame = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
     print(format_summary(summary))
     if args.json:
         _write_json(args.json, summary.as_dict())
     if args.per_frame:
-        (frames.write_parquet if args.per_frame.suffix == ".parquet" else frames.write_csv)(args.per_frame)
+        _write_table(args.per_frame, per_frame)
     return 0
+
+
+def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame) -> bool:
+    """Whether to score every track (several tracks and no ``--track``); says what is scored either way."""
+    tracks = sorted(traj.filter(pl.col("x").is_not_null())["track_id"].unique().to_list())
+    objects = sorted(gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))["id"].unique().to_list())
+    if args.track_id is None and len(tracks) > 1:
+        if args.gt_id is not None:
+            raise TrackreplayError(f"{args.trajectory} holds {len(tracks)} tracks: --gt-id scores one of them, so name it "
+                                   f"with --track ID (or leave both out to score all)")
+        print(f"scoring all {len(tracks)} tracks against all {len(objects)} truth object(s) with the multi-object "
+              f"metrics (--track ID scores one track alone)")
+        return True
+    if args.track_id is not None:
+        if args.track_id not in traj["track_id"].unique().to_list():
+            raise TrackreplayError(f"{args.trajectory} has no track {args.track_id} (its tracks: "
+                                   f"{', '.join(map(str, tracks[:20]))}{' ...' if len(tracks) > 20 else ''})")
+        which = f"track {args.track_id} (--track)"
+    else:
+        which = f"track {tracks[0]} (the trajectory's only one)" if tracks else "the trajectory"
+    if args.gt_id is not None:
+        against = f"truth object {args.gt_id} (--gt-id)"
+    elif len(objects) == 1:
+        against = f"truth object {objects[0]} (the truth's only one)"
+    else:
+        followed = object_followed(traj, gt, args.track_id if args.track_id is not None else tracks[0]) if tracks else None
+        if followed is not None:
+            args.gt_id = followed
+            against = f"truth object {followed}, the one of {len(objects)} it lies on most often (--gt-id ID chooses)"
+        else:
+            against = f"the truth object seen on most frames, of {len(objects)}, as it lies on none (--gt-id ID chooses)"
+    print(f"scoring {which} against {against}")
+    return False
+
+
+def _is_sequence(path: Path) -> bool:
+    """A MOTChallenge sequence (a folder with gt/gt.txt, or a .txt) rather than a log or a bag folder."""
+    return (path.is_dir() and (path / "gt" / "gt.txt").is_file()) or path.suffix.lower() == ".txt"
+
+
+def _sequence_truth(args: argparse.Namespace, traj: pl.DataFrame) -> tuple[pl.DataFrame, pl.DataFrame, pl.Series]:
+    """The trajectory (checked against the sequence's length, cleared of boxes on distractors, which
+    it says), the sequence's scored truth and its annotated frames."""
+    if args.gt_topic or args.image_topic:
+        raise TrackreplayError(f"--gt-topic and --image-topic choose topics of a log; {args.log} is a MOTChallenge sequence")
+    seq = read_mot_sequence(args.log)
+    if seq.length is not None:
+        beyond = traj.filter(pl.col("frame") >= seq.length)
+        if beyond.height:
+            raise TrackreplayError(f"{args.trajectory}: frame {beyond['frame'].min() + 1} (1-based) is beyond the "
+                                   f"{seq.length} frames of {seq.name} ({beyond.height} row(s)): a result of another sequence")
+    traj, removed = drop_distractor_matches(traj, seq)
+    if removed:
+        print(f"{removed} tracked box(es) on distractors (static people, reflections, ...) left out, as TrackEval does")
+    return traj, seq.gt, seq.frames
 
 
 def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> int:
@@ -80,8 +162,30 @@ def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, fra
     return 0
 
 
+def _write_table(path: Path, table: pl.DataFrame) -> None:
+    """The per-frame errors as Parquet or CSV, under NAME.partial until complete (its folder created)."""
+    import io
+
+    from trackreplay.replay.core.outputs import write_bytes
+
+    buf = io.BytesIO()
+    (table.write_parquet if path.suffix.lower() == ".parquet" else table.write_csv)(buf)
+    write_bytes(_folder(path), buf.getvalue())
+
+
+def _folder(path: Path) -> Path:
+    """``path``, its folder created as the other result outputs' are (docs/exit_codes.md, status 5)."""
+    from trackreplay.schemas.errors import OutputError
+
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"cannot write {path} ({err.strerror or err})") from None
+    return path
+
+
 def _write_json(path: Path, data: dict) -> None:
     """Strict JSON: a metric that is undefined (no truth, no match) is null, not NaN."""
     from trackreplay.replay.core.outputs import write_bytes  # NAME.partial, renamed when complete
 
-    write_bytes(path, (json.dumps(finite_json(data), indent=2, allow_nan=False) + "\n").encode())
+    write_bytes(_folder(path), (json.dumps(finite_json(data), indent=2, allow_nan=False) + "\n").encode())

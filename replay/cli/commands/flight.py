@@ -19,6 +19,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--rrd", type=Path, help="Rerun 3-D view: camera, lines of sight, fitted path")
     p.add_argument("--track", type=int, help="track id (default: the track with most measured frames)")
     p.add_argument("--no-size", action="store_true", help="ignore the apparent ball size (lines of sight only)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines (there are none either when stderr is not a terminal)")
     p.add_argument("--rescan", type=Path, metavar="TRAJ_OUT",
                    help="look again, along the fitted flight, in every frame the tracker did not measure (offline); "
                         "write the trajectory with the frames found there (status measured, fill 'rescan') to this "
@@ -38,6 +39,18 @@ def _ball_rows(table):
              if (spec := registry.find(n)) is not None and spec.ball_flight]
     balls = table.filter(pl.col("tracker").is_in(names))
     return balls if balls.height else table
+
+
+def stage_printer(enabled: bool):
+    """``say(what)``: one line on stderr per stage of a fit that takes tens of seconds (the stages of
+    :func:`~trackreplay.replay.analysis.flight.fit_flight`, the rescan); None (silent) when not ``enabled``."""
+    if not enabled:
+        return None
+
+    def say(what: str) -> None:
+        print(f"trackreplay: flight: {what}", file=sys.stderr, flush=True)
+
+    return say
 
 
 def run(args: argparse.Namespace) -> int:
@@ -65,10 +78,13 @@ def run(args: argparse.Namespace) -> int:
     obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
     fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
     config = FlightConfig(use_size=not args.no_size)
+    say = stage_printer(not args.quiet and sys.stderr.isatty())
     rescanned: frozenset[int] = frozenset()
     if args.rescan is not None:
         from trackreplay.replay.analysis.flight_rescan import rescan
 
+        if say is not None:
+            say("rescanning along the fitted flight (several fits)")
         found = rescan(table, args.log, times, cameras, track_id=track, flight=config, fps=fps,
                        what=f"{args.trajectory} (log {args.log})", tracker=str(traj["tracker"][0]))
         for warning in found.warnings:
@@ -80,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
               + (f"; {len(found.dropped)} dropped, off the final fit: {', '.join(str(f) for f in found.dropped)}" if found.dropped else "")
               + f"); wrote {args.rescan}")
     else:
-        fit = fit_flight(obs, config, fps)
+        fit = fit_flight(obs, config, fps, None if say is None else lambda stage: say(f"fitting: {stage}"))
     print(fit.report.describe())
     rows = flight_rows(fit, times, cameras, track_id=track or 1)
     if args.out:

@@ -40,6 +40,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--ground-plane", type=Path, metavar="FILE",
                    help="fixed camera over flat ground: JSON with width, height, image_to_ground (3x3) or points [[u,v,X,Y],...], "
                         "camera_ground [X,Y], camera_height (see recorder/sources/ground_plane.py)")
+    p.add_argument("--ground-plane-from-truth", action="store_true",
+                   help="fit the ground plane to the --groundtruth file's boxes and ground positions (MOTChallenge X,Y in "
+                        "metres: each box's bottom-centre is a foot on the ground); the fit's error is reported")
     p.add_argument("--gt-format", "--groundtruth-format", dest="gt_format", choices=FORMATS, default="auto", metavar="FORMAT",
                    help=f"annotation format: {', '.join(FORMATS)} (default: auto, detected)")
     p.add_argument("--gt-first-frame", type=int, default=0, metavar="N",
@@ -73,12 +76,14 @@ def run(args: argparse.Namespace) -> int:
         fps=args.fps, t0_ns=args.t0, timestamps=args.timestamps, calibration=args.calibration,
         encoders=args.encoders, lens_table=args.lens_table, groundtruth=args.groundtruth, gt_format=args.gt_format,
         gt_first_frame=args.gt_first_frame,
-        ground_plane=args.ground_plane,
+        ground_plane=args.ground_plane, ground_plane_from_truth=args.ground_plane_from_truth,
         encoding=args.encoding, flush_every=args.flush_every, topics=parse_topics(args.topic), quiet=args.quiet,
     )
     for warning in report.warnings:
         print(f"trackreplay: warning: {warning}", file=sys.stderr)
     if not args.quiet:
+        for note in report.notes:
+            print(f"trackreplay: {note}", file=sys.stderr)
         per_topic = ", ".join(f"{t} {n}" for t, n in sorted(report.topics.items()))
         print(f"wrote {report.path}: {report.frames} frames, {report.messages} messages ({per_topic})", file=sys.stderr)
     return 7 if report.frames_lost else 0  # a valid log of what could be read, but not the whole source

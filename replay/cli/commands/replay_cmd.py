@@ -12,7 +12,7 @@ from trackreplay.schemas.errors import TrackreplayError
 
 from trackreplay.replay.core import registry
 from trackreplay.replay.core.engine import ReplayRequest, replay
-from trackreplay.replay.core.export import METHODS, fill_gaps, trajectory_format, write_trajectory
+from trackreplay.replay.core.export import METHODS, export_trajectory, trajectory_format, write_trajectory
 from trackreplay.replay.core.outputs import write_json
 from trackreplay.replay.log.frames import read_hints
 from trackreplay.replay.log.reader import LogReader
@@ -64,6 +64,17 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--connect", metavar="URL", nargs="?", const="rerun+http://127.0.0.1:9876/proxy", type=_rerun_url,
                    help="also stream to a running Rerun viewer (default URL rerun+http://127.0.0.1:9876/proxy)")
     p.add_argument("--spawn", action="store_true", help="start a Rerun viewer and stream to it (needs a display)")
+    p.add_argument("--serve-web", action="store_true", help="serve Rerun's web viewer over HTTP (no display needed), "
+                   "stream the replay to it, print its URL and keep serving until Ctrl-C (or --serve-seconds)")
+    p.add_argument("--web-port", type=positive_int, default=9090, help="--serve-web's HTTP port (default 9090)")
+    p.add_argument("--grpc-port", type=positive_int, default=9876,
+                   help="--serve-web's gRPC port, which the web viewer reads the replay from (default 9876)")
+    p.add_argument("--serve-seconds", type=non_negative_float, help="with --serve-web: stop serving this many seconds "
+                   "after the replay (default: at Ctrl-C)")
+    p.add_argument("--no-truth", dest="truth", action="store_false",
+                   help="leave the log's ground truth out of the Rerun stream (default: under truth/ when the log has it)")
+    p.add_argument("--rrd-full", action="store_true", help="send every raster to Rerun as it is (groups: the foreground "
+                   "masks and disparity raw, 4 bytes a pixel a stereo frame in the viewer, instead of lossless PNG)")
     p.add_argument("--export", type=Path, help="trajectory output: .parquet, .csv or .txt (MOTChallenge)")
     p.add_argument("--interpolate", choices=("none", *METHODS), help="gap filling of the export (default linear; "
                    "not with --smooth, which fills gaps itself)")
@@ -104,13 +115,34 @@ def request_from_args(args: argparse.Namespace, rrd: Path | None) -> ReplayReque
     return ReplayRequest(
         log=args.log, tracker=tracker, config=config, seed=args.seed, rrd=rrd,
         start_s=args.start, end_s=args.end, image_topic=args.image_topic,
-        connect=getattr(args, "connect", None), spawn=getattr(args, "spawn", False),
+        connect=getattr(args, "connect", None), spawn=getattr(args, "spawn", False), truth=getattr(args, "truth", True),
+        rrd_full=getattr(args, "rrd_full", False),
         stereo_topics=tuple(args.stereo_topics) if args.stereo_topics else None,
         progress=not args.quiet and sys.stderr.isatty(), opencv_threads=args.opencv_threads, strict=args.strict,
     )
 
 
 def run(args: argparse.Namespace) -> int:
+    if not getattr(args, "serve_web", False):
+        return _run(args, None)
+    if args.connect or args.spawn:
+        raise TrackreplayError("--serve-web serves its own viewer: give it without --connect and --spawn")
+    from trackreplay.replay.views.rerun_sink import WebViewer
+
+    viewer = WebViewer(args.grpc_port, args.web_port)
+    try:
+        print(f"trackreplay: Rerun web viewer at {viewer.url} (the replay streams to {viewer.connect_url})",
+              file=sys.stderr, flush=True)
+        code = _run(args, viewer.connect_url)
+        until = "Ctrl-C" if args.serve_seconds is None else f"{args.serve_seconds:g} s have passed"
+        print(f"trackreplay: serving the replay at {viewer.url} until {until}", file=sys.stderr, flush=True)
+        viewer.serve(args.serve_seconds)
+        return code
+    finally:
+        viewer.close()
+
+
+def _run(args: argparse.Namespace, connect: str | None) -> int:
     if args.smooth and args.interpolate is not None:
         raise TrackreplayError(f"--interpolate {args.interpolate} and --smooth exclude each other: the smoother fills the "
                                "gaps of the export itself (up to --max-gap frames)")
@@ -119,6 +151,8 @@ def run(args: argparse.Namespace) -> int:
     if args.export:
         trajectory_format(args.export)  # before the replay, not after it
     request = request_from_args(args, args.rrd)
+    if connect is not None:  # --serve-web's own gRPC server
+        request = dataclasses.replace(request, connect=connect)
     if args.summary:  # the summary's sidecar holds per-frame digests (for `trackreplay diff`)
         request = dataclasses.replace(request, frame_digests=True)
     if args.export and args.smooth:  # the smoother observes the trackers' raw measurements
@@ -129,10 +163,8 @@ def run(args: argparse.Namespace) -> int:
 
         write_trajectory(smooth_and_report(result.trajectory, args.log, args.max_gap, result.observations,
                                            {result.tracker: result.config}), args.export)
-    elif args.export:
-        method = args.interpolate or "linear"
-        table = result.trajectory if method == "none" else fill_gaps(result.trajectory, method, args.max_gap)
-        write_trajectory(table, args.export)
+    elif args.export:  # a spilled trajectory is filled and written a piece at a time (docs/memory.md)
+        export_trajectory(result.table, args.export, args.interpolate or "linear", args.max_gap)
     if args.export and result.extra_rows is not None:  # groups: the second table beside it, TRAJ.groups.parquet
         from trackreplay.replay.core.group_table import group_table, write_group_table
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from trackreplay.replay.cli.commands.record import check_output_folder
@@ -33,6 +35,8 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                         "colorpf-illumination|background|approach: walkers before a fixed camera (colour PF, Tables 1-3)")
     p.add_argument("out", type=Path, help="output .mcap")
     p.add_argument("--seed", type=non_negative_int, default=0, help="seed of the procedural scene (default 0)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress bar (there is none either when stderr is not a terminal)")
     flow = p.add_argument_group("flow-sim scenes")
     flow.add_argument("--background", default=None, choices=("texture", *PHOTOS),
                       help="procedural texture (default) or a photo bundled with scikit-image (the `scenes` extra)")
@@ -54,6 +58,27 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                       help="log the encoders without noise or quantisation (geometry checks)")
     p.set_defaults(func=run)
     return p
+
+
+def _shows_progress(args: argparse.Namespace) -> bool:
+    return not args.quiet and sys.stderr.isatty()
+
+
+@contextmanager
+def progress_bar(desc: str, enabled: bool) -> Iterator[Callable[[int, int], None] | None]:
+    """A frame counter on stderr (tqdm) fed by a scene writer's ``progress(done, total)``; None when
+    not ``enabled``. Only the bar reads the clock: what is written does not depend on it."""
+    if not enabled:
+        yield None
+        return
+    from tqdm import tqdm
+
+    with tqdm(unit="frame", desc=desc, leave=False, file=sys.stderr) as bar:
+        def progress(done: int, total: int) -> None:
+            bar.total = total
+            bar.update(done - bar.n)
+
+        yield progress
 
 
 def _reject(args: argparse.Namespace, options: tuple[tuple[str, str], ...], scene: str) -> None:
@@ -102,22 +127,8 @@ def _run_golf(args: argparse.Namespace) -> int:
         encoder_noise=not args.exact_encoders,
     )
     cfg.validate()
-    bar = None
-    if sys.stderr.isatty():
-        from tqdm import tqdm
-
-        bar = tqdm(unit="frame", desc=GOLF_SCENE, leave=False)
-
-    def progress(done: int, total: int) -> None:
-        if bar is not None:
-            bar.total = total
-            bar.update(done - bar.n)
-
-    try:
+    with progress_bar(GOLF_SCENE, _shows_progress(args)) as progress:
         summary = write_golf_teeshot(args.out, cfg, progress)
-    finally:
-        if bar is not None:
-            bar.close()
     print(f"wrote {args.out}: {GOLF_SCENE}, {summary.describe()}", file=sys.stderr)
     return 0
 
@@ -130,7 +141,8 @@ def _run_colorpf(args: argparse.Namespace) -> int:
         cfg.validate()
     except ValueError as err:
         raise TrackreplayError(str(err)) from None
-    summary = write_colorpf_scene(args.out, cfg)
+    with progress_bar(args.scene, _shows_progress(args)) as progress:
+        summary = write_colorpf_scene(args.out, cfg, progress)
     print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
     return 0
 
@@ -146,6 +158,7 @@ def _run_groups(args: argparse.Namespace) -> int:
         cfg.validate()
     except ValueError as err:  # before anything is written
         raise TrackreplayError(f"synth {args.scene}: {err}") from None
-    summary = write_group_scene(args.out, cfg)
+    with progress_bar(args.scene, _shows_progress(args)) as progress:  # ~0.2 s a stereo frame
+        summary = write_group_scene(args.out, cfg, progress)
     print(f"wrote {args.out}: {args.scene}, {summary.describe()}", file=sys.stderr)
     return 0

@@ -79,3 +79,18 @@ def test_a_cut_log_says_how_it_was_made(tmp_path: Path) -> None:
     with open(out, "rb") as fh:
         records = [m.metadata for m in make_reader(fh).iter_metadata() if m.name == "trackreplay.provenance"]
     assert records[-1]["source.log"].startswith("flow-sim1-24f.mcap sha256:") and "end_ns" in records[-1]
+
+
+def test_filter_takes_globs_regex_and_exclusions(tmp_path: Path, capsys) -> None:
+    src = GOLDEN / "golf-teeshot-640x360.mcap"
+    present = set(LogReader(src).topics())
+    out = tmp_path / "a.mcap"
+    assert main(["filter", str(src), str(out), "--topic", "ptz/*"]) == 0
+    assert set(LogReader(out).topics()) == {t for t in present if t.startswith("/ptz/")} != set()
+    out = tmp_path / "b.mcap"
+    assert main(["filter", str(src), str(out), "--exclude", "re:/(camera|ptz)/.*"]) == 0
+    assert set(LogReader(out).topics()) == {t for t in present if not t.startswith(("/camera/", "/ptz/"))}
+    assert main(["filter", str(src), str(tmp_path / "c.mcap"), "--topic", "lidar/*"]) == 2
+    err = capsys.readouterr().err
+    assert "has no topic matching 'lidar/*'; topics present: " in err and err.count("\n") == 1
+    assert not (tmp_path / "c.mcap").exists()

@@ -79,10 +79,10 @@ def test_truncated_log(tmp_path):
     path = write_log(tmp_path / "t.mcap", frames=[i * 40 * MS for i in range(40)])
     cut = tmp_path / "cut.mcap"
     cut.write_bytes(path.read_bytes()[: path.stat().st_size // 2])
-    with pytest.raises(TruncatedLogError, match=r"cut\.mcap is truncated .*trackreplay recover .*cut\.mcap OUT"):
+    with pytest.raises(TruncatedLogError, match=r"cut\.mcap is truncated: .*it ends early .*trackreplay recover .*cut\.mcap OUT"):
         log_info(cut)
     info = log_info(cut, partial_ok=True)
-    assert info["truncated"] and info["error"] and 0 < info["messages"] < 40
+    assert info["truncated"] and not info["complete"] and info["error"] and 0 < info["messages"] < 40
 
 
 def test_not_a_log(tmp_path):
@@ -129,13 +129,20 @@ def test_info_names_damaged_stretches_and_counts_the_rest(flow_sim1, tmp_path, c
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(bytes(data))
     info = log_info(bad, partial_ok=True)
-    assert info["truncated"] and len(info["damaged"]) == 1
-    assert info["damaged"][0]["start_byte"] == first.chunk_start_offset
+    assert not info["truncated"] and not info["complete"] and len(info["damaged"]) == 1
+    assert info["damaged"][0]["start_byte"] == first.chunk_start_offset and info["damaged"][0]["chunks"] == [1]
     intact = log_info(flow_sim1)
-    assert 0 < info["messages"] < intact["messages"]
+    assert 0 < info["messages"] < intact["messages"] == info["messages_expected"]
     assert main(["info", str(bad)]) == 3
-    out = capsys.readouterr().out
+    captured = capsys.readouterr()
+    out, err = captured.out, captured.err
     assert f"bytes {first.chunk_start_offset}-" in out and "DAMAGED: 1 unreadable stretch" in out
+    # worded by what is true: one chunk unreadable, the end intact; not "TRUNCATED", not "no valid MCAP end"
+    assert "TRUNCATED" not in out and "no valid MCAP end" not in err
+    n = len(summary.chunk_indexes)
+    assert (f"bad.mcap is damaged: chunk 1 of {n} at bytes {first.chunk_start_offset}-" in err
+            and f"the log's end is intact; {info['messages']} of {intact['messages']} messages readable" in err)
+    assert err.count("\n") == 1 and "trackreplay recover" in err
 
 
 def test_a_bag_folder_is_read_through_its_one_mcap(tmp_path, capsys) -> None:

@@ -91,8 +91,9 @@ def test_shift_image_moves_content_by_whole_pixels():
 def test_a_panning_camera_does_not_pull_the_box_off_the_walker():
     on = _errors(ColorPfConfig(), pan=1.0)
     off = _errors(ColorPfConfig(camera=CameraConfig(compensate=False)), pan=1.0)
-    # once the early background exists (frame 30): on the walker, from the median of the marked view
-    assert max(on[35:]) < 3.0 and np.mean(on[35:]) < 1.5, on
+    # once the early background exists (frame 30): on the walker, from the median of the marked view (with
+    # N = 100, issue 31, the region places the 12x36 walker 2.0 px off on every frame from 35; 0.5 px at N = 40)
+    assert max(on[35:]) < 3.0 and np.mean(on[35:]) < 2.5, on
     assert np.mean(off[35:]) > 4.0, off  # without: the smeared median's edges pull the box about
 
 

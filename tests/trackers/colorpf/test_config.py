@@ -22,11 +22,14 @@ def test_paper_overrides_change_only_the_default_departures():
     assert paper.support.lost_unsupported == 0 and ours.support.lost_unsupported > 0
     assert paper.frame_rate is None and ours.frame_rate == 30.0  # per frame, whatever the rate
     assert (paper.reacquire_frames, paper.min_box_pixels) == (1, 0) and ours.reacquire_frames > 1 and ours.min_box_pixels > 0
+    assert (paper.n_particles, paper.calibrate, paper.likelihood.grey) == (40, False, "hsv")  # issue 31's defaults off
+    assert ours.n_particles > 40 and ours.calibrate and ours.likelihood.grey == "gradient" and not ours.camera.scale_size
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
                                neighbour_check=True, refine=ours.refine, hold=ours.hold, camera=ours.camera,
                                frame_rate=ours.frame_rate, reacquire_frames=ours.reacquire_frames,
-                               min_box_pixels=ours.min_box_pixels, support=ours.support) == ours
+                               min_box_pixels=ours.min_box_pixels, support=ours.support,
+                               n_particles=ours.n_particles, calibrate=ours.calibrate) == ours
     assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 

@@ -58,7 +58,8 @@ def test_a_larger_mover_passing_behind_the_target_does_not_carry_the_box_away():
 
 
 def _tracker(enabled: bool = True, **hold) -> ColorPfTracker:
-    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(enabled=enabled, **hold)), np.random.default_rng(0))
+    tracker = ColorPfTracker(ColorPfConfig(hold=HoldConfig(enabled=enabled, **hold), n_particles=40),
+                             np.random.default_rng(0))  # the 40-particle cloud set below
     tracker.reference = SimpleNamespace(p_detect=216, p_square=432)  # the mark's foreground share: 0.5
     rng = np.random.default_rng(1)
     tracker.pf.particles = np.column_stack([rng.normal(100.0, 2.0, 40), rng.normal(90.0, 2.0, 40),

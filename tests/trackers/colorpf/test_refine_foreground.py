@@ -67,7 +67,7 @@ def test_the_layout_places_the_box_as_the_mark_was_on_its_foreground():
 
 
 def _tracker(has_plane: bool):
-    tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
+    tracker = ColorPfTracker(ColorPfConfig(n_particles=40), np.random.default_rng(0))  # the cloud set below
     tracker.reference = SimpleNamespace(p_detect=432, p_square=720)  # mark share 0.6
     tracker.layout = IDENTITY
     tracker.size = WeakPerspectiveSize(0.2, 432.0, 10.0 if has_plane else float("nan"))
@@ -176,3 +176,23 @@ def test_a_region_keeps_no_lost_track_on_another_walker():
     assert "lost" in after[:bound + 1]
     first = after.index("lost")
     assert set(after[first:]) == {"lost"}, after  # lost, and not taken back onto the other walker
+
+
+def test_the_region_grows_the_box_by_at_most_max_growth_per_side():
+    """Issue 31 (refine.max_growth): on otb_car4 a region of moving road grew the placed box 2.6x per side."""
+    import dataclasses
+
+    import pytest
+
+    image, background = _scene()
+    image[74:122, 100:112] = 20  # the region is 12 x 48: its area 1.33x the box's
+    areas = {}
+    for growth in (None, 1.1):
+        tracker = _tracker(False)  # S' = 432 (12 x 36), the last measured box's area too
+        tracker.config = dataclasses.replace(tracker.config, refine=dataclasses.replace(
+            tracker.config.refine, max_growth=growth, size_rate=1.0))
+        tracker._vouched_area = 12.0 * 36.0
+        _, placed = tracker._refine_foreground(image, background, 1.0, tracker.pf.estimate())
+        assert placed
+        areas[growth] = tracker.size.area0
+    assert areas[None] > 1.3 * 432.0 and areas[1.1] == pytest.approx(1.1 ** 2 * 432.0)

@@ -33,7 +33,8 @@ def _rows(support: SupportConfig, inflate_at: int | None = None) -> list:
     larger per side (as a measured camera zoom or the aspect stage would change them, with nothing seeing
     the target)."""
     mark = InitRegion(0, 0, 40 + SIDE / 2 - 0.5, 56 + SIDE / 2 - 0.5, SIDE, SIDE, "target")
-    tracker = ColorPfTracker(ColorPfConfig(support=support), np.random.default_rng(0))
+    # the colour's confidence and how it falls (calibrate would report a probability instead)
+    tracker = ColorPfTracker(ColorPfConfig(support=support, calibrate=False), np.random.default_rng(0))
     rows = []
     for i, image in enumerate(_small_target()):
         if i == inflate_at:

@@ -16,7 +16,7 @@ from trackreplay.replay.core.engine import ReplayRequest, replay
 from trackreplay.replay.log.groundtruth import read_groundtruth
 from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas.records import InitRegion
-from trackreplay.trackers.colorpf.config import ColorPfConfig, ReferenceConfig
+from trackreplay.trackers.colorpf.config import ColorPfConfig, LikelihoodConfig, ReferenceConfig
 from trackreplay.trackers.colorpf.tracker import ColorPfTracker, start_mark
 from trackreplay.trackers.frame import Frame
 
@@ -69,8 +69,8 @@ def test_size_estimation_beats_noise_on_the_approach(scene_log):
 def test_hs_is_steadier_than_hsv_under_illumination(scene_log):
     """Table 1's direction: the V histogram suffers from the brightness steps."""
     log = scene_log("colorpf-illumination")
-    _, _, r_hs = errors(log)
-    _, _, r_hsv = errors(log, {"likelihood": {"histogram": "hsv"}})
+    _, _, r_hs = errors(log, {"calibrate": False})  # the colour's match, not the calibrated probability
+    _, _, r_hsv = errors(log, {"likelihood": {"histogram": "hsv"}, "calibrate": False})
     # (x, y errors do not move the paper's way on this scene: see docs/colorpf.md)
     sim = lambda r: r.trajectory["confidence"].drop_nulls().to_numpy()[-10:].mean()  # noqa: E731
     assert sim(r_hs) > sim(r_hsv)  # the H-S match survives the darkest steps better
@@ -105,8 +105,8 @@ def test_fallback_notice_without_background_and_the_chosen_mark():
 def test_a_grey_sequence_is_said_and_tracked_on_brightness():
     """A review ran an OTB sequence saved grey: every H-S histogram was the same single bin, every box
     scored S = 1, and 93 rows were `measured` at confidence 1 up to 140 px off the walker (AUC 0.04).
-    A grey marked frame now switches the histogram to Perez et al.'s (V for uncoloured pixels) and says so;
-    a colour frame keeps H-S."""
+    A grey marked frame now switches the histogram to the grey-level and gradient-direction one (issue 31;
+    likelihood.grey = "hsv": Perez et al.'s, V for uncoloured pixels) and says so; a colour frame keeps H-S."""
     mark = InitRegion(0, 0, 35.5, 29.5, 12, 20, "target")
     grey = []
     for f in _frames(6, [mark]):
@@ -114,8 +114,12 @@ def test_a_grey_sequence_is_said_and_tracked_on_brightness():
         grey.append(dataclasses.replace(f, image=np.repeat(g, 3, axis=2)))
     tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
     notices = [(tracker.step(f), tracker.intermediates.notice)[1] for f in grey]
-    assert "no colour" in notices[0] and "likelihood.histogram = \"hsv\"" in notices[0]
-    assert tracker.model.config.histogram == "hsv" and tracker.intermediates.reference.shape == (10 * 10 + 10,)
+    assert "no colour" in notices[0] and "likelihood.histogram = \"gradient\"" in notices[0]
+    assert tracker.model.config.histogram == "gradient" and tracker.intermediates.reference.shape == (10 + 8,)
+    brightness = ColorPfTracker(ColorPfConfig(likelihood=LikelihoodConfig(grey="hsv")), np.random.default_rng(0))
+    notices = [(brightness.step(f), brightness.intermediates.notice)[1] for f in grey]
+    assert "likelihood.histogram = \"hsv\"" in notices[0]
+    assert brightness.model.config.histogram == "hsv" and brightness.intermediates.reference.shape == (10 * 10 + 10,)
     colour = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
     colour.step(_frames(1, [mark])[0])
     assert colour.model.config.histogram == "hs" and "no colour" not in colour.intermediates.notice
@@ -171,7 +175,7 @@ def test_confidence_falls_back_to_the_mark_alone_when_the_background_scores_as_w
     frames, _ = _scene_with_background()
     told = []
     for separation in (0.05, 1.0):  # 1.0: no background can be that far below the mark
-        tracker = ColorPfTracker(ColorPfConfig(min_separation=separation), np.random.default_rng(0))
+        tracker = ColorPfTracker(ColorPfConfig(min_separation=separation, calibrate=False), np.random.default_rng(0))
         notices, states = [], []
         for f in frames:
             states += tracker.step(f)
@@ -258,7 +262,7 @@ def test_adaptive_reference_only_with_a_background_built_reference(scene_log):
     assert tracker.adapted.sum() == pytest.approx(1.0)
 
 
-def test_a_grey_picture_with_a_coloured_logo_is_still_tracked_on_brightness():
+def test_a_grey_picture_with_a_coloured_logo_is_still_tracked_as_grey():
     """A review: a grey clip with a red channel logo (1 % of the frame) kept the H-S histograms (the
     whole frame counted as coloured), and rows were `measured` at confidence 1 up to 233 px off.
     What counts is the colour around the marked box (3x it), where the particles' boxes will be."""
@@ -270,7 +274,7 @@ def test_a_grey_picture_with_a_coloured_logo_is_still_tracked_on_brightness():
         frames.append(dataclasses.replace(f, image=g))
     tracker = ColorPfTracker(ColorPfConfig(), np.random.default_rng(0))
     notices = [(tracker.step(f), tracker.intermediates.notice)[1] for f in frames]
-    assert tracker.model.config.histogram == "hsv" and "no colour" in notices[0]
+    assert tracker.model.config.histogram == "gradient" and "no colour" in notices[0]
 
 
 def test_a_match_the_background_scores_as_well_is_not_measured():
