@@ -7,13 +7,22 @@ every frame, the target marked on frame 0), written with the recorder's LogWrite
 - ``replay_summary``: `trackreplay replay LOG --tracker flow --summary S.json` (trajectory, digest and
   per-frame digests go to temporary Parquet row groups past a bound; the sidecar is copied row group by
   row group)
-- ``replay_export``: the same with `--export T.parquet` (gap filling reads the whole table back: core/export.py)
+- ``replay_export``: the same with `--export T.parquet` (a spilled trajectory is gap-filled and written a
+  piece at a time: core/export.py ``export_trajectory``)
+- ``replay_export_whole``: before that (the reference, through the API): the replay, then the whole table
+  read back, gap-filled (``fill_gaps``) and written
 - ``eval``: `trackreplay eval T.parquet LOG --json M.json`
 
 Goal: from 1k to 200k frames the peak RSS grows by at most 50 MB; eval linear in time.
 
-Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000]
-Writes benchmarks/results/long_log.json and prints a table.
+``--export-only``: the export step alone, without replaying (minutes instead of hours on a loaded
+machine): the replay's spill file of this scene's flow track (one row a frame, ~3 % lost, as the tracker
+reports it) is made directly, then each fresh process loads what a replay has loaded (the engine, pyarrow,
+OpenCV) and exports it, a piece at a time (``export_trajectory``, ``--interpolate linear``) or the whole table
+(``fill_gaps``, as before); both outputs compared.
+
+Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only]
+Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json) and prints a table.
 """
 
 from __future__ import annotations
@@ -47,6 +56,18 @@ from trackreplay.replay.cli.main import main
 started = time.perf_counter()
 code = main({argv!r})
 print(code, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.perf_counter() - started)
+"""
+
+
+WHOLE = """
+import resource, sys, time
+sys.path.insert(0, {root!r})
+from trackreplay.replay.core.engine import ReplayRequest, replay
+from trackreplay.replay.core.export import fill_gaps, write_trajectory
+started = time.perf_counter()
+result = replay(ReplayRequest(log={log!r}, tracker="flow"))
+write_trajectory(fill_gaps(result.trajectory, "linear", 15), {out!r})
+print(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.perf_counter() - started)
 """
 
 
@@ -90,6 +111,11 @@ def run_size(tmp: Path, frames: int) -> dict[str, object]:
     code, rss_replay, s_replay = measure(CLI.format(root=root, argv=replay))
     digest = json.loads(summary.read_text())["digest"]
     code_export, rss_export, s_export = measure(CLI.format(root=root, argv=[*replay, "--export", str(traj)]))
+    whole = tmp / f"w-{frames}.parquet"
+    code_whole, rss_whole, s_whole = measure(WHOLE.format(root=root, log=str(log), out=str(whole)))
+    import polars as pl
+
+    same_rows = pl.read_parquet(whole).equals(pl.read_parquet(traj), null_equal=True)
     code_eval, rss_eval, s_eval = measure(CLI.format(root=root, argv=["eval", str(traj), str(log), "--json", str(metrics)]))
     return {
         "frames": frames, "log_bytes": log.stat().st_size, "write_s": round(written, 2),
@@ -97,17 +123,87 @@ def run_size(tmp: Path, frames: int) -> dict[str, object]:
                            "us_per_frame": round(1e6 * s_replay / frames, 1)},
         "replay_export": {"exit": int(code_export), "peak_rss_kib": rss_export, "seconds": round(s_export, 2),
                           "same_digest": json.loads(summary.read_text())["digest"] == digest},
+        "replay_export_whole": {"exit": int(code_whole), "peak_rss_kib": rss_whole, "seconds": round(s_whole, 2),
+                                "same_rows_as_replay_export": same_rows},
         "eval": {"exit": int(code_eval), "peak_rss_kib": rss_eval, "seconds": round(s_eval, 2),
                  "us_per_frame": round(1e6 * s_eval / frames, 1)},
     }
 
 
+EXPORT = """
+import resource, sys, time
+sys.path.insert(0, {root!r})
+import cv2, pyarrow.parquet, trackreplay.replay.core.engine
+from trackreplay.replay.core.export import export_trajectory, fill_gaps, write_trajectory
+from trackreplay.replay.core.trajectory import SpilledTrajectory
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+started = time.perf_counter()
+if {whole!r}:
+    write_trajectory(fill_gaps(SpilledTrajectory({spill!r}).frame(), "linear", 15), {out!r})
+else:
+    export_trajectory(SpilledTrajectory({spill!r}), {out!r}, "linear", 15)
+print(before, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.perf_counter() - started)
+"""
+
+
+def write_spill(path: Path, frames: int) -> None:
+    """A flow replay's spill file of this scene: row groups of 2048 rows in replay order."""
+    import polars as pl
+
+    from trackreplay.replay.core.trajectory import SCHEMA
+
+    rng = np.random.default_rng(0)
+    t = np.arange(frames)
+    c = (SIZE - 1) / 2
+    lost = rng.random(frames) < 0.03
+    x = np.where(lost, np.nan, c + 6 * np.cos(2 * np.pi * t / PERIOD) + rng.normal(0, 0.2, frames))
+    y = np.where(lost, np.nan, c + 6 * np.sin(2 * np.pi * t / PERIOD) + rng.normal(0, 0.2, frames))
+    nan = np.full(frames, np.nan)
+    df = pl.DataFrame({"tracker": "flow", "track_id": 1, "frame": t, "t_ns": t * 1_000_000_000 // 30, "x": x, "y": y,
+                       "w": np.where(lost, np.nan, 5.0), "h": np.where(lost, np.nan, 5.0), "vx": np.where(lost, np.nan, 0.1),
+                       "vy": np.where(lost, np.nan, 0.1), "X": nan, "Y": nan, "Z": nan, "dx": nan, "dy": nan, "dz": nan,
+                       "status": np.where(lost, "lost", "measured"), "confidence": np.where(lost, np.nan, 0.9)})
+    df = df.cast(SCHEMA).with_columns(pl.col(c).fill_nan(None) for c, k in SCHEMA.items() if k == pl.Float64)
+    df.write_parquet(path, row_group_size=2048)
+
+
+def export_only(sizes: list[int], out: Path) -> int:
+    import polars as pl
+
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            spill = Path(tmp) / f"spill-{n}.parquet"
+            write_spill(spill, n)
+            entry: dict = {"frames": n}
+            for name, whole in (("pieces", False), ("whole_table", True)):
+                target = Path(tmp) / f"{name}-{n}.parquet"
+                code = EXPORT.format(root=str(ROOT), whole=whole, spill=str(spill), out=str(target))
+                res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
+                entry[name] = {"base_rss_kib": int(res[-3]), "peak_rss_kib": int(res[-2]),
+                               "export_mb": round((int(res[-2]) - int(res[-3])) / 1024, 1), "seconds": round(float(res[-1]), 2)}
+            entry["same_rows"] = pl.read_parquet(Path(tmp) / f"pieces-{n}.parquet").equals(
+                pl.read_parquet(Path(tmp) / f"whole_table-{n}.parquet"), null_equal=True)
+            runs.append(entry)
+            print(json.dumps(entry), flush=True)
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("pieces", "whole_table")}
+    results = {"machine": describe(), "scene": "the flow track of the long-log scene, one row a frame, 3 % lost",
+               "runs": runs, "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"export peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "long_log.json")
+    ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--export-only", action="store_true", help="the export step alone, on a spill file made directly")
     args = ap.parse_args()
     sizes = [int(x) for x in args.frames.split(",")]
+    if args.export_only:
+        return export_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_export.json")
+    args.out = args.out or ROOT / "benchmarks" / "results" / "long_log.json"
     load_before = [round(x, 2) for x in __import__("os").getloadavg()]
     with tempfile.TemporaryDirectory() as tmp:
         runs = []
@@ -116,7 +212,7 @@ def main() -> int:
             print(json.dumps(runs[-1]), flush=True)
     first, last = runs[0], runs[-1]
     growth = {k: round((last[k]["peak_rss_kib"] - first[k]["peak_rss_kib"]) / 1024, 1)
-              for k in ("replay_summary", "replay_export", "eval")}
+              for k in ("replay_summary", "replay_export", "replay_export_whole", "eval")}
     results = {
         "machine": describe(),
         "load_average_before": load_before,
@@ -129,7 +225,8 @@ def main() -> int:
     args.out.write_text(json.dumps(results, indent=2) + "\n")
     for r in runs:
         print(f"{r['frames']:>7} frames: replay --summary {r['replay_summary']['peak_rss_kib'] / 1024:.0f} MB "
-              f"{r['replay_summary']['seconds']:.1f} s; with --export {r['replay_export']['peak_rss_kib'] / 1024:.0f} MB; "
+              f"{r['replay_summary']['seconds']:.1f} s; with --export {r['replay_export']['peak_rss_kib'] / 1024:.0f} MB "
+              f"(whole-table fill {r['replay_export_whole']['peak_rss_kib'] / 1024:.0f} MB); "
               f"eval {r['eval']['peak_rss_kib'] / 1024:.0f} MB {r['eval']['seconds']:.1f} s")
     print(f"peak RSS growth {first['frames']} -> {last['frames']} frames (MB): {growth} (target <= 50)")
     return 0

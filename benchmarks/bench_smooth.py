@@ -9,7 +9,14 @@ it replaced (one track, one grid point at a time), kept below as the reference; 
 short table (``--old-rows``, it costs 10-100 ms a row) and its outputs are compared with the new
 path's there. The new path runs on 10k and 60k rows, each timed (best of ``--repeats``) and its
 peak traced allocation measured in a separate run (tracemalloc).
-Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2]
+
+Layouts (issue 33, the whole ``smooth_trajectory``: kernels and the assembly of the output table):
+``--layout-rows`` rows as one long track and as many short tracks (60 rows each), timed for the tree's
+module and, with ``--before REV``, for ``replay/analysis/smooth.py`` as it was at git revision REV
+(``smooth.py`` and ``rts.py`` loaded from ``git show``; same inputs; outputs compared: they must be
+identical).
+
+Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2] [--before HEAD] [--layout-rows 60000]
 Writes benchmarks/results/smooth.json.
 """
 
@@ -258,17 +265,78 @@ def bench_model(tracker: str, old_rows: int, sizes: tuple[int, ...], repeats: in
     return result
 
 
+def module_at(rev: str, name: str):
+    """``replay/analysis/NAME.py`` at git revision ``rev``, imported as ``NAME_before``."""
+    import importlib.util
+    import subprocess
+
+    source = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:replay/analysis/{name}.py"], check=True,
+                            capture_output=True, text=True).stdout
+    path = Path(os.environ.get("TMPDIR", "/tmp")) / f"trackreplay_{name}_{os.getpid()}.py"
+    path.write_text(source)
+    try:
+        spec = importlib.util.spec_from_file_location(f"{name}_before", path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[f"{name}_before"] = module
+        spec.loader.exec_module(module)
+    finally:
+        path.unlink()
+    return module
+
+
+def smooth_at(rev: str):
+    """The smoother as it was at ``rev``: its ``smooth.py`` with that revision's ``rts.py`` kernels."""
+    module = module_at(rev, "smooth")
+    module.rts = module_at(rev, "rts")
+    return module
+
+
+def bench_layouts(rows: int, repeats: int, before) -> dict:
+    """Rows per second of the whole ``smooth_trajectory`` on one long track and on many short ones."""
+    out: dict = {}
+    for tracker in MODELS:
+        for layout, tracks in (("one_long_track", 1), ("short_tracks_60_rows", max(1, rows // 60))):
+            table = synthetic_trajectory(rows, tracker, tracks=tracks, seed=2)
+            entry: dict = {"rows": table.height, "tracks": tracks}
+            for name, module in (("after", smooth), ("before", before)):
+                if module is None:
+                    continue
+                module.smooth_trajectory(synthetic_trajectory(300, tracker, tracks=2))  # imports, registry
+                wall, cpu = math.inf, math.inf
+                for _ in range(repeats):
+                    t0, c0 = time.perf_counter(), time.process_time()
+                    result = module.smooth_trajectory(table)
+                    wall, cpu = min(wall, time.perf_counter() - t0), min(cpu, time.process_time() - c0)
+                entry[name] = {"seconds": wall, "cpu_seconds": cpu, "rows_per_s": table.height / wall,
+                               "rows_per_cpu_s": table.height / cpu}
+                entry.setdefault("_results", []).append(result)
+            if before is not None:
+                (a, fa), (b, fb) = entry.pop("_results")
+                entry["identical"] = a.equals(b, null_equal=True) and [vars(f) for f in fa] == [vars(f) for f in fb]
+            entry.pop("_results", None)
+            out[f"{tracker}/{layout}"] = entry
+            print(tracker, layout, {k: round(v["rows_per_cpu_s"]) for k, v in entry.items() if isinstance(v, dict)},
+                  "identical" if entry.get("identical") else "", flush=True)
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old-rows", type=int, default=600)
     ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 60_000])
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
+    ap.add_argument("--before", help="git revision whose replay/analysis/smooth.py to time beside the tree's")
+    ap.add_argument("--layout-rows", type=int, default=60_000)
+    ap.add_argument("--skip-models", action="store_true", help="only the layouts")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "smooth.json")
     args = ap.parse_args()
     load_before = os.getloadavg()
-    results = {m: bench_model(m, args.old_rows, tuple(args.sizes), args.repeats) for m in args.models}
+    layouts = bench_layouts(args.layout_rows, args.repeats, smooth_at(args.before) if args.before else None)
+    results = {} if args.skip_models else {m: bench_model(m, args.old_rows, tuple(args.sizes), args.repeats)
+                                           for m in args.models}
     out = {"machine": describe(), "load_average_before": load_before, "load_average_after": os.getloadavg(),
+           "layouts": {"before_revision": args.before, "rows": args.layout_rows, **layouts},
            "tracks_per_table": 6, "models": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2))

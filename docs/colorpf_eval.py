@@ -7,7 +7,7 @@ Metric: the paper's mean absolute error of x, y, w, h (px) over the visible fram
 a position, with coverage (share of those frames) beside it. Seeds 0-2, 96 walking frames, 720x480.
 Beside it, OTB success AUC, precision at 20 px (a frame without a position counts as IoU 0 and as a
 miss) and mean centre error over the frames with a position. OpenCV's CSRT runs on the same frames
-from the same marked box, in its own venv (benchmarks/csrt_side.py; built on first use by
+from the same marked box, in its own venv (replay/runs/csrt_side.py; built on first use by
 benchmarks/bench_colorpf.py's ensure_venv). otb_crossing: the colour PF with tracker seeds 0-4.
 """
 
@@ -140,7 +140,7 @@ def csrt(py: Path, folder: Path, box: tuple[float, float, float, float], first_f
     top-left box ``box``; a trajectory table like the replay's. Centres as ``annotate`` makes them
     (left + w / 2), so CSRT's first box is exactly the colour PF's mark."""
     out = tmp / "csrt.json"
-    subprocess.run([str(py), str(HERE.parent / "benchmarks" / "csrt_side.py"), str(folder),
+    subprocess.run([str(py), str(HERE.parent / "replay" / "runs" / "csrt_side.py"), str(folder),
                     ",".join(str(v) for v in box), str(out)], check=True)
     boxes = json.loads(out.read_text())["boxes"]
     rows = [{"tracker": "csrt", "track_id": 1, "frame": first_frame + i, "x": b[0] + b[2] / 2 if b else None,

@@ -21,6 +21,7 @@ smoother: Rauch, Tung and Striebel, AIAA Journal 3(8), 1965.
 from __future__ import annotations
 
 import math
+from array import array
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,6 +119,8 @@ def filter_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
     (``a - a²/s`` written ``a r / s``: no cancellation; an unobserved frame has variance
     :data:`UNSEEN`). Returns ``-2 ×`` the log-likelihood without
     its ``2π`` terms (…, B) and, with ``keep``, the filtered ``(p, v, a, b, c)`` of every frame."""
+    if not keep:
+        return _filter_loglik(cols, Q, s2, sv2, prior), ()
     q3, q2, q = Q
     axes = cols.rv.shape[1]
     pv, cov = _prior(cols, s2, axes, prior)
@@ -163,6 +166,69 @@ def filter_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
             kept[0][k], kept[1][k] = pv, cov
     filtered = (kept[0][:, 0], kept[0][:, 1], kept[1][:, 0], kept[1][:, 1], kept[1][:, 2]) if keep else ()
     return quad.sum(axis=-2) + logs.sum(axis=-2) * (cols.zp.shape[1] // axes), filtered
+
+
+BLOCK = 256  # frames whose likelihood terms are summed at once (at most)
+BLOCK_ELEMENTS = 1 << 16  # ... and at most this many values of a state column (grid points × axes × tracks) a buffer
+
+
+def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior) -> np.ndarray:
+    """:func:`filter_columns` without ``keep``: ``-2 ×`` the log-likelihood (without its ``2π`` terms).
+    The same operations in the same order, with fewer numpy calls a frame (the cost of a long track,
+    whose arrays are small): each frame's innovations and variances go to a buffer, and every
+    :data:`BLOCK` frames (fewer in a wide lane: :data:`BLOCK_ELEMENTS`) their terms ``y² / s`` and ``log s`` are computed at once and added to the
+    sums in frame order (a sum along the first axis adds row after row: the sums are those of adding
+    them frame by frame); the measurement variances of a block are scaled at once."""
+    q3, q2, q = Q
+    axes = cols.rv.shape[1]
+    pv, cov = _prior(cols, s2, axes, prior)
+    p, v, a, b, c = pv[0], pv[1], cov[0], cov[1], cov[2]  # views: updated in place
+    gains, gains_v, cb = cov[:2], cov[1:], cov[2:0:-1]  # (a, b), (b, c), (c, b)
+    bc_noise = np.stack(np.broadcast_arrays(q2, q))  # (Q_pv, Q_vv), added to (b, c) at once
+    quad, logs = np.zeros(p.shape), np.zeros(a.shape)
+    step = 2 if cols.velocity else 1  # terms per frame: the position's, then the velocity's
+    block = max(1, min(BLOCK, BLOCK_ELEMENTS // p.size))  # a wide lane already amortises numpy's calls
+    Y, W, S = np.empty((step * block, *p.shape)), np.empty((step * block, *a.shape)), np.empty((step * block, *a.shape))
+    K, Kb = np.empty(cov[:2].shape), np.empty(cov[:2].shape)
+    K_rev = K[::-1]
+    Ky = np.empty(np.broadcast_shapes(K.shape, (1, *p.shape)))
+    lead = (slice(None), *([None] * (a.ndim - 2)))  # the grid's axes, before the frames' (A, B)
+    n = cols.zp.shape[0]
+    for lo in range(0, n, block):
+        hi = min(n, lo + block)
+        rp = s2 * cols.rp[lo:hi][lead]
+        rv = sv2 * cols.rv[lo:hi][lead] if cols.velocity else None
+        for j in range(hi - lo):
+            p += v  # predict: a += b; t = b + c; a += t; a += q3; (b, c) = (t + q2, c + q)
+            a += b
+            np.add(b, c, out=b)
+            a += b
+            a += q3
+            gains_v += bc_noise
+            r = rp[j]  # position update: gains K = (a, b) / s
+            w = np.reciprocal(np.add(a, r, out=S[step * j]), out=W[step * j])
+            np.multiply(gains, w, out=K)
+            y = np.subtract(cols.zp[lo + j], p, out=Y[step * j])
+            pv += np.multiply(K, y, out=Ky)
+            cb -= np.multiply(K_rev, b, out=Kb)  # c -= K₁ b, b -= K₀ b (the old b in both)
+            np.multiply(K[0], r, out=a)
+            if rv is not None:
+                r = rv[j]  # velocity update: K = (b, c) / s
+                w = np.reciprocal(np.add(c, r, out=S[step * j + 1]), out=W[step * j + 1])
+                np.multiply(gains_v, w, out=K)
+                y = np.subtract(cols.zv[lo + j], v, out=Y[step * j + 1])
+                pv += np.multiply(K, y, out=Ky)
+                gains -= np.multiply(K, b, out=Kb)  # a -= K₀ b, b -= K₁ b
+                np.multiply(K[1], r, out=c)
+        m = step * (hi - lo)
+        counted = np.empty((m, *cols.counted_v.shape[1:]))
+        counted[::step] = cols.counted[lo:hi]
+        if cols.velocity:
+            counted[1::step] = cols.counted_v[lo:hi]
+            W[1:m:2] = counted[1::2][lead] * W[1:m:2]  # a velocity's term counts only where observed
+        quad = np.concatenate([quad[None], Y[:m] * Y[:m] * W[:m]]).sum(axis=0)  # 0 on the first observation
+        logs = np.concatenate([logs[None], np.log(S[:m]) * counted[lead]]).sum(axis=0)
+    return quad.sum(axis=-2) + logs.sum(axis=-2) * (cols.zp.shape[1] // axes)
 
 
 def _compose(first: tuple[np.ndarray, ...], then: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
@@ -222,7 +288,64 @@ def grid_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: n
 def smooth_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray,
                    prior: Prior = IMAGE_PRIOR) -> tuple[np.ndarray, ...]:
     """Filter and RTS at one noise per track (each (B,)): the smoothed ``(p, v)`` (N, D, B) and
-    ``(a, b, c)`` (N, A, B)."""
+    ``(a, b, c)`` (N, A, B). One track alone (a long one) is filtered in scalar floats
+    (:func:`filter_one`): the same arithmetic without numpy's cost per call on 1-element arrays."""
     noise = tuple(x[None] for x in Q)
-    _, kept = filter_columns(cols, noise, s2[None], sv2[None], True, prior)
+    if cols.zp.shape[-1] == 1 and cols.rv.shape[1] == 1:
+        kept = filter_one(cols, tuple(float(x[0]) for x in Q), float(s2[0]), float(sv2[0]), prior)
+    else:
+        kept = filter_columns(cols, noise, s2[None], sv2[None], True, prior)[1]
     return rts_columns(kept, noise, cols.last)
+
+
+def filter_one(cols: Columns, Q: tuple[float, float, float], s2: float, sv2: float,
+               prior: Prior = IMAGE_PRIOR) -> tuple[np.ndarray, ...]:
+    """:func:`filter_columns` with ``keep`` for a single track whose axes share one covariance
+    (``B = A = 1``), in Python floats: every operation is the one :func:`filter_columns` does, in
+    the same order (IEEE double either way), so the results are the same to the bit
+    (``tests/replay/analysis/test_rts.py``). Returns the filtered ``(p, v, a, b, c)``."""
+    q3, q2, q = Q
+    n, d = cols.zp.shape[0], cols.zp.shape[1]
+    p, v = cols.p0[:, 0].tolist(), [0.0] * d
+    a, b, c = s2 * float(cols.r0[0, 0]) + prior.position, 0.0, prior.velocity
+    means, covs = array("d"), array("d")  # 8 bytes a value, as numpy's
+    axes = range(d)
+    for lo in range(0, n, 4096):  # the observations as floats a block at a time
+        zp, zv = cols.zp[lo:lo + 4096, :, 0].tolist(), cols.zv[lo:lo + 4096, :, 0].tolist()
+        rp, rv = cols.rp[lo:lo + 4096, 0, 0].tolist(), cols.rv[lo:lo + 4096, 0, 0].tolist()
+        for k in range(len(zp)):
+            for i in axes:  # predict
+                p[i] += v[i]
+            t = b + c
+            a = a + b + t + q3
+            b = t + q2
+            c += q
+            r = s2 * rp[k]  # position update
+            w = 1.0 / (a + r)
+            k0, k1 = a * w, b * w
+            z = zp[k]
+            for i in axes:
+                y = z[i] - p[i]
+                p[i] += k0 * y
+                v[i] += k1 * y
+            c -= k1 * b
+            b -= k0 * b
+            a = k0 * r
+            if cols.velocity:
+                r = sv2 * rv[k]  # velocity update
+                w = 1.0 / (c + r)
+                k0, k1 = b * w, c * w
+                z = zv[k]
+                for i in axes:
+                    y = z[i] - v[i]
+                    p[i] += k0 * y
+                    v[i] += k1 * y
+                a -= k0 * b
+                b -= k1 * b
+                c = k1 * r
+            means.extend(p)
+            means.extend(v)
+            covs.extend((a, b, c))
+    m = np.frombuffer(means, dtype=np.float64).reshape(n, 2, d, 1)
+    C = np.frombuffer(covs, dtype=np.float64).reshape(n, 3, 1, 1)
+    return m[:, 0], m[:, 1], C[:, 0], C[:, 1], C[:, 2]

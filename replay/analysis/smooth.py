@@ -69,13 +69,13 @@ from typing import Any
 import numpy as np
 import polars as pl
 
-from trackreplay.replay.analysis import rts, rts_space
+from trackreplay.replay.analysis import rts, rts_space, segments
 from trackreplay.replay.core import registry
 from trackreplay.replay.core.observations import OBS_SCHEMA, observation_rows, observations_table  # noqa: F401 (re-exported)
-from trackreplay.replay.core.trajectory import COLUMNS, SCHEMA, interpolated_times
+from trackreplay.replay.core.trajectory import COLUMNS, SCHEMA
 from trackreplay.schemas.errors import TrackreplayError
 from trackreplay.trackers.geometry.ptz import PtzCamera
-from trackreplay.trackers.smoothing import DEFAULT_SMOOTHING, ImageSmoothing, SmoothingModel, SpaceSmoothing
+from trackreplay.trackers.smoothing import DEFAULT_SMOOTHING, SmoothingModel, SpaceSmoothing
 
 EXTRA_SCHEMA: dict[str, pl.DataType] = {
     "x_std": pl.Float64, "y_std": pl.Float64, "vx_std": pl.Float64, "vy_std": pl.Float64, "fill": pl.String,
@@ -217,48 +217,13 @@ def smooth_tracks(zs: list[np.ndarray], confidences: list[np.ndarray], cfg: Smoo
     return [(x, var, out, fit) for (x, var), out, fit in zip(smoothed, outliers, fits)]
 
 
-def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
-    runs, i, n = [], 0, missing.size
-    while i < n:
-        if missing[i]:
-            j = i
-            while j < n and missing[j]:
-                j += 1
-            runs.append((i, j))
-            i = j
-        else:
-            i += 1
-    return runs
-
-
-def _interp(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.ndarray:
-    ok = np.isfinite(values)
-    out = values.copy()
-    if ok.sum() >= 2:
-        out[where] = np.interp(frames[where], frames[ok], values[ok])
-    elif ok.sum() == 1:
-        out[where] = values[ok][0]
-    return out
-
-
-def _interp_rate(frames: np.ndarray, values: np.ndarray, where: np.ndarray) -> np.ndarray:
-    """The slope (per frame) of :func:`_interp`'s line at the ``where`` frames: the segment between the
-    known values around each (0 with a single known value; NaN with none)."""
-    ok = np.isfinite(values)
-    out = np.full(len(values), np.nan)
-    if ok.sum() == 1:
-        out[where] = 0.0
-    if ok.sum() < 2:
-        return out
-    fk, vk = frames[ok], values[ok]
-    i = np.clip(np.searchsorted(fk, frames[where]), 1, len(fk) - 1)
-    out[where] = (vk[i] - vk[i - 1]) / (fk[i] - fk[i - 1])
-    return out
+KEYS = ["tracker", "track_id", "frame"]
+_interp, _interp_rate = segments.interp, segments.interp_rate  # per track when given ``starts``
 
 
 @dataclass(frozen=True)
 class _Plan:
-    """Which frames of a track's span the smoother sets, and how (the image and 3-D models alike).
+    """Which frames of each track's span the smoother sets, and how (the image and 3-D models alike).
 
     Runs of frames without an observation (predicted, lost, absent, or rejected as an outlier) are
     filled by the smoother when at most max_gap long and bracketed by observations: the smoother
@@ -273,16 +238,14 @@ class _Plan:
     status: np.ndarray  # object (n,): the new status column
 
 
-def _plan(observed: np.ndarray, measured: np.ndarray, has_pos: np.ndarray, status: np.ndarray, max_gap: int) -> _Plan:
-    n = len(observed)
-    fill_gap = np.zeros(n, bool)
-    for a, b in _gap_runs(~observed):
-        if a > 0 and b < n and b - a <= max_gap:
-            fill_gap[a:b] = True
+def _plan(observed: np.ndarray, measured: np.ndarray, has_pos: np.ndarray, status: np.ndarray, starts: np.ndarray,
+          max_gap: int) -> _Plan:
+    """The plan of every track at once (``starts``: each track's first row, :mod:`.segments`)."""
+    fill_gap = segments.short_gaps(~observed, starts, max_gap)
     smoothed = observed | fill_gap
     keep = smoothed | has_pos
     filled = fill_gap & ~measured
-    fill = np.full(n, None, dtype=object)
+    fill = np.full(len(observed), None, dtype=object)
     fill[observed] = "rts"
     fill[fill_gap & measured] = "rts_outlier"
     fill[filled] = "rts_gap"
@@ -290,11 +253,39 @@ def _plan(observed: np.ndarray, measured: np.ndarray, has_pos: np.ndarray, statu
     return _Plan(smoothed, keep, filled, fill, new_status)
 
 
-def _span(track: pl.DataFrame, positioned: pl.DataFrame) -> tuple[int, int, np.ndarray, pl.DataFrame]:
-    """The track's positioned span ``lo .. hi``: its frames and its rows on every one (absent: nulls)."""
-    lo, hi = int(positioned["frame"].min()), int(positioned["frame"].max())
-    frames = np.arange(lo, hi + 1, dtype=np.int64)
-    return lo, hi, frames, pl.DataFrame({"frame": frames}).join(track, on="frame", how="left")
+@dataclass(frozen=True)
+class _Spans:
+    """A table's tracks split at their positioned span ``lo .. hi`` (all tracks at once, canonical
+    order, each row with its track's index ``_tid``)."""
+
+    full: pl.DataFrame  # each positioned track on every frame of its span (absent frames: nulls but the keys)
+    starts: np.ndarray  # (T + 1,) each track's first row in ``full``, and the end
+    outside: pl.DataFrame  # those tracks' rows before and after their span
+    bare: pl.DataFrame  # the tracks without a positioned row
+
+
+def _spans(table: pl.DataFrame, positioned: pl.Expr) -> _Spans:
+    t = table.with_columns(pl.struct("tracker", "track_id").rle_id().alias("_tid"))
+    span = (t.filter(positioned).group_by("_tid")
+            .agg(pl.col("frame").min().alias("_lo"), pl.col("frame").max().alias("_hi"),
+                 pl.col("tracker").first(), pl.col("track_id").first()).sort("_tid"))
+    t = t.join(span.select("_tid", "_lo", "_hi"), on="_tid", how="left", maintain_order="left")
+    bare = t.filter(pl.col("_lo").is_null()).drop("_lo", "_hi")
+    outside = t.filter(pl.col("_lo").is_not_null() & ((pl.col("frame") < pl.col("_lo")) | (pl.col("frame") > pl.col("_hi"))))
+    lo, hi = span["_lo"].to_numpy().astype(np.int64), span["_hi"].to_numpy().astype(np.int64)
+    length = hi - lo + 1
+    begin = np.concatenate([[0], np.cumsum(length)])[:-1]
+    which = np.repeat(np.arange(span.height), length)
+    grid = span.select(pl.col("_tid", "tracker", "track_id").gather(which)).with_columns(
+        pl.Series("frame", lo[which] - begin[which] + np.arange(len(which)), dtype=pl.Int64))
+    full = grid.join(t.drop("tracker", "track_id", "_lo", "_hi"), on=["_tid", "frame"], how="left", maintain_order="left")
+    return _Spans(full, segments.offsets(full["_tid"].to_numpy()), outside.drop("_lo", "_hi"), bare)
+
+
+def _rows(df: pl.DataFrame, mask: np.ndarray) -> tuple[pl.DataFrame, np.ndarray]:
+    """The rows of ``df`` (grouped by ``_tid``) under ``mask``, and their track offsets."""
+    part = df.filter(pl.Series(mask))
+    return part, segments.offsets(part["_tid"].to_numpy())
 
 
 def _assemble(full: pl.DataFrame, cols: dict[str, np.ndarray], confidence: np.ndarray, plan: _Plan) -> pl.DataFrame:
@@ -310,91 +301,110 @@ def _no_extra(df: pl.DataFrame) -> pl.DataFrame:
     return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items()))
 
 
-@dataclass(frozen=True)
-class _ImageTrack:
-    """An image track ready for the smoother: its positioned span ``lo .. hi`` and its observations."""
-
-    track: pl.DataFrame
-    tracker: str
-    track_id: int
-    lo: int
-    hi: int
-    frames: np.ndarray
-    full: pl.DataFrame  # the track's rows on every frame of the span (absent: nulls)
-    status: np.ndarray
-    conf: np.ndarray
-    has_pos: np.ndarray
-    z: np.ndarray  # (n, 4) = (x, y, vx, vy), NaN where not observed
-    measured: np.ndarray
+def _has_raw(full: pl.DataFrame, starts: np.ndarray, raw: pl.DataFrame | None, column: str) -> np.ndarray:
+    """Per track of ``full``, whether the replay kept a raw measurement ``column`` for it."""
+    if raw is None:
+        return np.zeros(len(starts) - 1, bool)
+    have = raw.group_by(["tracker", "track_id"]).agg(pl.col(column).is_not_null().any().alias("_raw"))
+    heads = full.select(pl.col("tracker", "track_id").gather(starts[:-1]))
+    return heads.join(have, on=["tracker", "track_id"], how="left", maintain_order="left")["_raw"].fill_null(False).to_numpy()
 
 
-def _image_track(model: ImageSmoothing, track: pl.DataFrame, frame_times: Mapping[int, int] | None,
-                 raw: pl.DataFrame | None) -> _ImageTrack | tuple[pl.DataFrame, None]:
-    """The track's span and observations, or its finished rows when there is nothing to smooth."""
-    head = track.row(0, named=True)
-    tracker, track_id = head["tracker"], head["track_id"]
-    positioned = track.filter(pl.col("x").is_not_null() & pl.col("y").is_not_null() & (pl.col("status") != "lost"))
-    if positioned.height == 0:
-        return _no_extra(track).select(SMOOTH_COLUMNS), None
-    lo, hi, frames, full = _span(track, positioned)
-    status = full["status"].fill_null("lost").to_numpy().astype(object)
-    x = full["x"].to_numpy().astype(float)
-    y = full["y"].to_numpy().astype(float)
-    conf = full["confidence"].to_numpy().astype(float)
-    has_pos = np.isfinite(x) & np.isfinite(y) & (status != "lost")
-    z, measured = _image_observations(model, full, frames, raw, has_pos & (status == "measured"))
-    if not np.isfinite(z[:, :2]).all(axis=1).any():  # only predictions: nothing to smooth; keep the rows as they are
-        return _finish(_no_extra(full), tracker, track_id, frame_times), None
-    return _ImageTrack(track, tracker, track_id, lo, hi, frames, full, status, conf, has_pos, z, measured)
+def _raw_rows(full: pl.DataFrame, raw: pl.DataFrame) -> pl.DataFrame:
+    """The raw measurements on ``full``'s rows (nulls where none)."""
+    return full.select(KEYS).join(raw, on=KEYS, how="left", maintain_order="left")
 
 
-def _image_result(model: ImageSmoothing, t: _ImageTrack, smoothed: tuple, cfg: SmoothConfig,
+def _smooth_image(table: pl.DataFrame, models: Mapping[str, SmoothingModel], cfg: SmoothConfig, raw: pl.DataFrame | None,
                   frame_times: Mapping[int, int] | None,
-                  cameras: Mapping[int, PtzCamera] | None) -> tuple[pl.DataFrame, TrackFit]:
-    """An image track's rows: ``x, y, vx, vy`` smoothed, gaps filled, the other columns interpolated."""
-    xs, var, outliers, (q, s, sv, ll) = smoothed
-    plan = _plan(t.measured & ~outliers, t.measured, t.has_pos, t.status, cfg.max_gap)
-    cols = _image_columns(t.full, t.frames, xs, var, plan, t.has_pos, cameras)
-    out = _assemble(t.full, cols, np.where(plan.filled, np.nan, t.conf), plan)
-    fit = TrackFit(t.tracker, int(t.track_id), q, s, sv, ll, int(t.measured.sum()), int(outliers.sum()),
-                   int(plan.filled.sum()), model.describe(q, s))
-    # Rows of the track outside its positioned span (lost before the first / after the last position).
-    outside = _no_extra(t.track.filter((pl.col("frame") < t.lo) | (pl.col("frame") > t.hi)))
-    out = pl.concat([_finish(out, t.tracker, t.track_id, frame_times), outside.select(SMOOTH_COLUMNS)])
-    return out.sort("frame"), fit
+                  cameras: Mapping[int, PtzCamera] | None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
+    """Every image track's rows and fit: all tracks' columns at once (:mod:`.segments`), the
+    smoother over all of them (:func:`smooth_tracks`)."""
+    sp = _spans(table, pl.col("x").is_not_null() & pl.col("y").is_not_null() & (pl.col("status") != "lost"))
+    parts = [_no_extra(sp.bare), _no_extra(sp.outside)]
+    full, starts = sp.full, sp.starts
+    status = full["status"].fill_null("lost").to_numpy().astype(object)
+    x, y = full["x"].to_numpy().astype(float), full["y"].to_numpy().astype(float)
+    has_pos = np.isfinite(x) & np.isfinite(y) & (status != "lost")
+    z, measured = _image_observations(models, full, starts, raw, has_pos & (status == "measured"))
+    rows = segments.per_row(segments.counts(np.isfinite(z[:, :2]).all(axis=1), starts) > 0, starts)
+    if not rows.all():  # only predictions: nothing to smooth; keep the rows as they are
+        idle, idle_starts = _rows(full, ~rows)
+        parts.append(_finish(_no_extra(idle), idle_starts, frame_times))
+    fits: list[TrackFit] = []
+    if rows.any():
+        full, starts = _rows(full, rows)
+        out, fits = _image_result(models, full, starts, z[rows], measured[rows], has_pos[rows], status[rows], cfg,
+                                  cameras)
+        parts.append(_finish(out, starts, frame_times))
+    return parts, fits
 
 
-def _image_observations(model: ImageSmoothing, full: pl.DataFrame, frames: np.ndarray, raw: pl.DataFrame | None,
-                        measured: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _image_result(models: Mapping[str, SmoothingModel], full: pl.DataFrame, starts: np.ndarray, z: np.ndarray,
+                  measured: np.ndarray, has_pos: np.ndarray, status: np.ndarray, cfg: SmoothConfig,
+                  cameras: Mapping[int, PtzCamera] | None) -> tuple[pl.DataFrame, list[TrackFit]]:
+    """The image tracks' rows: ``x, y, vx, vy`` smoothed, gaps filled, the other columns interpolated."""
+    conf = full["confidence"].to_numpy().astype(float)
+    bounds = list(zip(starts[:-1].tolist(), starts[1:].tolist()))
+    smoothed = smooth_tracks([z[a:b] for a, b in bounds], [conf[a:b] for a, b in bounds], cfg)
+    xs, var = np.concatenate([s[0] for s in smoothed]), np.concatenate([s[1] for s in smoothed])
+    outliers = np.concatenate([s[2] for s in smoothed])
+    plan = _plan(measured & ~outliers, measured, has_pos, status, starts, cfg.max_gap)
+    out = _assemble(full, _image_columns(full, starts, xs, var, plan, has_pos, cameras),
+                    np.where(plan.filled, np.nan, conf), plan)
+    heads = full.select(pl.col("tracker", "track_id").gather(starts[:-1]))
+    counted = zip(*(segments.counts(m, starts).tolist() for m in (measured, outliers, plan.filled)))
+    fits = [TrackFit(tracker, int(track_id), q, s, sv, ll, m, o, f, models[tracker].describe(q, s))
+            for (tracker, track_id), (_, _, _, (q, s, sv, ll)), (m, o, f) in zip(heads.iter_rows(), smoothed, counted)]
+    return out, fits
+
+
+def _image_observations(models: Mapping[str, SmoothingModel], full: pl.DataFrame, starts: np.ndarray,
+                        raw: pl.DataFrame | None, measured: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``z`` (n, 4) = (x, y, vx, vy), NaN where not observed, and the measured rows that observe.
 
     The tracker's raw measurements (before its own filter), where the replay kept them, replace its
     filtered output: the smoother then filters them once, with the future, instead of smoothing a
     filtered track."""
-    n = len(frames)
-    x, y = full["x"].to_numpy().astype(float), full["y"].to_numpy().astype(float)
-    vx = full["vx"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
-    vy = full["vy"].to_numpy().astype(float) if model.observe_velocity else np.full(n, np.nan)
-    z = np.where(measured[:, None], np.stack([x, y, vx, vy], axis=1), np.nan)
-    if raw is None or not raw.height or not raw["zx"].is_not_null().any():
-        return z, measured
-    r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
-    zx, zy = r["zx"].to_numpy().astype(float), r["zy"].to_numpy().astype(float)
-    zv = np.stack([r["zvx"].to_numpy().astype(float), r["zvy"].to_numpy().astype(float)], axis=1)
-    if model.velocity_lag:
-        zv = np.concatenate([zv[model.velocity_lag:], np.full((model.velocity_lag, 2), np.nan)])
-    if not model.raw_velocity:
-        zv = np.where(measured[:, None], np.stack([vx, vy], axis=1), np.nan)
-    ok = measured & np.isfinite(zx) & np.isfinite(zy)
-    z = np.full((n, 4), np.nan)
-    z[ok, 0], z[ok, 1] = zx[ok], zy[ok]
-    if model.observe_velocity:
-        z[:, 2:] = zv
-    # a raw observation on a frame the tracker also measured; the others fall back to nothing
-    return z, measured & (ok | np.isfinite(zv).all(axis=1))
+    n = full.height
+    xy = np.stack([full["x"].to_numpy().astype(float), full["y"].to_numpy().astype(float)], axis=1)
+    v = np.stack([full["vx"].to_numpy().astype(float), full["vy"].to_numpy().astype(float)], axis=1)
+    z, measured = np.full((n, 4), np.nan), measured.copy()
+    has_raw = segments.per_row(_has_raw(full, starts, raw, "zx"), starts)
+    r = _raw_rows(full, raw) if has_raw.any() else None
+    track_end = segments.per_row(starts[1:], starts)
+    blocks = segments.offsets(full.select(pl.col("tracker").rle_id()).to_series().to_numpy())
+    for a, b in zip(blocks[:-1].tolist(), blocks[1:].tolist()):  # one tracker (model) at a time
+        model, sl = models[full["tracker"][a]], slice(a, b)
+        vel = v[sl] if model.observe_velocity else np.full((b - a, 2), np.nan)
+        z[sl] = np.where(measured[sl, None], np.concatenate([xy[sl], vel], axis=1), np.nan)
+        hr = has_raw[sl]
+        if r is None or not hr.any():
+            continue
+        zx, zy = r["zx"].to_numpy()[sl].astype(float), r["zy"].to_numpy()[sl].astype(float)
+        zv = np.stack([r["zvx"].to_numpy().astype(float), r["zvy"].to_numpy().astype(float)], axis=1)
+        if model.velocity_lag:  # each track's velocity from ``lag`` frames later
+            ahead = np.arange(a, b) + model.velocity_lag
+            inside = ahead < track_end[sl]
+            lagged = np.full((b - a, 2), np.nan)
+            lagged[inside] = zv[ahead[inside]]
+            zv = lagged
+        else:
+            zv = zv[sl]
+        if not model.raw_velocity:
+            zv = np.where(measured[sl, None], vel, np.nan)
+        ok = measured[sl] & np.isfinite(zx) & np.isfinite(zy)
+        zr = np.full((b - a, 4), np.nan)
+        zr[ok, 0], zr[ok, 1] = zx[ok], zy[ok]
+        if model.observe_velocity:
+            zr[:, 2:] = zv
+        z[sl] = np.where(hr[:, None], zr, z[sl])
+        # a raw observation on a frame the tracker also measured; the others fall back to nothing
+        measured[sl] = np.where(hr, measured[sl] & (ok | np.isfinite(zv).all(axis=1)), measured[sl])
+    return z, measured
 
 
-def _image_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, var: np.ndarray, plan: _Plan,
+def _image_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, var: np.ndarray, plan: _Plan,
                    has_pos: np.ndarray, cameras: Mapping[int, PtzCamera] | None) -> dict[str, np.ndarray]:
     """Smoothed ``x, vx, y, vy`` with their std; box size and world position linear across filled
     frames (the image model says nothing about them); lines of sight."""
@@ -406,10 +416,11 @@ def _image_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, var: 
     for k, name in enumerate(("x", "vx", "y", "vy")):
         cols[name] = masked(np.where(plan.smoothed, xs[:, k], full[name].to_numpy().astype(float)))
         cols[f"{name}_std"] = np.where(plan.smoothed, std[:, k], np.nan)
+    frames = full["frame"].to_numpy()
     f = frames.astype(float)
     for name in ("w", "h", "X", "Y", "Z", "dx", "dy", "dz"):
         values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
-        cols[name] = masked(_interp(f, values, plan.filled))
+        cols[name] = masked(_interp(f, values, plan.filled, starts))
     cols["dx"], cols["dy"], cols["dz"] = _lines_of_sight(cols, frames, plan.smoothed, cameras)
     return cols
 
@@ -429,23 +440,30 @@ def _lines_of_sight(cols: dict[str, np.ndarray], frames: np.ndarray, smoothed: n
     return d[:, 0], d[:, 1], d[:, 2]
 
 
-def _finish(full: pl.DataFrame, tracker: str, track_id: int, frame_times: Mapping[int, int] | None) -> pl.DataFrame:
-    """Identity columns and the times of added frames (the log's frame times, else interpolated)."""
-    frames = full["frame"].to_numpy()
+def _logged_times(frame_times: Mapping[int, int], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The log's time of each of ``frames`` and whether the log has one."""
+    keys = np.fromiter(frame_times.keys(), dtype=np.int64, count=len(frame_times))
+    times = np.fromiter(frame_times.values(), dtype=np.int64, count=len(frame_times))
+    order = np.argsort(keys, kind="stable")
+    keys, times = keys[order], times[order]
+    at = np.clip(np.searchsorted(keys, frames), 0, max(len(keys) - 1, 0))
+    found = (keys[at] == frames) if len(keys) else np.zeros(len(frames), bool)
+    return np.where(found, times[at] if len(keys) else 0, 0), found
+
+
+def _finish(full: pl.DataFrame, starts: np.ndarray, frame_times: Mapping[int, int] | None) -> pl.DataFrame:
+    """The extra columns (null where not set) and the times of added frames: the log's frame times,
+    else interpolated within each track (``starts``)."""
+    frames = full["frame"].to_numpy().astype(np.int64)
     known = full["t_ns"].is_not_null().to_numpy()
     t = full["t_ns"].fill_null(0).to_numpy().astype(np.int64)
     if frame_times and not known.all():  # (ints: float64 would round epoch times off their frames)
-        logged = [frame_times.get(int(k)) for k in frames]
-        for i in np.flatnonzero(~known):
-            if logged[i] is not None:
-                t[i], known[i] = logged[i], True
-    t = interpolated_times(frames, t, known)
+        missing = np.flatnonzero(~known)
+        logged, found = _logged_times(frame_times, frames[missing])
+        t[missing[found]], known[missing[found]] = logged[found], True
+    t = segments.interpolated_times(frames, t, known, starts)
     full = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items() if c not in full.columns))
-    return full.with_columns(
-        pl.lit(tracker).alias("tracker"),
-        pl.lit(track_id, dtype=pl.Int64).alias("track_id"),
-        pl.Series("t_ns", t, dtype=pl.Int64),
-    ).select(SMOOTH_COLUMNS)
+    return full.with_columns(pl.Series("t_ns", t, dtype=pl.Int64))
 
 
 def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *,
@@ -463,126 +481,105 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
 
     ``frame_times`` (frame -> t_ns) gives added frames their log time; ``cameras`` (frame -> posed
     camera) lets lines of sight follow the smoothed pixels. Deterministic: no randomness, a fixed
-    parameter grid, tracks in canonical order.
+    parameter grid, tracks in canonical order. All tracks are assembled at once (no loop per track
+    over the table: issue 33).
     """
     if config.max_gap < 0:
         raise TrackreplayError(f"--max-gap must be >= 0, not {config.max_gap}")
     if df.is_empty():
         return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items())).select(SMOOTH_COLUMNS), []
-    raw_by_track: dict = {}
-    if observations is not None and observations.height:
-        for key, part in observations.sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
-            raw_by_track[tuple(key)] = part.drop("tracker", "track_id")
-    models: dict[str, SmoothingModel] = {}
-    results: list = []  # per track, in canonical order: (rows, fit), or the track awaiting the smoother
-    for key, track in df.select(COLUMNS).sort(["tracker", "track_id", "frame"]).group_by(["tracker", "track_id"], maintain_order=True):
-        tracker = key[0]
-        if tracker not in models:
-            models[tracker] = smoothing_model(tracker, (configs or {}).get(tracker))
-        model, raw = models[tracker], raw_by_track.get(tuple(key))
+    table = df.select(COLUMNS).sort(KEYS)
+    raw = observations.select(list(OBS_SCHEMA)) if observations is not None and observations.height else None
+    models = {t: smoothing_model(t, (configs or {}).get(t)) for t in table["tracker"].unique(maintain_order=True).to_list()}
+    image = [t for t, m in models.items() if not isinstance(m, SpaceSmoothing)]
+    parts, fits = [], []
+    if image:
+        parts, fits = _smooth_image(table.filter(pl.col("tracker").is_in(image)), models, config, raw, frame_times, cameras)
+    for tracker, model in models.items():
         if isinstance(model, SpaceSmoothing):
-            results.append(_space_track(model, track, frame_times, raw))
-        else:
-            results.append(_image_track(model, track, frame_times, raw))
-    _smooth_waiting(results, models, config, frame_times, cameras)
-    parts = [out.cast({**SCHEMA, **EXTRA_SCHEMA}) for out, _ in results]
-    fits = [fit for _, fit in results if fit is not None]
-    return pl.concat(parts).sort(["tracker", "track_id", "frame"], maintain_order=True), fits
-
-
-def _smooth_waiting(results: list, models: Mapping[str, SmoothingModel], config: SmoothConfig,
-                    frame_times: Mapping[int, int] | None, cameras: Mapping[int, PtzCamera] | None) -> None:
-    """Replace every track awaiting the smoother in ``results`` by its rows and fit: all image tracks
-    at once (the models differ only in what they observe, which ``z`` already says), then each 3-D
-    model's tracks at once."""
-    waiting = [i for i, r in enumerate(results) if isinstance(r, _ImageTrack)]
-    smoothed = smooth_tracks([results[i].z for i in waiting], [results[i].conf for i in waiting], config)
-    for i, sm in zip(waiting, smoothed):
-        results[i] = _image_result(models[results[i].tracker], results[i], sm, config, frame_times, cameras)
-    for tracker in dict.fromkeys(r.tracker for r in results if isinstance(r, _SpaceTrack)):
-        waiting = [i for i, r in enumerate(results) if isinstance(r, _SpaceTrack) and r.tracker == tracker]
-        fitted = _fit_space(models[tracker], [results[i] for i in waiting], config)
-        for i, f in zip(waiting, fitted):
-            results[i] = _space_result(models[tracker], results[i], f, config, frame_times)
+            more, more_fits = _smooth_space(table.filter(pl.col("tracker") == tracker), model, config, raw, frame_times)
+            parts, fits = parts + more, fits + more_fits
+    out = pl.concat([p.select(SMOOTH_COLUMNS).cast({**SCHEMA, **EXTRA_SCHEMA}) for p in parts])
+    return out.sort(KEYS, maintain_order=True), sorted(fits, key=lambda f: (f.tracker, f.track_id))
 
 
 @dataclass(frozen=True)
 class _SpaceTrack:
-    """A 3-D track ready for the smoother: its positioned span and its observations."""
+    """A 3-D track's observations for the smoother (its own arrays: outliers are removed in place)."""
 
-    track: pl.DataFrame
-    tracker: str
-    track_id: int
-    lo: int
-    hi: int
-    frames: np.ndarray
-    full: pl.DataFrame
-    status: np.ndarray
-    P3: np.ndarray  # (n, 3) the tracker's own X, Y, Z
-    has_pos: np.ndarray
-    measured: np.ndarray
     z: np.ndarray  # (n, 3), NaN where not observed
     R0: np.ndarray  # (n, 3, 3), I where not observed
     ok: np.ndarray
     grid: tuple[float, ...]  # R's scales tried
 
 
-def _space_track(model: SpaceSmoothing, track: pl.DataFrame, frame_times: Mapping[int, int] | None,
-                 raw: pl.DataFrame | None) -> _SpaceTrack | tuple[pl.DataFrame, None]:
-    """The track's span and observations, or its finished rows when fewer than two are observed."""
-    head = track.row(0, named=True)
-    tracker, track_id = head["tracker"], head["track_id"]
-    positioned = track.filter(pl.col("X").is_not_null() & (pl.col("status") != "lost"))
-    if positioned.height == 0:
-        return _finish(track, tracker, track_id, frame_times).sort("frame"), None
-    lo, hi, frames, full = _span(track, positioned)
+def _smooth_space(table: pl.DataFrame, model: SpaceSmoothing, cfg: SmoothConfig, raw: pl.DataFrame | None,
+                  frame_times: Mapping[int, int] | None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
+    """Every 3-D track of one tracker (groups): rows and fits, all tracks at once."""
+    sp = _spans(table, pl.col("X").is_not_null() & (pl.col("status") != "lost"))
+    parts = [_finish(df, segments.offsets(df["_tid"].to_numpy()), frame_times) for df in (sp.bare, sp.outside)]
+    full, starts = sp.full, sp.starts
     status = full["status"].fill_null("lost").to_numpy().astype(object)
     P3 = np.stack([full[c].to_numpy().astype(float) for c in ("X", "Y", "Z")], axis=1)
     has_pos = np.isfinite(P3).all(axis=1) & (status != "lost")
     measured = has_pos & (status == "measured")
-    z, R0, ok, grid = _space_observations(model, frames, raw, P3, measured)
-    if ok.sum() < 2:
-        return _finish(full, tracker, track_id, frame_times).sort("frame"), None
-    return _SpaceTrack(track, tracker, track_id, lo, hi, frames, full, status, P3, has_pos, measured, z, R0, ok, grid)
+    z, R0, ok, grids = _space_observations(model, full, starts, raw, P3, measured)
+    enough = segments.counts(ok, starts) >= 2
+    rows = segments.per_row(enough, starts)
+    if not rows.all():
+        idle, idle_starts = _rows(full, ~rows)
+        parts.append(_finish(idle, idle_starts, frame_times))
+    if not rows.any():
+        return parts, []
+    bounds = [(a, b) for a, b, e in zip(starts[:-1].tolist(), starts[1:].tolist(), enough) if e]
+    tracks = [_SpaceTrack(z[a:b].copy(), R0[a:b].copy(), ok[a:b].copy(), g) for (a, b), g in
+              zip(bounds, [g for g, e in zip(grids, enough) if e])]
+    fitted = _fit_space(model, tracks, cfg)
+    full, starts = _rows(full, rows)
+    out, fits = _space_result(model, full, starts, fitted, status[rows], P3[rows], has_pos[rows], measured[rows], cfg,
+                              frame_times)
+    return parts + [_finish(out, starts, frame_times)], fits
 
 
-def _space_result(model: SpaceSmoothing, t: _SpaceTrack, fitted: tuple, cfg: SmoothConfig,
-                  frame_times: Mapping[int, int] | None) -> tuple[pl.DataFrame, TrackFit]:
-    """A 3-D track's rows (groups): 3-D position and velocity smoothed, gaps filled."""
-    accel, s, ll, xs, Ps, ok, outliers = fitted
-    plan = _plan(ok, t.measured, t.has_pos, t.status, cfg.max_gap)
-    cols = _space_columns(t.full, t.frames, xs, Ps, plan, t.has_pos, t.P3, frame_times)
-    out = _assemble(t.full, cols, np.where(plan.filled, np.nan, t.full["confidence"].to_numpy().astype(float)), plan)
-    q = accel**2
-    fit = TrackFit(t.tracker, int(t.track_id), q, s, math.nan, ll, int(ok.sum() + outliers.sum()), int(outliers.sum()),
-                   int(plan.filled.sum()), model.describe(q, s))
-    outside = t.track.filter((pl.col("frame") < t.lo) | (pl.col("frame") > t.hi))
-    out = pl.concat([_finish(out, t.tracker, t.track_id, frame_times), _finish(outside, t.tracker, t.track_id, frame_times)])
-    return out.sort("frame"), fit
+def _space_result(model: SpaceSmoothing, full: pl.DataFrame, starts: np.ndarray, fitted: list[tuple], status: np.ndarray,
+                  P3: np.ndarray, has_pos: np.ndarray, measured: np.ndarray, cfg: SmoothConfig,
+                  frame_times: Mapping[int, int] | None) -> tuple[pl.DataFrame, list[TrackFit]]:
+    """The 3-D tracks' rows (groups): 3-D position and velocity smoothed, gaps filled."""
+    xs, Ps = np.concatenate([f[3] for f in fitted]), np.concatenate([f[4] for f in fitted])
+    ok, outliers = np.concatenate([f[5] for f in fitted]), np.concatenate([f[6] for f in fitted])
+    plan = _plan(ok, measured, has_pos, status, starts, cfg.max_gap)
+    cols = _space_columns(full, starts, xs, Ps, plan, has_pos, P3, frame_times)
+    out = _assemble(full, cols, np.where(plan.filled, np.nan, full["confidence"].to_numpy().astype(float)), plan)
+    heads = full.select(pl.col("tracker", "track_id").gather(starts[:-1]))
+    counted = zip(*(segments.counts(m, starts).tolist() for m in (ok, outliers, plan.filled)))
+    fits = []
+    for (tracker, track_id), (accel, s, ll, *_), (n_ok, n_out, n_fill) in zip(heads.iter_rows(), fitted, counted):
+        q = accel**2
+        fits.append(TrackFit(tracker, int(track_id), q, s, math.nan, ll, n_ok + n_out, n_out, n_fill, model.describe(q, s)))
+    return out, fits
 
 
-def _space_observations(model: SpaceSmoothing, frames: np.ndarray, raw: pl.DataFrame | None, P3: np.ndarray,
-                        measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[float, ...]]:
-    """``z`` (n, 3) and ``R`` (n, 3, 3) on the observed rows (NaN and I elsewhere), those rows, and the
-    grid of ``R``'s scale: the tracker's raw 3-D measurements with their covariance where the replay
-    kept them, else its own ``X, Y, Z`` with ``R = I`` (``σ`` from the model's sigma grid, m)."""
-    n = len(frames)
-    if raw is not None and raw.height > 0 and raw["zX"].is_not_null().any():
-        r = pl.DataFrame({"frame": frames}).join(raw, on="frame", how="left")
-        z = np.stack([r[c].to_numpy().astype(float) for c in ("zX", "zY", "zZ")], axis=1)
+def _space_observations(model: SpaceSmoothing, full: pl.DataFrame, starts: np.ndarray, raw: pl.DataFrame | None,
+                        P3: np.ndarray, measured: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, list]:
+    """``z`` (n, 3) and ``R`` (n, 3, 3) on the observed rows (NaN and I elsewhere), those rows, and per
+    track the grid of ``R``'s scale: the tracker's raw 3-D measurements with their covariance where
+    the replay kept them, else its own ``X, Y, Z`` with ``R = I`` (``σ`` from the model's sigma grid, m)."""
+    n = full.height
+    z, R0, ok = P3.copy(), np.broadcast_to(np.eye(3), (n, 3, 3)).copy(), measured.copy()
+    has_raw = _has_raw(full, starts, raw, "zX")
+    if has_raw.any():
+        r = _raw_rows(full, raw)
+        zr = np.stack([r[c].to_numpy().astype(float) for c in ("zX", "zY", "zZ")], axis=1)
         c = {k: r[k].to_numpy().astype(float) for k in ("rXX", "rXY", "rXZ", "rYY", "rYZ", "rZZ")}
-        R0 = np.stack([np.stack([c["rXX"], c["rXY"], c["rXZ"]], -1), np.stack([c["rXY"], c["rYY"], c["rYZ"]], -1),
+        Rr = np.stack([np.stack([c["rXX"], c["rXY"], c["rXZ"]], -1), np.stack([c["rXY"], c["rYY"], c["rYZ"]], -1),
                        np.stack([c["rXZ"], c["rYZ"], c["rZZ"]], -1)], axis=1)
-        ok = measured & np.isfinite(z).all(axis=1) & np.isfinite(R0).all(axis=(1, 2))
-        grid = model.scale_grid
-    else:
-        z = P3.copy()
-        R0 = np.broadcast_to(np.eye(3), (n, 3, 3)).copy()
-        ok = measured.copy()
-        grid = model.sigma_grid
+        hr = segments.per_row(has_raw, starts)
+        z, R0 = np.where(hr[:, None], zr, z), np.where(hr[:, None, None], Rr, R0)
+        ok = np.where(hr, measured & np.isfinite(zr).all(axis=1) & np.isfinite(Rr).all(axis=(1, 2)), ok)
     z[~ok] = np.nan
     R0[~ok] = np.eye(3)
-    return z, R0, ok, grid
+    return z, R0, ok, [model.scale_grid if h else model.sigma_grid for h in has_raw]
+
 
 
 def _per_axis(model: SpaceSmoothing, track: _SpaceTrack) -> bool:
@@ -691,16 +688,22 @@ def _fit_space(model: SpaceSmoothing, tracks: list[_SpaceTrack], cfg: SmoothConf
     return [(accel[i], s[i], best[i][2], *smoothed[i], oks[i], outliers[i]) for i in range(len(tracks))]
 
 
-def _space_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, Ps: np.ndarray, plan: _Plan,
+def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: np.ndarray, plan: _Plan,
                    has_pos: np.ndarray, P3: np.ndarray, frame_times: Mapping[int, int] | None) -> dict[str, np.ndarray]:
-    """Smoothed ``X, Y, Z`` with their std and velocity (m/s at the log's median frame interval); the
-    image columns are the tracker's own box on its rows, linear across filled frames (the 3-D model
-    says nothing about the box), a filled row's image velocity the rate of those positions."""
+    """Smoothed ``X, Y, Z`` with their std and velocity (m/s at each track's median frame interval);
+    the image columns are the tracker's own box on its rows, linear across filled frames (the 3-D
+    model says nothing about the box), a filled row's image velocity the rate of those positions."""
+    frames = full["frame"].to_numpy().astype(np.int64)
     t = full["t_ns"].to_numpy().astype(float)
     if frame_times:
-        t = np.where(np.isfinite(t), t, [frame_times.get(int(k), np.nan) for k in frames])
-    dt = np.nanmedian(np.diff(t)) * 1e-9 if np.isfinite(t).sum() >= 2 else math.nan
-    per_s = 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+        logged, found = _logged_times(frame_times, frames)
+        t = np.where(np.isfinite(t), t, np.where(found, logged.astype(float), np.nan))
+    rate = np.full(len(starts) - 1, math.nan)
+    for i, (a, b) in enumerate(zip(starts[:-1].tolist(), starts[1:].tolist())):
+        if np.isfinite(t[a:b]).sum() >= 2:
+            dt = np.nanmedian(np.diff(t[a:b])) * 1e-9
+            rate[i] = 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+    per_s = segments.per_row(rate, starts)
     f = frames.astype(float)
     cols: dict[str, np.ndarray] = {}
     for k, name in enumerate(("X", "Y", "Z")):
@@ -709,11 +712,12 @@ def _space_columns(full: pl.DataFrame, frames: np.ndarray, xs: np.ndarray, Ps: n
         cols[f"V{name}"] = np.where(plan.smoothed, xs[:, 2 * k + 1] * per_s, np.nan)
     for name in ("x", "y", "w", "h", "vx", "vy"):
         values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
-        cols[name] = np.where(plan.keep, _interp(f, values, plan.filled), np.nan)
+        cols[name] = np.where(plan.keep, _interp(f, values, plan.filled, starts), np.nan)
     for v, p in (("vx", "x"), ("vy", "y")):  # a filled row moves as its own (linear) positions do
         values = np.where(has_pos, full[p].to_numpy().astype(float), np.nan)
-        cols[v] = np.where(plan.filled & plan.keep, _interp_rate(f, values, plan.filled), cols[v])
+        cols[v] = np.where(plan.filled & plan.keep, _interp_rate(f, values, plan.filled, starts), cols[v])
     return cols
+
 
 
 def log_context(log) -> tuple[dict[int, int], dict[int, PtzCamera]]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +12,7 @@ from scipy.interpolate import CubicSpline
 
 from trackreplay.recorder.atomic import claim_partial
 from trackreplay.schemas.errors import OutputError, TrackreplayError
-from trackreplay.replay.core.trajectory import COLUMNS, FLOAT_COLUMNS, canonical_order, conform, interpolated_times
+from trackreplay.replay.core.trajectory import COLUMNS, FLOAT_COLUMNS, SCHEMA, canonical_order, conform, interpolated_times
 
 METHODS = ("linear", "cubic")
 FORMATS = {".parquet": "parquet", ".csv": "csv", ".txt": "mot"}
@@ -37,6 +38,8 @@ def _gap_runs(missing: np.ndarray) -> list[tuple[int, int]]:
 def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, method: str) -> tuple[np.ndarray, np.ndarray]:
     """Values at frames ``at`` from the known samples and their rate (per frame) there: the segment's
     slope for linear, the spline's derivative for cubic (natural, from 4 samples; linear below)."""
+    if known_f.size < 2:  # (a piece of a track holding one of its known values: numpy.interp holds it)
+        return np.full(at.shape, known_v[0]), np.zeros(at.shape)
     if method == "cubic" and known_f.size >= 4:
         spline = CubicSpline(known_f, known_v, bc_type="natural")
         return spline(at), spline(at, 1)
@@ -45,7 +48,9 @@ def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, metho
     return np.interp(at, known_f, known_v), slope
 
 
-def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
+def _fill_track(track: pl.DataFrame, method: str, max_gap: int, known_counts: dict[str, int] | None = None) -> pl.DataFrame:
+    """One track's rows on every frame of its span, gaps filled. ``known_counts``: a piece of a longer
+    track (:func:`export_trajectory`) interpolates the columns the whole track holds on 2 known rows."""
     first, last = track["frame"].min(), track["frame"].max()
     frames = pl.DataFrame({"frame": np.arange(first, last + 1, dtype=np.int64)})
     full = frames.join(track, on="frame", how="left")
@@ -71,7 +76,7 @@ def _fill_track(track: pl.DataFrame, method: str, max_gap: int) -> pl.DataFrame:
     for name in FLOAT_COLUMNS:
         values = full[name].to_numpy().astype(float)
         ok = known & ~np.isnan(values)
-        if ok.sum() < 2:
+        if (ok.sum() if known_counts is None else known_counts[name]) < 2 or not ok.any():
             continue
         values[fill], rates[name] = _interpolate(f[ok], values[ok], f[fill], method)
         columns[name] = values
@@ -193,3 +198,160 @@ def _first_line(err: Exception) -> str:
     """The gist of a library's message (polars explains at length, over several paragraphs)."""
     lines = [line.strip() for line in str(err).splitlines() if line.strip()]
     return lines[0].rstrip(".:") if lines else type(err).__name__
+
+
+# A spilled trajectory is exported this many frames of a track (or whole short tracks) at a time, so
+# the export's memory does not grow with the log (docs/memory.md).
+EXPORT_ROWS = 4096
+
+
+def _known(column: str) -> pl.Expr:
+    """A known row (positioned, not lost) that holds ``column`` (gap filling's ``ok``)."""
+    return (pl.col("x").fill_nan(None).is_not_null() & (pl.col("status").fill_null("lost") != "lost")
+            & pl.col(column).fill_nan(None).is_not_null())
+
+
+def _tracks_of(path: Path) -> pl.DataFrame:
+    """Per track (canonical order): its first and last frame, its rows, and how many known rows hold
+    each float column (gap filling interpolates a column from 2 of them: a piece must do the same)."""
+    return (pl.scan_parquet(path).group_by("tracker", "track_id")
+            .agg(pl.col("frame").min().alias("_lo"), pl.col("frame").max().alias("_hi"),
+                 *(_known(c).sum().alias(c) for c in FLOAT_COLUMNS))
+            .collect(engine="streaming").sort("tracker", "track_id"))
+
+
+def _anchor(counts: dict) -> pl.Expr:
+    """A row a long track may be cut at, both pieces holding it: known, with its time and every column
+    the track interpolates, so each side fills as the whole track would."""
+    ok = _known("x") & pl.col("t_ns").is_not_null()
+    for c in FLOAT_COLUMNS:
+        if counts[c] >= 2:
+            ok = ok & pl.col(c).fill_nan(None).is_not_null()
+    return ok
+
+
+def _pieces(path: Path, rows: int, split: bool) -> Iterator[tuple[pl.DataFrame, bool, dict | None]]:
+    """A spilled trajectory in pieces, canonical order: (rows, drop its first row (the previous piece's
+    last), a piece of one track: the track's known rows per column). Whole short tracks together up to
+    ``rows`` frames; a longer track (``split``) about ``rows`` frames at a time, cut at anchors."""
+    tracks = _tracks_of(path)
+    batch: list[tuple[str, int]] = []
+    size = 0
+    for track in tracks.iter_rows(named=True):
+        key, span = (track["tracker"], track["track_id"]), track["_hi"] - track["_lo"] + 1
+        if split and span > rows:
+            if batch:  # the tracks before it first: canonical order
+                yield _read(path, _tracks(batch)), False, None
+                batch, size = [], 0
+            yield from _track_pieces(path, key, track, rows)
+            continue
+        batch.append(key)
+        size += span
+        if size >= rows:
+            yield _read(path, _tracks(batch)), False, None
+            batch, size = [], 0
+    if batch:
+        yield _read(path, _tracks(batch)), False, None
+
+
+def _track_pieces(path: Path, key: tuple[str, int], track: dict, rows: int) -> Iterator[tuple[pl.DataFrame, bool, dict]]:
+    """One long track about ``rows`` frames at a time: each piece ends at the first anchor ``rows`` or
+    more frames after its start (the next begins there); the last one at the track's end."""
+    counts = {c: track[c] for c in FLOAT_COLUMNS}
+    same = (pl.col("tracker") == key[0]) & (pl.col("track_id") == key[1])
+    start, hi, first = track["_lo"], track["_hi"], True
+    while True:
+        reach = rows
+        while True:  # read on until a cut is found or the track ends
+            part = _read(path, same & pl.col("frame").is_between(start, start + 2 * reach))
+            cuts = part.filter(pl.col("frame").is_between(start + rows, hi, closed="left") & _anchor(counts))
+            if cuts.height or start + 2 * reach >= hi:
+                break
+            reach *= 2
+        if not cuts.height:  # the rest of the track is the last piece
+            yield part, not first, counts
+            return
+        end = int(cuts["frame"][0])
+        yield part.filter(pl.col("frame") <= end), not first, counts
+        start, first = end, False
+
+
+def _tracks(keys: list[tuple[str, int]]) -> pl.Expr:
+    return pl.struct("tracker", "track_id").is_in(pl.Series([{"tracker": t, "track_id": i} for t, i in keys]).implode())
+
+
+def _read(path: Path, where: pl.Expr) -> pl.DataFrame:
+    return canonical_order(pl.scan_parquet(path).filter(where).collect())
+
+
+def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: int = 15,
+                      rows: int = EXPORT_ROWS) -> tuple[int, int]:
+    """Gap-fill ``table`` (``method`` ``none``: as it is) and write it (:func:`write_trajectory`'s
+    formats); ``(rows, interpolated rows)`` written. A :class:`SpilledTrajectory` is read, filled and
+    written a piece at a time (whole short tracks, a long track ``rows`` frames at a time, cut at a known
+    row both pieces hold) in Parquet or CSV: the same rows as filling the whole table, in memory
+    bounded by ``rows`` instead of the log. Cubic splines span their whole track: a track is not cut
+    then; MOTChallenge (sorted by frame) is written from the whole table."""
+    from trackreplay.replay.core.trajectory import SpilledTrajectory
+
+    if method not in (*METHODS, "none"):
+        raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
+    kind = trajectory_format(path)
+    if not isinstance(table, SpilledTrajectory) or kind == "mot":
+        df = table.frame() if isinstance(table, SpilledTrajectory) else table
+        df = df if method == "none" else fill_gaps(df, method, max_gap)
+        write_trajectory(df, path)
+        return df.height, df.filter(pl.col("status") == "interpolated").height
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = claim_partial(path)
+    written = filled = 0
+    try:
+        with _PieceWriter(tmp, kind) as out:
+            for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic"):
+                if method != "none" and counts is not None:  # a piece of one track
+                    part = canonical_order(_fill_track(part, method, max_gap, counts))
+                elif method != "none":
+                    part = fill_gaps(part, method, max_gap)
+                part = part.slice(1) if drop_first else part
+                out.write(part)
+                written, filled = written + part.height, filled + part.filter(pl.col("status") == "interpolated").height
+        os.replace(tmp, path)
+    except (OSError, pl.exceptions.PolarsError) as err:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {path} ({err})") from None
+    return written, filled
+
+
+class _PieceWriter:
+    """Parquet (a row group per piece) or CSV (one header) written a piece at a time."""
+
+    def __init__(self, path: Path, kind: str) -> None:
+        self.path, self.kind, self._writer, self._fh = path, kind, None, None
+
+    def __enter__(self) -> _PieceWriter:
+        if self.kind == "csv":
+            self._fh = open(self.path, "wb")
+        return self
+
+    def write(self, part: pl.DataFrame) -> None:
+        if self.kind == "csv":
+            part.write_csv(self._fh, include_header=self._writer is None)
+            self._writer = True
+            return
+        import pyarrow.parquet as pq
+
+        table = part.to_arrow()
+        if self._writer is None:
+            self._writer = pq.ParquetWriter(self.path, table.schema, compression="zstd")
+        self._writer.write_table(table)
+
+    def __exit__(self, *exc) -> None:
+        if self._fh is not None:
+            if self._writer is None:  # no rows at all: the header alone
+                pl.DataFrame(schema=SCHEMA).write_csv(self._fh)
+            self._fh.close()
+        elif self._writer is not None:
+            self._writer.close()
+        elif exc[0] is None:
+            pl.DataFrame(schema=SCHEMA).write_parquet(self.path)
