@@ -21,8 +21,13 @@ reports it) is made directly, then each fresh process loads what a replay has lo
 OpenCV) and exports it, a piece at a time (``export_trajectory``, ``--interpolate linear``) or the whole table
 (``fill_gaps``, as before); both outputs compared.
 
-Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only]
-Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json) and prints a table.
+``--eval-only``: `eval` alone, on the scene's log and that flow track as T.parquet: the chunked single-object
+path (replay/analysis/eval.py ``evaluate_chunked``) against the whole table (``--per-frame`` takes it); the
+two --json files compared.
+
+Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only]
+Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json, ``--eval-only``:
+long_log_eval.json) and prints a table.
 """
 
 from __future__ import annotations
@@ -194,13 +199,43 @@ def export_only(sizes: list[int], out: Path) -> int:
     return 0
 
 
+def eval_only(sizes: list[int], out: Path) -> int:
+    """`eval` alone: the scene's log and its flow track (``write_spill``) as T.parquet, scored in a fresh
+    process by the chunked single-object path and by the whole table (``--per-frame`` takes it); the
+    same --json asked of both."""
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            log, traj = Path(tmp) / f"long-{n}.mcap", Path(tmp) / f"t-{n}.parquet"
+            write_long_log(log, n)
+            write_spill(traj, n)
+            entry: dict = {"frames": n}
+            for name, extra in (("chunked", []), ("whole_table", ["--per-frame", str(Path(tmp) / f"pf-{n}.parquet")])):
+                argv = ["eval", str(traj), str(log), "--json", str(Path(tmp) / f"{name}-{n}.json"), *extra]
+                code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=argv))
+                entry[name] = {"exit": int(code), "peak_rss_kib": rss, "seconds": round(seconds, 2)}
+            entry["same_json"] = (Path(tmp) / f"chunked-{n}.json").read_text() == (Path(tmp) / f"whole_table-{n}.json").read_text()
+            runs.append(entry)
+            print(json.dumps(entry), flush=True)
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("chunked", "whole_table")}
+    results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
+               "scene": "the long-log scene's log and its flow track (one row a frame, 3 % lost)", "runs": runs,
+               "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"eval peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--export-only", action="store_true", help="the export step alone, on a spill file made directly")
+    ap.add_argument("--eval-only", action="store_true", help="eval alone (chunked and whole table), on the flow track made directly")
     args = ap.parse_args()
     sizes = [int(x) for x in args.frames.split(",")]
+    if args.eval_only:
+        return eval_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_eval.json")
     if args.export_only:
         return export_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_export.json")
     args.out = args.out or ROOT / "benchmarks" / "results" / "long_log.json"

@@ -7,12 +7,13 @@ predicted and those the gap filling interpolated, so it is never the headline.""
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 import numpy as np
 import polars as pl
 
 from trackreplay.schemas.errors import TrackreplayError
-from trackreplay.replay.core.trajectory import frame_time_mismatches
+from trackreplay.replay.core.trajectory import KEY, SCHEMA, conform, frame_time_mismatches
 from trackreplay.trackers.geometry.box import iou as box_iou
 
 IOU_THRESHOLDS = np.linspace(0.0, 1.0, 21)
@@ -63,6 +64,11 @@ def _pick_track(traj: pl.DataFrame, track_id: int | None) -> pl.DataFrame:
 
 
 def _pick_gt(gt: pl.DataFrame, gt_id: int | None) -> pl.DataFrame:
+    return gt.filter(pl.col("id") == _gt_id(gt, gt_id))
+
+
+def _gt_id(gt: pl.DataFrame, gt_id: int | None) -> int:
+    """The truth object to score against (``gt_id``, else the one placed on most frames), refused when absent."""
     if gt.is_empty():
         raise TrackreplayError("the log's ground truth holds no objects")
     if gt_id is None:
@@ -70,10 +76,21 @@ def _pick_gt(gt: pl.DataFrame, gt_id: int | None) -> pl.DataFrame:
         if counts.is_empty():
             raise TrackreplayError("the log's ground truth places no object on any frame (every row marks it absent)")
         gt_id = int(counts["id"][0])
-    obj = gt.filter(pl.col("id") == gt_id)
-    if obj.is_empty():
+    if not (gt["id"] == gt_id).any():
         raise TrackreplayError(f"the ground truth has no object {gt_id}")
-    return obj
+    return gt_id
+
+
+def _object_rows(gt: pl.DataFrame, gt_id: int) -> pl.DataFrame:
+    """The object's rows by frame: a slice of ``gt`` (no copy) when it is sorted by object and frame, as
+    the log's truth is read."""
+    at = (gt["id"] == gt_id).arg_true()
+    first, last = int(at[0]), int(at[-1])
+    if last - first + 1 == at.len():
+        rows = gt.slice(first, at.len())
+        if rows["frame"].is_sorted():
+            return rows
+    return gt.filter(pl.col("id") == gt_id).sort("frame", maintain_order=True)
 
 
 def object_followed(traj: pl.DataFrame, gt: pl.DataFrame, track_id: int) -> int | None:
@@ -126,9 +143,14 @@ def per_frame(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = No
     """One row per ground-truth frame with the estimate beside it and the errors."""
     track = _pick_track(traj, track_id)
     obj = _pick_gt(gt, gt_id)
+    _same_frames(track, obj)
+    return _joined(track, obj)
+
+
+def _joined(track: pl.DataFrame, obj: pl.DataFrame) -> pl.DataFrame:
+    """The truth object's frames with the track's row beside each and the errors, by frame."""
     est = track.select("frame", "tracker", "track_id", "status",
                        *(pl.col(c).alias(f"est_{c}") for c in ("x", "y", "w", "h", "vx", "vy")))
-    _same_frames(track, obj)
     joined = obj.select("frame", "id", "visible", "x", "y", "w", "h", "vx", "vy").join(est, on="frame", how="left")
     return joined.with_columns(
         (((pl.col("est_x") - pl.col("x")) ** 2 + (pl.col("est_y") - pl.col("y")) ** 2).sqrt()).alias("centre_error"),
@@ -182,6 +204,155 @@ def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = Non
         measured_iou_50=float(np.sum(mious >= RIGHT_IOU) / n) if n_boxes else None,
     )
     return summary, frames
+
+
+# A long log is scored this many truth frames at a time (docs/memory.md): only the counts and the
+# per-frame numbers the mean and median need (8 bytes a frame each) are kept between chunks.
+EVAL_CHUNK_FRAMES = 16384
+CHECK_ROWS = 2048  # a trajectory file is checked this many rows at a time (larger pieces peak higher)
+
+
+@dataclass
+class _Running:
+    """What :func:`evaluate` needs of the per-frame table, gathered a chunk of frames at a time: the
+    counts, and the centre errors, IoUs and velocity errors in frame order (the same arrays as the
+    whole table's, so the means and the median are the same to the bit)."""
+
+    visible: int = 0
+    tracked: int = 0
+    measured: int = 0
+    boxed: int = 0  # visible truth frames with a box
+    near: tuple[int, int] = (0, 0)
+    measured_right: int = 0  # measured boxes with IoU >= RIGHT_IOU
+    tracker: str | None = None
+    track_id: int | None = None
+    gt_id: int | None = None
+    parts: dict[str, list[np.ndarray]] | None = None
+
+    def add(self, frames: pl.DataFrame) -> None:
+        """Count one chunk of :func:`per_frame`'s rows (in frame order)."""
+        parts = self.parts if self.parts is not None else {k: [] for k in ("ce", "ious", "ex", "ey")}
+        self.parts = parts
+        if self.tracker is None and frames["tracker"].drop_nulls().len():
+            self.tracker = str(frames["tracker"].drop_nulls()[0])
+        if self.track_id is None and frames["track_id"].drop_nulls().len():
+            self.track_id = int(frames["track_id"].drop_nulls()[0])
+        if self.gt_id is None and frames.height:
+            self.gt_id = int(frames["id"][0])
+        visible = frames.filter(pl.col("x").is_not_null() & (pl.col("visible").fill_null(True)))
+        tracked = visible.filter(pl.col("est_x").is_not_null())
+        boxes = tracked.filter(pl.col("w").is_not_null() & pl.col("est_w").is_not_null())
+        measured = tracked.filter(pl.col("status") == "measured")
+        mboxes = boxes.filter(pl.col("status") == "measured")
+        m_err = measured["centre_error"].to_numpy()
+        self.visible += visible.height
+        self.tracked += tracked.height
+        self.measured += measured.height
+        self.boxed += visible.filter(pl.col("w").is_not_null()).height
+        self.near = tuple(k + int(np.sum(m_err <= r)) for k, r in zip(self.near, NEAR_PX))  # type: ignore[assignment]
+        self.measured_right += int(np.sum(_ious(mboxes) >= RIGHT_IOU))
+        parts["ce"].append(tracked["centre_error"].to_numpy())
+        parts["ious"].append(_ious(boxes))
+        vel = tracked.filter(pl.col("vx").is_not_null() & pl.col("est_vx").is_not_null())
+        parts["ex"].append(vel["vx_error"].to_numpy())
+        parts["ey"].append(vel["vy_error"].to_numpy())
+
+    def summary(self) -> EvalSummary:
+        """:func:`evaluate`'s summary, with its arithmetic on the same arrays."""
+        parts = self.parts or {}
+        ce, ious, ex, ey = (np.concatenate(parts.get(k) or [np.array([])]) for k in ("ce", "ious", "ex", "ey"))
+        n = self.visible
+        ious_all = np.concatenate([ious, np.zeros(n - ious.size)]) if n else ious
+        return EvalSummary(
+            tracker=self.tracker or "", track_id=-1 if self.track_id is None else self.track_id,
+            gt_id=int(self.gt_id if self.gt_id is not None else -1), gt_frames=n, tracked_frames=self.tracked,
+            coverage=self.tracked / n if n else 0.0,
+            centre_error_mean=_f(ce.mean()) if ce.size else None,
+            centre_error_median=_f(np.median(ce)) if ce.size else None,
+            centre_error_rmse=_f(np.sqrt(np.mean(ce**2))) if ce.size else None,
+            precision_at_20px=float(np.sum(ce <= PRECISION_PX) / n) if n else None,
+            iou_mean=_f(ious_all.mean()) if ious_all.size else None,
+            success_auc=_f(np.mean([(ious_all > t).mean() for t in IOU_THRESHOLDS])) if ious_all.size else None,
+            velocity_rmse_x=_f(np.sqrt(np.mean(ex**2))) if ex.size else None,
+            velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
+            velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
+            velocity_frames=int(ex.size), measured_frames=self.measured,
+            measured_within_5px=float(self.near[0] / n) if n else None,
+            measured_within_10px=float(self.near[1] / n) if n else None,
+            measured_iou_50=float(self.measured_right / n) if self.boxed else None,
+        )
+
+
+def _ious(boxes: pl.DataFrame) -> np.ndarray:
+    """IoU of each row's estimated box with its truth box (centred boxes)."""
+    if not boxes.height:
+        return np.array([])
+    return box_iou(boxes.select("est_x", "est_y", "est_w", "est_h").to_numpy(), boxes.select("x", "y", "w", "h").to_numpy(),
+                   centred=True)
+
+
+def _pick_track_lazy(traj: pl.LazyFrame, track_id: int | None) -> int:
+    """:func:`_pick_track`'s choice and refusals, on a lazy table (only ``track_id`` and ``x`` read)."""
+    counts = traj.select("track_id", "x").group_by("track_id").agg(pl.len().alias("rows"), pl.col("x").count().alias("len"))
+    counts = counts.collect()
+    if counts.is_empty():
+        raise TrackreplayError("the trajectory has no rows to evaluate")
+    if track_id is None:
+        placed = counts.filter(pl.col("len") > 0).sort(["len", "track_id"], descending=[True, False])
+        if placed.is_empty():
+            raise TrackreplayError("the trajectory has no positioned rows to evaluate")
+        return int(placed["track_id"][0])
+    if counts.filter(pl.col("track_id") == track_id).is_empty():
+        raise TrackreplayError(f"the trajectory has no track {track_id}")
+    return track_id
+
+
+def evaluate_chunked(traj: pl.LazyFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None,
+                     chunk_frames: int = EVAL_CHUNK_FRAMES) -> EvalSummary:
+    """:func:`evaluate`'s summary in memory flat in the log's length: the truth object's frames
+    ``chunk_frames`` at a time, each with only the track's rows on those frames read (a filter the
+    scan pushes down to a Parquet file)."""
+    tid = _pick_track_lazy(traj, track_id)
+    obj = _object_rows(gt, _gt_id(gt, gt_id))
+    track = traj.filter(pl.col("track_id") == tid)
+    running = _Running()
+    for start in range(0, obj.height, chunk_frames):
+        part = obj.slice(start, chunk_frames)
+        lo, hi = part["frame"].min(), part["frame"].max()
+        rows = track.filter(pl.col("frame").is_between(lo, hi)).collect()
+        try:
+            _same_frames(rows, part)
+        except TrackreplayError:  # the whole table's sentence (the first frame and how many disagree)
+            _same_frames(track.collect(), obj)
+            raise
+        running.add(_joined(rows, part))
+    return running.summary()
+
+
+def checked_scan(path: Path, chunk_rows: int = CHECK_ROWS) -> tuple[pl.LazyFrame, pl.DataFrame] | None:
+    """A Parquet trajectory as a lazy table of the ★ columns and its keys (``tracker, status`` as
+    categories, ``track_id, frame, t_ns, x, y``, ~45 bytes a row, canonical order), checked ``chunk_rows`` rows at a time as
+    :func:`~trackreplay.replay.core.export.read_trajectory` checks the whole table. None when any check
+    fails or the file does not read: then read it whole, which names the defect in its own words."""
+    try:
+        scan = pl.scan_parquet(path)
+        names = scan.collect_schema().names()
+        if "confidence" not in names:  # tables written before the column existed
+            scan = scan.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
+        keys = []
+        for part in scan.collect_batches(chunk_size=chunk_rows):  # (a sliced scan would read the whole file each time)
+            part = conform(part, str(path))
+            keys.append(part.select(pl.col("tracker", "status").cast(pl.Categorical), "track_id", "frame", "t_ns", "x", "y"))
+    except (TrackreplayError, pl.exceptions.PolarsError, OSError):
+        return None
+    if not keys:
+        return None
+    table = pl.concat(keys, rechunk=True).sort(list(KEY), maintain_order=True)
+    # sorted, a second row for a track and frame lies next to the first (a hash of every key costs ~200 B a row)
+    if table.select(pl.all_horizontal(pl.col(c) == pl.col(c).shift(1) for c in KEY).any()).item():
+        return None
+    typed = scan.select(pl.col(c).cast(dtype) for c, dtype in SCHEMA.items())
+    return typed, table
 
 
 def format_summary(s: EvalSummary) -> str:
