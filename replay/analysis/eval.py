@@ -163,6 +163,23 @@ def _f(v) -> float | None:
     return None if v is None or not np.isfinite(v) else float(v)
 
 
+
+def _error_figures(ce: np.ndarray, ious_all: np.ndarray, ex: np.ndarray, ey: np.ndarray, n: int) -> dict:
+    """The summary's error figures from the centre errors, the IoUs (0 where nothing was tracked),
+    the velocity errors and the visible frames: one arithmetic for the whole table and the chunks."""
+    return dict(
+        centre_error_mean=_f(ce.mean()) if ce.size else None,
+        centre_error_median=_f(np.median(ce)) if ce.size else None,
+        centre_error_rmse=_f(np.sqrt(np.mean(ce**2))) if ce.size else None,
+        precision_at_20px=float(np.sum(ce <= PRECISION_PX) / n) if n else None,
+        iou_mean=_f(ious_all.mean()) if ious_all.size else None,
+        success_auc=_f(np.mean([(ious_all > t).mean() for t in IOU_THRESHOLDS])) if ious_all.size else None,
+        velocity_rmse_x=_f(np.sqrt(np.mean(ex**2))) if ex.size else None,
+        velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
+        velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
+        velocity_frames=int(ex.size),
+    )
+
 def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = None, gt_id: int | None = None) -> tuple[EvalSummary, pl.DataFrame]:
     frames = per_frame(traj, gt, track_id=track_id, gt_id=gt_id)
     visible = frames.filter(pl.col("x").is_not_null() & (pl.col("visible").fill_null(True)))
@@ -189,16 +206,7 @@ def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = Non
         gt_frames=n,
         tracked_frames=tracked.height,
         coverage=tracked.height / n if n else 0.0,
-        centre_error_mean=_f(ce.mean()) if ce.size else None,
-        centre_error_median=_f(np.median(ce)) if ce.size else None,
-        centre_error_rmse=_f(np.sqrt(np.mean(ce**2))) if ce.size else None,
-        precision_at_20px=float(np.sum(ce <= PRECISION_PX) / n) if n else None,
-        iou_mean=_f(ious_all.mean()) if ious_all.size else None,
-        success_auc=_f(np.mean([(ious_all > t).mean() for t in IOU_THRESHOLDS])) if ious_all.size else None,
-        velocity_rmse_x=_f(np.sqrt(np.mean(ex**2))) if ex.size else None,
-        velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
-        velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
-        velocity_frames=int(ex.size),
+        **_error_figures(ce, ious_all, ex, ey, n),
         measured_frames=measured.height,
         measured_within_5px=near[0], measured_within_10px=near[1],
         measured_iou_50=float(np.sum(mious >= RIGHT_IOU) / n) if n_boxes else None,
@@ -267,16 +275,7 @@ class _Running:
             tracker=self.tracker or "", track_id=-1 if self.track_id is None else self.track_id,
             gt_id=int(self.gt_id if self.gt_id is not None else -1), gt_frames=n, tracked_frames=self.tracked,
             coverage=self.tracked / n if n else 0.0,
-            centre_error_mean=_f(ce.mean()) if ce.size else None,
-            centre_error_median=_f(np.median(ce)) if ce.size else None,
-            centre_error_rmse=_f(np.sqrt(np.mean(ce**2))) if ce.size else None,
-            precision_at_20px=float(np.sum(ce <= PRECISION_PX) / n) if n else None,
-            iou_mean=_f(ious_all.mean()) if ious_all.size else None,
-            success_auc=_f(np.mean([(ious_all > t).mean() for t in IOU_THRESHOLDS])) if ious_all.size else None,
-            velocity_rmse_x=_f(np.sqrt(np.mean(ex**2))) if ex.size else None,
-            velocity_rmse_y=_f(np.sqrt(np.mean(ey**2))) if ey.size else None,
-            velocity_error_mean=_f(np.mean(np.hypot(ex, ey))) if ex.size else None,
-            velocity_frames=int(ex.size), measured_frames=self.measured,
+            **_error_figures(ce, ious_all, ex, ey, n), measured_frames=self.measured,
             measured_within_5px=float(self.near[0] / n) if n else None,
             measured_within_10px=float(self.near[1] / n) if n else None,
             measured_iou_50=float(self.measured_right / n) if self.boxed else None,
