@@ -75,6 +75,7 @@ def _panning_street_log(folder: Path) -> Path:
     return marked
 
 
+@pytest.mark.slow  # 12 s on 2 cores: keeps the default suite under its 4-minute budget (CI runs -m slow too)
 def test_two_processes_agree_on_the_colour_pf_under_a_moving_camera(tmp_path: Path) -> None:
     log = _panning_street_log(tmp_path / "scene")
     a = _replay(log, "colorpf", tmp_path / "a", "0", 1)

@@ -124,6 +124,7 @@ def _closed_pipe_run(*argv: str) -> subprocess.CompletedProcess:
         os.close(write)
 
 
+@pytest.mark.slow  # 6 s on 2 cores: keeps the default suite under its 4-minute budget (CI runs -m slow too)
 def test_a_closed_stdout_keeps_the_exit_status(short_sim: Path, tmp_path: Path) -> None:
     """A review: `diff A B | true` exited 0 for two different runs (1 without the pipe)."""
     golden = Path(__file__).resolve().parents[2] / "golden" / "flow-sim1-24f.mcap"
