@@ -102,10 +102,6 @@ class WorldBehind:
         self._pictures: deque[_Picture] = deque(maxlen=max(cfg.frames, 1))
         self._now: tuple[int, np.ndarray, np.ndarray] | None = None  # (frame index, grey, small) of the frame asked about
 
-    def reset(self) -> None:
-        self._pictures.clear()
-        self._now = None
-
     def push(self, index: int, image: np.ndarray) -> None:
         """Keep frame ``index``'s picture (after the frame is tracked)."""
         if self.cfg.frames == 0:
