@@ -344,6 +344,7 @@ class GolfTracker(TrackerBase):
         self.life.start()
         self.sightings.restart()  # a re-anchor is no step of the ball's
         self.validator.reset()
+        self.validator.seed_at(frame.index, (region.x, region.y))  # its speed is unknown until a step is seen
         self.scenery.reset()  # the user says where the ball is
         self.reinit.landed_at, self.reinit.followed_landing = None, False  # a landing before the mark is not this track's
         name, self.look.lut_name = self.luts.start_names(frame.image, region)

@@ -48,7 +48,7 @@ from trackreplay.trackers.golf.config import BlobConfig, ValidateConfig
 
 MERGED_SHAPES = (CIRCULARITY, EXCESS, ELONGATED)  # blobs refused for their shape, not their size
 VERDICTS = ("measured", "confirmed", "no_candidate", "low_confidence", "outside_gate", "outside_image", "lost", "start",
-            "ambiguous", "merged_nearer", "too_near", "seen_before")
+            "ambiguous", "merged_nearer", "too_near", "seen_before", "unconfirmed")
 
 
 @dataclass(frozen=True, eq=False)
@@ -129,6 +129,7 @@ class Tentative:
     shapes: list[tuple[float, float]]
     in_view: list[tuple[float, float]] = field(default_factory=list)
     repeats: list[bool] = field(default_factory=list)  # the row's frame showed the picture before it again
+    seeded: bool = False  # its first row is the mark's (:meth:`Validator.seed_at`): the ball's own start
 
     def __post_init__(self) -> None:
         if not self.in_view:
@@ -145,9 +146,13 @@ class Tentative:
     def expected(self) -> np.ndarray:
         """Constant-velocity extrapolation of its last two points to the next frame (its last point
         when it has one), in the latest pose's pixels: the ball's motion against the world, so a
-        camera sweeping after it does not bend the track."""
+        camera sweeping after it does not bend the track. Rows frames apart (a track seeded at the
+        mark, whose next sighting came later) give the step per frame."""
         last = np.array(self.in_view[-1])
-        return last + (last - np.array(self.in_view[-2])) if len(self.in_view) > 1 else last
+        if len(self.in_view) < 2:
+            return last
+        frames = max(self.rows[-1][0] - self.rows[-2][0], 1)
+        return last + (last - np.array(self.in_view[-2])) / frames
 
 
 SCENERY_PLACES = 4
@@ -169,11 +174,34 @@ class Validator:
         self.tracks: list[Tentative] = []
         self.best: Tentative | None = None  # the longest live track (shown; confirmed from)
         self.scenery: set[int] = set()  # this frame's blobs on still tracks in a fixed view
+        self.anchor: tuple[int, float, float] | None = None  # the mark (frame, x, y) while the ball's speed is unknown
 
     def reset(self) -> None:
         self.tracks = []
         self.best = None
         self.scenery = set()
+        self.anchor = None
+
+    def seed_at(self, index: int, point: tuple[float, float]) -> None:
+        """The user marked the ball at ``point`` on frame ``index``: until it is seen again within a
+        diameter of there (at rest, or slow) or a track from the mark is confirmed, its speed is
+        unknown, and a blob away from the mark is no measurement of it (:meth:`validate`). Every
+        blob within reach on the ``confirm_frames`` frames after the mark starts a tentative track
+        from the mark itself (:meth:`_branch_from_mark`): the mark is the track's first row."""
+        self.anchor = (int(index), float(point[0]), float(point[1]))
+
+    def _first_step(self, index: int, point: np.ndarray, diameter: float) -> bool:
+        """``point`` is a step of unknown speed: away from the mark (more than a diameter) while no
+        step of the ball's has been seen since it (a single mark gives no velocity: the blob nearest a
+        prediction that stays at the mark is as likely a player's shoe as the shuttle). Once no path
+        from the mark is left and none can start (``confirm_frames`` after it), the samples, drawn by
+        the in-gate blobs meanwhile, are all there is to go on: the gate measures as before."""
+        if self.anchor is not None and index - self.anchor[0] > self.cfg.confirm_frames and not any(
+                t.seeded and t.rows[-1][0] == index - 1 for t in self.tracks):
+            self.anchor = None
+        if self.anchor is None or index == self.anchor[0]:
+            return False
+        return math.hypot(float(point[0]) - self.anchor[1], float(point[1]) - self.anchor[2]) > diameter
 
     def follow_camera(self, homography: np.ndarray) -> None:
         """The pose changed by ``homography`` (last frame's pixels -> this frame's): the tentative
@@ -260,8 +288,12 @@ class Validator:
                                      scale=scale, lost=lost)
         found, in_gate, outside = seen
         if found is not None and found.verdict == "measured":
-            self.reset()
-            return found
+            if not self._first_step(index, gated.blobs.centroid[found.candidate], diameter):
+                anchor = self.anchor if self.anchor is not None and self.anchor[0] == index else None
+                self.reset()
+                self.anchor = anchor  # (the mark's own frame: the speed is still unknown)
+                return found
+            found = dataclasses.replace(found, verdict="unconfirmed", confidence=0.0)
         verdict = "outside_image" if outside else "lost" if lost else "outside_gate" if ok.any() else "no_candidate"
         border = None
         if outside and entry_only:
@@ -277,7 +309,7 @@ class Validator:
         k, fit = self._extend(index, gated, predicted, diameter, scale, border, must_move=entry_only, evidence=evidence,
                               repeat=repeat)
         if k >= 0 and fit >= cfg.confirm_fit:
-            if self._ambiguous(gated, k, scale):
+            if self._ambiguous(gated, k, scale) if not self.best.seeded else self._rival_from_mark(diameter):
                 return Validation("ambiguous", 0.0, fit, 0.0, radius, k, self._rows(), in_gate)
             return Validation("confirmed", fit, fit, 0.0, radius, k, self._rows(), in_gate)
         if found is not None:
@@ -293,9 +325,18 @@ class Validator:
         if not others.size or self.best is None:
             return False
         slack = self.blobs.area_slack_px * scale * scale
-        typical = float(np.median(np.array(self.best.shapes, float).reshape(-1, 2)[:, 0]))
+        typical = float(np.nanmedian(np.array(self.best.shapes, float).reshape(-1, 2)[:, 0]))
         ratio = np.abs(np.log((gated.blobs.area[others] + slack) / (typical + slack)))
         return bool((ratio <= math.log(self.blobs.area_tolerance)).any())
+
+    def _rival_from_mark(self, diameter: float) -> bool:
+        """Another track from the mark is alive this frame on a blob more than a diameter from the one to
+        confirm: two paths leave the mark, and until one of them ends the tracker cannot tell which
+        is its ball (a player's shoe moves away from a shuttle's mark too)."""
+        best = self.best
+        return any(t.seeded and t is not best and t.rows[-1][0] == best.rows[-1][0]
+                   and math.hypot(t.rows[-1][1] - best.rows[-1][1], t.rows[-1][2] - best.rows[-1][2]) > diameter
+                   for t in self.tracks)
 
     def confirmed_velocity(self) -> tuple[np.ndarray, float]:
         """The confirmed track's velocity for the next frame (px/frame): its last step plus the
@@ -344,6 +385,7 @@ class Validator:
         if min_move > 0 and float(np.hypot(*(rows[-1, 1:] - rows[0, 1:]))) < min_move:
             return 0.0
         shapes = np.array([track.shapes[j] for j in last], float).reshape(-1, 2)
+        shapes = shapes[np.isfinite(shapes[:, 0])]  # the mark's row (a seeded track) has no blob's shape
         return track_fit(shapes[:, 0], shapes[:, 1], self.blobs, scale, self.cfg.confirm_min_area_px)
 
     def _extend(self, index: int, gated: GatedBlobs, predicted: np.ndarray, diameter: float, scale: float,
@@ -361,6 +403,7 @@ class Validator:
         ok = np.flatnonzero(gated.accepted if evidence is None else evidence)
         rounds = roundness(gated.blobs)
         kept, free = self._continue_tracks(index, gated, rounds, ok, diameter, scale, repeat)
+        kept += self._branch_from_mark(index, gated, rounds, ok, diameter, scale)
         kept += self._new_tracks(index, gated, rounds, ok[free], predicted, border)
         min_move = diameter if must_move else 0.0
         kept = self._keep(kept, must_move, min_move)
@@ -370,24 +413,44 @@ class Validator:
                          scale: float, repeat: bool) -> tuple[list[tuple[Tentative, int]], np.ndarray]:
         """The tracks live on the frame before, longest first, each extended by the free blob of ``ok``
         nearest its extrapolation when within reach: the (track, blob row) pairs, and which of ``ok``
-        no track took."""
+        no track took. A track from the mark (``seeded``) takes its blob whether or not another took it,
+        and leaves it free: the paths from the mark are hypotheses about one ball, not rival claims."""
         cfg, c = self.cfg, gated.blobs.centroid
         live = sorted((t for t in self.tracks if index - t.rows[-1][0] == 1), key=lambda t: -len(t.rows))
         free = np.ones(len(ok), bool)
         kept: list[tuple[Tentative, int]] = []
         for track in live:
-            if not free.any():
-                break
+            if not ok.size or not (free.any() or track.seeded):
+                continue
             reach = (cfg.confirm_px if len(track.rows) > 1 else cfg.confirm_first_step_px) * scale + diameter
             expected = track.expected()
-            dist = np.where(free, np.hypot(c[ok, 0] - expected[0], c[ok, 1] - expected[1]), np.inf)
+            dist = np.hypot(c[ok, 0] - expected[0], c[ok, 1] - expected[1])
+            dist = dist if track.seeded else np.where(free, dist, np.inf)
             j = int(np.argmin(dist))
             if dist[j] <= reach:
-                free[j] = False
+                free[j] = free[j] and track.seeded
                 k = int(ok[j])
                 track.add(index, (float(c[k, 0]), float(c[k, 1])), (float(gated.blobs.area[k]), float(rounds[k])), repeat)
                 kept.append((track, k))
         return kept, free
+
+    def _branch_from_mark(self, index: int, gated: GatedBlobs, rounds: np.ndarray, ok: np.ndarray, diameter: float,
+                          scale: float) -> list[tuple[Tentative, int]]:
+        """On the ``confirm_frames`` frames after the mark, while the ball's speed is unknown, a track from
+        the mark to every blob of ``ok`` within ``confirm_first_step_px`` (+ D) per frame since it,
+        nearest the mark first (the blob may also extend or start another track)."""
+        if self.anchor is None:
+            return []
+        frame, x, y = self.anchor
+        gap = index - frame
+        if not 0 < gap <= self.cfg.confirm_frames or not ok.size:
+            return []
+        c = gated.blobs.centroid[ok]
+        dist = np.hypot(c[:, 0] - x, c[:, 1] - y)
+        near = np.flatnonzero(dist <= self.cfg.confirm_first_step_px * scale * gap + diameter)
+        return [(Tentative([(frame, x, y), (index, float(c[j, 0]), float(c[j, 1]))],
+                           [(math.nan, math.nan), (float(gated.blobs.area[ok[j]]), float(rounds[ok[j]]))], seeded=True),
+                 int(ok[j])) for j in near[np.argsort(dist[near], kind="stable")]]
 
     @staticmethod
     def _new_tracks(index: int, gated: GatedBlobs, rounds: np.ndarray, starts: np.ndarray, predicted: np.ndarray,
@@ -420,14 +483,16 @@ class Validator:
 
     def _ready(self, kept: list[tuple[Tentative, int]], gated: GatedBlobs, scale: float,
                min_move: float) -> tuple[int, float]:
-        """The blob row and track fit of the track to confirm: of several that could be, the one most
+        """The blob row and track fit of the track to confirm: of several that could be, one from the mark
+        (:meth:`_branch_from_mark`) before any other, then the one most
         like the ball last seen (its area), then :attr:`best`; else the longest track's (-1: none)."""
         fits = [self._fit(track, scale, min_move) for track, _ in kept]
         ready = [j for j, fit in enumerate(fits) if fit >= self.cfg.confirm_fit]
+        ready = [j for j in ready if kept[j][0].seeded] or ready  # a path from the mark first: the ball's own
         if ready:
             slack = self.blobs.area_slack_px * scale * scale
             target = float(gated.targets[0]) + slack
-            unlike = [abs(math.log((float(np.median(np.array(kept[j][0].shapes)[:, 0])) + slack) / target)) for j in ready]
+            unlike = [abs(math.log((float(np.nanmedian(np.array(kept[j][0].shapes)[:, 0])) + slack) / target)) for j in ready]
             j = ready[int(np.argmin(unlike))]
             self.best = kept[j][0]
             return kept[j][1], fits[j]
@@ -436,4 +501,5 @@ class Validator:
     def confirmed_shape(self) -> tuple[float, float]:
         """Median area and roundness of the confirmed tentative blobs: the ball's new targets."""
         shapes = np.array(self.best.shapes if self.best is not None else [], float).reshape(-1, 2)
+        shapes = shapes[np.isfinite(shapes[:, 0])]
         return float(np.median(shapes[:, 0])), float(np.nanmedian(shapes[:, 1])) if np.isfinite(shapes[:, 1]).any() else 0.9

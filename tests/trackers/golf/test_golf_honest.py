@@ -283,7 +283,9 @@ def test_a_bounce_off_the_prediction_is_confirmed_from_the_low_confidence_frames
     frames = sequence(backdrop, draw_ball, path, [(0, path[0])])
     results = run(frames)
     st = statuses(results)
-    assert st[:10] == ["measured"] * 10
+    # marked in flight (15 px a frame, more than its size): confirmed from the mark on frame 2 (mark -> 1 -> 2)
+    assert st[:10] == ["measured", "predicted"] + ["measured"] * 8
+    assert results[1][1].validation.verdict == "unconfirmed" and results[2][1].validation.verdict == "confirmed"
     assert "measured" not in st[10:12]  # a jump off the motion model is not taken on one frame's word
     confirmed = [k for k in range(10, 20) if results[k][1].validation.verdict == "confirmed"]
     assert confirmed and confirmed[0] <= 14, st

@@ -74,11 +74,15 @@ def marked_sequence(backdrop, draw_ball, positions):
             for k, p in enumerate(positions)]
 
 
-def assert_followed(rows, path):
-    """Every row ``measured`` within 3 px of the ball."""
-    assert [s.status for s in rows] == ["measured"] * len(path)
+def assert_followed(rows, path, unconfirmed=0):
+    """Every row ``measured`` within 3 px of the ball, but the ``unconfirmed`` rows after the mark:
+    a ball marked in flight, its first steps farther than its size from the mark, is `predicted`
+    until a path from the mark confirms it (trackers/golf/validate.py, ``Validator.seed_at``)."""
+    statuses = [s.status for s in rows]
+    assert statuses == ["measured"] + ["predicted"] * unconfirmed + ["measured"] * (len(path) - 1 - unconfirmed), statuses
     for s, (x, y) in zip(rows, path):
-        assert abs(s.x - x) < 3 and abs(s.y - y) < 3
+        if s.status == "measured":
+            assert abs(s.x - x) < 3 and abs(s.y - y) < 3
 
 
 def track(frames, world_behind=None, **particles):
@@ -100,11 +104,12 @@ def test_a_followed_ball_that_stops_in_the_picture_is_still_measured(backdrop, d
     frames = marked_sequence(backdrop, draw_ball, path)
     # The backdrop here stands still, so the world behind the ball (trackers/golf/world_behind.py) would
     # rightly refuse a ball at rest after it moved; this test is about the samples, so it is off.
-    assert_followed(track(frames, world_behind=WorldBehindConfig(frames=0)), path)
+    # (25 px a frame, 2.5 diameters: the first step from the mark is confirmed on frame 2, mark -> 1 -> 2)
+    assert_followed(track(frames, world_behind=WorldBehindConfig(frames=0)), path, unconfirmed=1)
     # Constant-velocity samples alone run on past it: predicted as soon as it stops, and found
     # again only by the evidence a jump needs (a tentative track, three frames).
     moving_only = track(frames, stop_share=0.0)
-    assert [s.status for s in moving_only[:10]] == ["measured"] * 10
+    assert [s.status for s in moving_only[:10]] == ["measured", "predicted"] + ["measured"] * 8
     assert [s.status for s in moving_only[10:12]] == ["predicted"] * 2, [s.status for s in moving_only]
     assert all(abs(s.x - 625.0) < 2 for s in moving_only[12:] if s.status == "measured")
 

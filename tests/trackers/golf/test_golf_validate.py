@@ -184,3 +184,53 @@ def test_a_repeated_picture_long_ago_leaves_the_last_steps_alone():
     validator.best = track
     velocity, unsure = validator.confirmed_velocity()
     assert velocity.tolist() == [4.0, 0.0] and unsure == 4.0
+
+
+def discs_at(*points: tuple[float, float], radius: int = 4) -> GatedBlobs:
+    mask = np.zeros(SIZE[::-1], np.uint8)
+    for x, y in points:
+        cv2.circle(mask, (int(round(x)), int(round(y))), radius, 1, -1)
+    blobs = measure_blobs(mask)
+    return GatedBlobs(blobs, np.zeros(len(blobs.area), np.int64), -1, np.array([float(blobs.area[0]), 0.9]), 1.0)
+
+
+def after_a_mark(frames: list[tuple[tuple[float, float], ...]], mark: tuple[float, float] = (400.0, 300.0)) -> list[str]:
+    """Marked at ``mark`` on frame 0 (measured there), then the blobs of each later frame, the
+    prediction staying at the mark (a single mark gives no velocity)."""
+    validator = Validator(ValidateConfig(), BlobConfig())
+    validator.seed_at(0, mark)
+    out = []
+    for k, points in enumerate([(mark,)] + frames):
+        check = validator.validate(index=k, gated=discs_at(*points), predicted=np.array(mark), spread=np.full(2, 20.0),
+                                   diameter=9.0, size=SIZE, scale=1.0, lost=False)
+        out.append(check.verdict)
+    return out
+
+
+def test_a_blob_away_from_the_mark_is_no_measurement_until_a_track_from_the_mark_confirms():
+    # The shuttle leaves the mark at 40 px a frame, unseen on frame 1; a player's shoe 30 px from the
+    # mark, nearer the prediction than the shuttle, is seen on frames 1-2 and then hidden.
+    shoe = (390.0, 330.0)
+    verdicts = after_a_mark([(shoe,), (shoe, (480.0, 300.0)), ((520.0, 300.0),), ((560.0, 300.0),)])
+    assert verdicts[0] == "measured"  # the mark's own frame
+    assert verdicts[1] == "unconfirmed"  # the shoe, nearest the prediction, is not measured on a guess
+    assert "measured" not in verdicts[1:3]
+    assert verdicts[3] == "confirmed"  # mark -> 480 (two frames) -> 520, and no other path from the mark alive
+
+
+def test_a_path_from_the_mark_waits_while_another_one_lives():
+    # as above, but the shoe stays in view: two paths leave the mark, neither is taken
+    shoe = (390.0, 330.0)
+    verdicts = after_a_mark([(shoe,), (shoe, (480.0, 300.0)), (shoe, (520.0, 300.0)), (shoe, (560.0, 300.0))])
+    assert "confirmed" not in verdicts and "measured" not in verdicts[1:]
+
+
+def test_a_ball_seen_at_its_mark_is_measured_at_once():
+    assert after_a_mark([((401.0, 300.0),), ((400.0, 301.0),)]) == ["measured", "measured", "measured"]
+
+
+def test_two_paths_from_the_mark_confirm_neither():
+    # two look-alikes leave the mark in opposite directions at the same speed
+    frames = [((400.0 + 40 * k, 300.0), (400.0 - 40 * k, 300.0)) for k in range(1, 4)]
+    verdicts = after_a_mark(frames)
+    assert "confirmed" not in verdicts and "measured" not in verdicts[1:]
