@@ -19,7 +19,7 @@ import numpy as np
 
 # Intercept, then one slope per feature of RowEvidence.features(), in that order; fitted on
 # benchmarks/corpora/colorpf-box.toml (docs/colorpf.md, "Calibrated confidence").
-COEFFICIENTS = (1.432, -1.76, 0.619, 1.19, 3.844, -3.816, -3.142, -0.714)
+COEFFICIENTS = (1.26, -1.751, 0.749, 1.218, 3.921, -3.523, -2.967, -0.577)
 UNSUPPORTED_SCALE = 60  # frames without support are counted in units of 60 (2 s at 30 fps), capped at 1
 
 

@@ -49,7 +49,9 @@ a grey picture is histogrammed by grey level and gradient direction (``likelihoo
 :mod:`~trackreplay.trackers.appearance.gradient`); the camera's measured zoom moves the cloud but does not
 size the target (``camera.scale_size``); a region grows the box by at most ``refine.max_growth`` per side
 past the last "measured" box; N = 100 particles; the reported confidence is the fitted probability that
-the row is right (``calibrate``, :mod:`.calibration`). Off by default,
+the row is right (``calibrate``, :mod:`.calibration`); on a grey picture the layout (template) cue is on too
+(``likelihood.grey_template``), and wherever that cue is on a colour match is "measured" only when the estimate's
+box correlates with the target's template (``likelihood.layout_vouches``, :meth:`_layout_agrees`). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -102,6 +104,8 @@ GREY_USES = {"hsv": "the brightness histogram of Perez et al. is used instead (l
              "gradient": "a grey-level and gradient-direction histogram is used instead (likelihood.histogram = "
                          "\"gradient\": grey level of flat pixels, direction of edges; likelihood.grey = \"hsv\" for "
                          "Perez et al.'s brightness histogram)"}
+GREY_LAYOUT = ("a grey histogram drifts with the light and shadows share it, so the layout cue is on too (the "
+               "marked box's grey template, NCC at weight {:g}, likelihood.grey_template)")
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
@@ -342,6 +346,10 @@ class ColorPfTracker(TrackerBase):
             # no hue or saturation to histogram: every box would score alike, and confidently
             likelihood = dataclasses.replace(likelihood, histogram=likelihood.grey)
             self._say(GREY_NOTICE + GREY_USES[likelihood.grey])
+            if likelihood.grey_template > 0 and likelihood.template == 0:  # the layout too (grey_template)
+                likelihood = dataclasses.replace(likelihood, template=likelihood.grey_template, template_mask="kernel")
+                self._say(GREY_LAYOUT.format(likelihood.grey_template))
+            self.config = dataclasses.replace(cfg, likelihood=likelihood)  # the cues' weights (_cues) read it
         if likelihood.histogram == "gradient":  # edges from the target's surroundings' median magnitude (0.5)
             self.model = ColourModel(likelihood, edge_threshold(context, likelihood.edge_quantile))
         elif likelihood is not cfg.likelihood:
@@ -737,13 +745,25 @@ class ColorPfTracker(TrackerBase):
         if matched:
             self.placed_run.reset()
             status = life.supported()
-            if not weigh_only and self._beside_larger_region(image, view, estimate):
+            if not weigh_only and (self._beside_larger_region(image, view, estimate)
+                                   or not self._layout_agrees(image, estimate)):
                 return "predicted"
             return status
         if placed and cfg.refine.keeps_track and self.placed_run.within(cfg.refine.keep_frames):
             self.placed_run.extend()
             return life.held()  # the foreground region places the target: not a miss towards "lost"
         return life.missed()
+
+    def _layout_agrees(self, image: np.ndarray, estimate: np.ndarray) -> bool:
+        """``likelihood.layout_vouches``: where the layout (template) cue is on, the estimate's box must correlate
+        with the target's template (NCC > 0; a box not wholly in the picture scores 0) for its colour match to
+        vouch; True where the cue is off. Only the status changes (the misses towards "lost" are colour's)."""
+        cfg = self.config.likelihood
+        if not cfg.layout_vouches or cfg.template <= 0 or self.template is None or self.template.template is None:
+            return True
+        ncc = template_scores(image, self.template.template, estimate[None, :2], estimate[2:4], cfg.template_side,
+                              self.template.weights)
+        return bool(ncc[0] > 0.0)
 
     def _beside_larger_region(self, image: np.ndarray, view: ForegroundView, estimate: np.ndarray) -> bool:
         """``neighbour_check``: a neighbour holds more foreground than the marked box did: the estimate is on

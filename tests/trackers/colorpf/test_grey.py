@@ -82,8 +82,10 @@ def test_a_grey_log_is_followed_on_gradients_where_brightness_stays_behind():
     tracker, errors = _track(ColorPfConfig(likelihood=LikelihoodConfig(grey="gradient")))
     assert tracker.model.config.histogram == "gradient"
     assert max(errors) < 8.0  # followed over the fence for 50 px
-    _, brightness = _track(ColorPfConfig(likelihood=LikelihoodConfig(grey="hsv")))
+    _, brightness = _track(ColorPfConfig(likelihood=LikelihoodConfig(grey="hsv", grey_template=0.0)))
     assert brightness[-1] > 30.0  # Pérez et al.'s V histogram: every box scores alike, the cloud stays behind
+    _, laid_out = _track(ColorPfConfig(likelihood=LikelihoodConfig(grey="hsv")))
+    assert max(laid_out) < 8.0  # the layout cue (grey_template, on by default) carries even the V histogram
 
 
 def test_paper_keeps_the_brightness_fallback():
@@ -92,3 +94,41 @@ def test_paper_keeps_the_brightness_fallback():
     tracker.step(Frame(index=0, t_ns=0, image=_scene()[0], all_hints=(mark,), hints=(mark,)))
     assert tracker.model.config.histogram == "hsv"
 
+
+
+def _started(config: ColorPfConfig) -> tuple[ColorPfTracker, np.ndarray]:
+    """The tracker after the grey scene's marked frame, and that frame."""
+    tracker = ColorPfTracker(config, np.random.default_rng(0))
+    image = _scene()[0]
+    mark = InitRegion(0, 0, 37.5, 51.5, SIDE, SIDE, "target")
+    tracker.step(Frame(index=0, t_ns=0, image=image, all_hints=(mark,), hints=(mark,)))
+    return tracker, image
+
+
+def test_a_grey_picture_turns_the_layout_cue_on_and_paper_does_not():
+    tracker, _ = _started(ColorPfConfig())
+    lik = tracker.config.likelihood
+    assert (lik.histogram, lik.template, lik.template_mask) == ("gradient", 4.0, "kernel")
+    assert tracker.template is not None and tracker.template.template is not None
+    assert "layout cue is on" in tracker.intermediates.notice
+    explicit, _ = _started(ColorPfConfig(likelihood=LikelihoodConfig(template=2.0)))
+    assert explicit.config.likelihood.template == 2.0  # a weight the config sets is kept
+    off, _ = _started(ColorPfConfig(likelihood=LikelihoodConfig(grey_template=0.0)))
+    assert off.config.likelihood.template == 0.0 and off.template is None
+    paper, _ = _started(config_from_dict(ColorPfConfig, PAPER))
+    assert paper.config.likelihood.template == 0.0 and not paper.config.likelihood.layout_vouches
+
+
+def test_a_colour_match_vouches_only_where_the_layout_agrees():
+    """``likelihood.layout_vouches``: NCC > 0 with the target's template, else the row is not "measured"."""
+    tracker, image = _started(ColorPfConfig())
+    flat = image.copy()
+    flat[20:80, 60:160] = 120  # a patch of one grey level: no layout (NCC 0)
+    assert tracker._layout_agrees(image, np.array([37.5, 51.5, SIDE, SIDE]))  # on the target
+    assert not tracker._layout_agrees(flat, np.array([110.0, 50.0, SIDE, SIDE]))
+    assert not tracker._layout_agrees(image, np.array([4.0, 51.5, SIDE, SIDE]))  # not wholly in the picture
+    inverted = image.copy()  # the target's stripes a half period off: its histogram, the opposite layout
+    inverted[44:44 + SIDE, 30:30 + SIDE] = 230 - image[44:44 + SIDE, 30:30 + SIDE]
+    assert not tracker._layout_agrees(inverted, np.array([37.5, 51.5, SIDE, SIDE]))
+    colour, _ = _started(ColorPfConfig(likelihood=LikelihoodConfig(grey_template=0.0)))
+    assert colour._layout_agrees(flat, np.array([110.0, 50.0, SIDE, SIDE]))  # no layout cue: the colour decides
