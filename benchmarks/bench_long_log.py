@@ -21,6 +21,9 @@ reports it) is made directly, then each fresh process loads what a replay has lo
 OpenCV) and exports it, a piece at a time (``export_trajectory``, ``--interpolate linear``) or the whole table
 (``fill_gaps``, as before); both outputs compared.
 
+``--export-only`` also runs `trackreplay export SPILL.parquet OUT.parquet` (``cli_export``: the file as a user's
+trajectory, checked and exported a piece at a time; its peak RSS is the whole process's) and compares its rows.
+
 ``--eval-only``: `eval` alone, on the scene's log and that flow track as T.parquet: the chunked single-object
 path (replay/analysis/eval.py ``evaluate_chunked``) against the whole table (``--per-frame`` takes it); the
 two --json files compared.
@@ -187,12 +190,19 @@ def export_only(sizes: list[int], out: Path) -> int:
                 res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
                 entry[name] = {"base_rss_kib": int(res[-3]), "peak_rss_kib": int(res[-2]),
                                "export_mb": round((int(res[-2]) - int(res[-3])) / 1024, 1), "seconds": round(float(res[-1]), 2)}
-            entry["same_rows"] = pl.read_parquet(Path(tmp) / f"pieces-{n}.parquet").equals(
-                pl.read_parquet(Path(tmp) / f"whole_table-{n}.parquet"), null_equal=True)
+            # `trackreplay export TRAJ OUT` on the same file as a user's trajectory (checked and exported in pieces)
+            cli_out = Path(tmp) / f"cli-{n}.parquet"
+            code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=["export", str(spill), str(cli_out)]))
+            entry["cli_export"] = {"exit": int(code), "peak_rss_kib": rss, "seconds": round(seconds, 2)}
+            whole = pl.read_parquet(Path(tmp) / f"whole_table-{n}.parquet")
+            entry["same_rows"] = pl.read_parquet(Path(tmp) / f"pieces-{n}.parquet").equals(whole, null_equal=True)
+            entry["cli_same_rows"] = pl.read_parquet(cli_out).equals(whole, null_equal=True)
             runs.append(entry)
             print(json.dumps(entry), flush=True)
-    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("pieces", "whole_table")}
-    results = {"machine": describe(), "scene": "the flow track of the long-log scene, one row a frame, 3 % lost",
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1)
+              for k in ("pieces", "whole_table", "cli_export")}
+    results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
+               "scene": "the flow track of the long-log scene, one row a frame, 3 % lost",
                "runs": runs, "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"export peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")

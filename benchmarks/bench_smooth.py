@@ -16,7 +16,11 @@ module and, with ``--before REV``, for ``replay/analysis/smooth.py`` as it was a
 (``smooth.py`` and ``rts.py`` loaded from ``git show``; same inputs; outputs compared: they must be
 identical).
 
-Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2] [--before HEAD] [--layout-rows 60000]
+``--before-dir DIR`` does the same with copies of ``smooth.py`` and ``rts.py`` kept in DIR. The fits must
+be the same; their log-likelihoods are compared to a relative tolerance (a long track's grid search sums
+its terms piece by piece, ``rts._pieces_loglik``).
+
+Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2] [--before HEAD | --before-dir DIR] [--layout-rows 60000]
 Writes benchmarks/results/smooth.json.
 """
 
@@ -291,6 +295,22 @@ def smooth_at(rev: str):
     return module
 
 
+def smooth_from(folder: Path):
+    """The smoother of the copies ``folder/smooth.py`` and ``folder/rts.py`` (an earlier tree's files)."""
+    import importlib.util
+
+    def load(name: str):
+        spec = importlib.util.spec_from_file_location(f"{name}_before", folder / f"{name}.py")
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[f"{name}_before"] = module
+        spec.loader.exec_module(module)
+        return module
+
+    module = load("smooth")
+    module.rts = load("rts")
+    return module
+
+
 def bench_layouts(rows: int, repeats: int, before) -> dict:
     """Rows per second of the whole ``smooth_trajectory`` on one long track and on many short ones."""
     out: dict = {}
@@ -312,7 +332,11 @@ def bench_layouts(rows: int, repeats: int, before) -> dict:
                 entry.setdefault("_results", []).append(result)
             if before is not None:
                 (a, fa), (b, fb) = entry.pop("_results")
-                entry["identical"] = a.equals(b, null_equal=True) and [vars(f) for f in fa] == [vars(f) for f in fb]
+                fits = [{**vars(f), "log_likelihood": None} for f in fa] == [{**vars(f), "log_likelihood": None} for f in fb]
+                entry["identical"] = a.equals(b, null_equal=True) and fits  # the table to the bit, the same fits
+                entry["max_rel_diff_log_likelihood"] = max(
+                    (abs(x.log_likelihood - y.log_likelihood) / max(abs(y.log_likelihood), 1e-300) for x, y in zip(fa, fb)),
+                    default=0.0)  # rts._pieces_loglik sums a long track's terms piece by piece
             entry.pop("_results", None)
             out[f"{tracker}/{layout}"] = entry
             print(tracker, layout, {k: round(v["rows_per_cpu_s"]) for k, v in entry.items() if isinstance(v, dict)},
@@ -327,16 +351,19 @@ def main() -> int:
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--models", nargs="+", default=list(MODELS), choices=MODELS)
     ap.add_argument("--before", help="git revision whose replay/analysis/smooth.py to time beside the tree's")
+    ap.add_argument("--before-dir", type=Path, help="a folder with an earlier smooth.py and rts.py to time beside the tree's")
     ap.add_argument("--layout-rows", type=int, default=60_000)
     ap.add_argument("--skip-models", action="store_true", help="only the layouts")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "smooth.json")
     args = ap.parse_args()
     load_before = os.getloadavg()
-    layouts = bench_layouts(args.layout_rows, args.repeats, smooth_at(args.before) if args.before else None)
+    before = smooth_at(args.before) if args.before else smooth_from(args.before_dir) if args.before_dir else None
+    layouts = bench_layouts(args.layout_rows, args.repeats, before)
     results = {} if args.skip_models else {m: bench_model(m, args.old_rows, tuple(args.sizes), args.repeats)
                                            for m in args.models}
     out = {"machine": describe(), "load_average_before": load_before, "load_average_after": os.getloadavg(),
-           "layouts": {"before_revision": args.before, "rows": args.layout_rows, **layouts},
+           "layouts": {"before_revision": args.before or (args.before_dir and "files of --before-dir"), "rows": args.layout_rows,
+                       **layouts},
            "tracks_per_table": 6, "models": results}
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(out, indent=2))

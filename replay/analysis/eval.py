@@ -114,7 +114,7 @@ def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] 
     cut or recovered by a tool that did not renumber would compare each estimate with another moment)."""
     if "t_ns" not in track.columns or "t_ns" not in obj.columns:
         return
-    both = frame_time_mismatches(track, obj)
+    both = _mismatches(track, obj)
     if both.height:
         f, t, g = both.row(0)
         raise TrackreplayError(f"frame {f} is at t={t} ns in {names[0]} but at t={g} ns in {names[1]} "
@@ -122,14 +122,34 @@ def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] 
                                "recovered without renumbering its ground truth")
 
 
-def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int], annotated: pl.DataFrame,
+MATCH_ROWS = 1 << 14  # rows of a table compared with another's frame times at a time
+
+
+def _mismatches(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False, rows: int | None = None) -> pl.DataFrame:
+    """:func:`~trackreplay.replay.core.trajectory.frame_time_mismatches` of ``a`` and ``b``, ``rows``
+    rows of ``a`` at a time against ``b``'s rows on those frames (the join of a 200k-row table cost
+    ~30 MB; issue 33): the same rows, a frame's first disagreeing row of ``a`` kept."""
+    rows = rows or MATCH_ROWS
+    if a.height <= rows:
+        return frame_time_mismatches(a, b, missing=missing)
+    parts = []
+    for start in range(0, a.height, rows):
+        part = a.slice(start, rows)
+        lo, hi = part["frame"].min(), part["frame"].max()
+        near = b.filter(pl.col("frame").cast(a.schema["frame"]).is_between(lo, hi)) if lo is not None else b.clear()
+        parts.append(frame_time_mismatches(part, near, missing=missing))
+    return pl.concat(parts).sort("frame", maintain_order=True).unique("frame", keep="first", maintain_order=True)
+
+
+def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int] | pl.DataFrame, annotated: pl.DataFrame,
                  log_name: str) -> None:
     """The trajectory was replayed from this log: every row's frame is one of the log's images
-    (``log_times``, frame -> t_ns) and, where the row's time is the frame's own (measured,
-    predicted), at that time in the log and in its ground truth (``annotated``: frame, t_ns)."""
-    logged = pl.DataFrame({"frame": list(log_times), "t_ns": list(log_times.values())},
-                          schema={"frame": pl.Int64, "t_ns": pl.Int64})
-    bad = frame_time_mismatches(traj, logged, missing=True)
+    (``log_times``, frame -> t_ns, or a table of ``frame, t_ns``: :func:`truth_index`) and, where the
+    row's time is the frame's own (measured, predicted), at that time in the log and in its ground
+    truth (``annotated``: frame, t_ns)."""
+    logged = log_times if isinstance(log_times, pl.DataFrame) else pl.DataFrame(
+        {"frame": list(log_times), "t_ns": list(log_times.values())}, schema={"frame": pl.Int64, "t_ns": pl.Int64})
+    bad = _mismatches(traj, logged, missing=True)
     if bad.height:
         f, t, lt = bad.row(0)
         where = (f"is at t={lt} ns in {log_name}" if lt is not None
@@ -216,7 +236,7 @@ def evaluate(traj: pl.DataFrame, gt: pl.DataFrame, *, track_id: int | None = Non
 
 # A long log is scored this many truth frames at a time (docs/memory.md): only the counts and the
 # per-frame numbers the mean and median need (8 bytes a frame each) are kept between chunks.
-EVAL_CHUNK_FRAMES = 16384
+EVAL_CHUNK_FRAMES = 4096
 CHECK_ROWS = 2048  # a trajectory file is checked this many rows at a time (larger pieces peak higher)
 
 
@@ -311,21 +331,128 @@ def evaluate_chunked(traj: pl.LazyFrame, gt: pl.DataFrame, *, track_id: int | No
     """:func:`evaluate`'s summary in memory flat in the log's length: the truth object's frames
     ``chunk_frames`` at a time, each with only the track's rows on those frames read (a filter the
     scan pushes down to a Parquet file)."""
-    tid = _pick_track_lazy(traj, track_id)
     obj = _object_rows(gt, _gt_id(gt, gt_id))
+    return evaluate_parts(traj, lambda: (obj.slice(start, chunk_frames) for start in range(0, obj.height, chunk_frames)),
+                          track_id=track_id)
+
+
+def evaluate_parts(traj: pl.LazyFrame, parts, *, track_id: int | None = None) -> EvalSummary:
+    """:func:`evaluate_chunked` on the truth object's rows as ``parts()`` gives them: tables of its
+    rows in frame order, one after the other (a slice of a table in memory, or read from the log a
+    chunk at a time: :func:`truth_parts`)."""
+    tid = _pick_track_lazy(traj, track_id)
     track = traj.filter(pl.col("track_id") == tid)
     running = _Running()
-    for start in range(0, obj.height, chunk_frames):
-        part = obj.slice(start, chunk_frames)
+    for part in parts():
+        if not part.height:
+            continue
         lo, hi = part["frame"].min(), part["frame"].max()
         rows = track.filter(pl.col("frame").is_between(lo, hi)).collect()
         try:
             _same_frames(rows, part)
         except TrackreplayError:  # the whole table's sentence (the first frame and how many disagree)
-            _same_frames(track.collect(), obj)
+            _same_frames(track.collect(), pl.concat(list(parts())))
             raise
         running.add(_joined(rows, part))
     return running.summary()
+
+
+TRUTH_COLUMNS = {"frame": pl.Int64, "t_ns": pl.Int64, "id": pl.Int64, "x": pl.Float64, "y": pl.Float64, "w": pl.Float64,
+                 "h": pl.Float64, "vx": pl.Float64, "vy": pl.Float64, "visible": pl.Boolean}  # what one object's score reads
+_FIELDS = tuple(TRUTH_COLUMNS)[3:]  # the truth message's fields of the same names (schemas/records.py)
+
+
+@dataclass(frozen=True)
+class TruthIndex:
+    """What scoring one object needs of a log's whole ground truth, read without keeping its rows
+    (:func:`truth_index`): the annotated frames, and per object the frames that place it."""
+
+    annotated: pl.DataFrame  # frame, t_ns of every truth message (as groundtruth_with_frames gives them)
+    placed: dict[int, int]  # object id -> rows with a position
+    seen: frozenset[int]  # objects placed and visible (or visibility unknown) on some frame
+    ids: frozenset[int]  # every object with a row
+    in_order: bool  # the messages come in increasing frame order, an object at most once in each
+
+    def gt_id(self, gt_id: int | None) -> int:
+        """:func:`_gt_id`'s choice and refusals, from the counts."""
+        if not self.ids:
+            raise TrackreplayError("the log's ground truth holds no objects")
+        if gt_id is None:
+            if not self.placed:
+                raise TrackreplayError("the log's ground truth places no object on any frame (every row marks it absent)")
+            gt_id = min(self.placed, key=lambda i: (-self.placed[i], i))
+        if gt_id not in self.ids:
+            raise TrackreplayError(f"the ground truth has no object {gt_id}")
+        return gt_id
+
+
+def truth_index(reader, topic: str, image_topic: str | None = None) -> tuple[TruthIndex, pl.DataFrame]:
+    """One pass over the log's truth messages and its images (issue 33: a 200k-frame truth table and
+    its building cost ~50 MB, the images' frame -> time dict ~20 MB; these are 16 bytes a frame and
+    a count per object). Returns the index and the images' ``frame, t_ns`` (``image_topic``: as
+    :func:`~trackreplay.replay.log.frames.image_times`)."""
+    from array import array
+
+    from trackreplay.replay.log.frames import choose_image_topic, require_image_topic
+
+    reader.require(topic)
+    images = image_topic or choose_image_topic(reader)
+    require_image_topic(reader, images)
+    frames, times, image_index, image_times = array("q"), array("q"), array("q"), array("q")
+    placed: dict[int, int] = {}
+    seen, ids = set(), set()
+    last, in_order = None, True
+    for item in reader.messages([topic, images]):
+        if item.topic == images:
+            if item.lost is None or item.log_time >= 0:
+                image_index.append(item.index)
+                image_times.append(item.log_time)
+            continue
+        pb = item.decode()  # read as GroundTruthFrame.from_pb reads it, only the fields needed here
+        frames.append(pb.frame)
+        times.append(pb.t_ns)
+        objects = pb.objects
+        in_order = in_order and (last is None or pb.frame > last) and len({o.id for o in objects}) == len(objects)
+        last = pb.frame
+        for o in objects:
+            ids.add(o.id)
+            if o.HasField("x"):
+                placed[o.id] = placed.get(o.id, 0) + 1
+                if not (o.HasField("visible") and not o.visible):
+                    seen.add(o.id)
+    increasing = all(a < b for a, b in zip(frames, frames[1:])) if not in_order else True
+    annotated = _frame_table(frames, times)
+    del frames, times
+    if not increasing:  # (in increasing frame order it already is unique and sorted: no copies)
+        annotated = annotated.unique("frame").sort("frame")
+    return TruthIndex(annotated, placed, frozenset(seen), frozenset(ids), in_order), _frame_table(image_index, image_times)
+
+
+def _frame_table(frames, times) -> pl.DataFrame:
+    return pl.DataFrame({"frame": np.frombuffer(frames, np.int64), "t_ns": np.frombuffer(times, np.int64)},
+                        schema={"frame": pl.Int64, "t_ns": pl.Int64})
+
+
+def truth_parts(reader, topic: str, gt_id: int, chunk_frames: int | None = None):
+    """``parts()`` for :func:`evaluate_parts`: object ``gt_id``'s truth rows read from the log,
+    ``chunk_frames`` rows at a time (the :data:`TRUTH_COLUMNS`; the messages in frame order:
+    :attr:`TruthIndex.in_order`)."""
+    chunk_frames = chunk_frames or EVAL_CHUNK_FRAMES
+
+    def parts():
+        rows: list[tuple] = []
+        for item in reader.messages([topic]):
+            pb = item.decode()
+            for o in pb.objects:
+                if o.id == gt_id:  # GroundTruthObject.from_pb's values: None where a field is not set
+                    rows.append((pb.frame, pb.t_ns, o.id, *(getattr(o, n) if o.HasField(n) else None for n in _FIELDS)))
+            if len(rows) == chunk_frames:
+                yield pl.DataFrame(rows, schema=TRUTH_COLUMNS, orient="row")
+                rows = []
+        if rows:
+            yield pl.DataFrame(rows, schema=TRUTH_COLUMNS, orient="row")
+
+    return parts
 
 
 def checked_scan(path: Path, chunk_rows: int = CHECK_ROWS) -> tuple[pl.LazyFrame, pl.DataFrame] | None:
@@ -346,12 +473,25 @@ def checked_scan(path: Path, chunk_rows: int = CHECK_ROWS) -> tuple[pl.LazyFrame
         return None
     if not keys:
         return None
-    table = pl.concat(keys, rechunk=True).sort(list(KEY), maintain_order=True)
+    table = pl.concat(keys, rechunk=False)  # the pieces as its chunks: no second copy
+    del keys
+    if not _in_order(table):  # a replay writes the canonical order: no second copy to sort
+        table = table.sort(list(KEY), maintain_order=True)
     # sorted, a second row for a track and frame lies next to the first (a hash of every key costs ~200 B a row)
     if table.select(pl.all_horizontal(pl.col(c) == pl.col(c).shift(1) for c in KEY).any()).item():
         return None
     typed = scan.select(pl.col(c).cast(dtype) for c, dtype in SCHEMA.items())
     return typed, table
+
+
+def _in_order(table: pl.DataFrame) -> bool:
+    """Whether ``table`` is sorted by :data:`KEY` (``tracker`` by its text), checked on consecutive rows."""
+    later, same = None, None
+    for c in KEY:
+        col = pl.col(c).cast(pl.String) if table.schema[c] == pl.Categorical else pl.col(c)
+        gt, eq = col > col.shift(1), col == col.shift(1)
+        later, same = (gt, eq) if later is None else (later | (same & gt), same & eq)
+    return bool(table.select((later | same).fill_null(True).all()).item())
 
 
 def format_summary(s: EvalSummary) -> str:

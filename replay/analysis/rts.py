@@ -8,7 +8,9 @@ track observed with ``R = s² I`` splits the same way (three axes). Every frame 
 all tracks and grid points as numpy elementwise operations on ``(grid, axis, track)`` arrays, the
 frames in a Python loop; the update by a position and a velocity of independent noise is two
 scalar updates (the same posterior; the log-likelihood is the joint density by the chain rule).
-The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds).
+The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds). The grid
+search's likelihood of a long track is computed by pieces filtered side by side, each started a
+little early from a guess and checked to join its predecessor (:func:`_pieces_loglik`).
 
 filterpy's ``KalmanFilter.batch_filter`` and ``rts_smoother``, which this replaces, run one track at
 one noise in Python (9.5 ms a row over flow's 140-point grid); no maintained library batches a
@@ -172,16 +174,24 @@ BLOCK = 256  # frames whose likelihood terms are summed at once (at most)
 BLOCK_ELEMENTS = 1 << 16  # ... and at most this many values of a state column (grid points × axes × tracks) a buffer
 
 
-def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior) -> np.ndarray:
+def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
+                   start: tuple[np.ndarray, np.ndarray] | None = None, own: np.ndarray | None = None,
+                   snaps: tuple[int, ...] = (), sums: bool = False):
     """:func:`filter_columns` without ``keep``: ``-2 ×`` the log-likelihood (without its ``2π`` terms).
     The same operations in the same order, with fewer numpy calls a frame (the cost of a long track,
     whose arrays are small): each frame's innovations and variances go to a buffer, and every
     :data:`BLOCK` frames (fewer in a wide lane: :data:`BLOCK_ELEMENTS`) their terms ``y² / s`` and ``log s`` are computed at once and added to the
     sums in frame order (a sum along the first axis adds row after row: the sums are those of adding
-    them frame by frame); the measurement variances of a block are scaled at once."""
+    them frame by frame); the measurement variances of a block are scaled at once.
+
+    For :func:`_pieces_loglik`: ``start`` the means and covariances before the first frame instead of
+    the prior; ``own`` (N, 1, B) 1.0 on the frames whose position term counts (0.0 elsewhere; the
+    velocity's and the ``log s`` terms follow ``counted``); ``snaps`` the frames after which the
+    state is copied; with ``sums``, returns ``(quad, logs, {frame: (means, covariances)})``."""
     q3, q2, q = Q
     axes = cols.rv.shape[1]
-    pv, cov = _prior(cols, s2, axes, prior)
+    pv, cov = _prior(cols, s2, axes, prior) if start is None else (start[0].copy(), start[1].copy())
+    kept: dict[int, tuple[np.ndarray, np.ndarray]] = {}
     p, v, a, b, c = pv[0], pv[1], cov[0], cov[1], cov[2]  # views: updated in place
     gains, gains_v, cb = cov[:2], cov[1:], cov[2:0:-1]  # (a, b), (b, c), (c, b)
     bc_noise = np.stack(np.broadcast_arrays(q2, q))  # (Q_pv, Q_vv), added to (b, c) at once
@@ -220,14 +230,20 @@ def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
                 pv += np.multiply(K, y, out=Ky)
                 gains -= np.multiply(K, b, out=Kb)  # a -= K₀ b, b -= K₁ b
                 np.multiply(K[1], r, out=c)
+            if lo + j in snaps:
+                kept[lo + j] = (pv.copy(), cov.copy())
         m = step * (hi - lo)
         counted = np.empty((m, *cols.counted_v.shape[1:]))
         counted[::step] = cols.counted[lo:hi]
         if cols.velocity:
             counted[1::step] = cols.counted_v[lo:hi]
             W[1:m:2] = counted[1::2][lead] * W[1:m:2]  # a velocity's term counts only where observed
+        if own is not None:
+            W[0:m:step] = own[lo:hi][lead] * W[0:m:step]
         quad = np.concatenate([quad[None], Y[:m] * Y[:m] * W[:m]]).sum(axis=0)  # 0 on the first observation
         logs = np.concatenate([logs[None], np.log(S[:m]) * counted[lead]]).sum(axis=0)
+    if sums:
+        return quad, logs, kept
     return quad.sum(axis=-2) + logs.sum(axis=-2) * (cols.zp.shape[1] // axes)
 
 
@@ -275,13 +291,17 @@ def grid_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: n
                 prior: Prior = IMAGE_PRIOR) -> np.ndarray:
     """Log-likelihood (G, B) of every track at every grid point ``(Q, σ₀², σ_v²)`` (each (G,)),
     at most ``lane_elements`` grid points × tracks at a time (the working set)."""
-    g, b = len(s2), cols.zp.shape[-1]
-    step = max(1, lane_elements // b)
+    g, b, n = len(s2), cols.zp.shape[-1], cols.zp.shape[0]
+    pieces = n >= PIECES_FROM
+    step = max(1, lane_elements // b // (1 if not pieces else max(1, n // PIECE // 2)))
     out = np.empty((g, b))
     for lo in range(0, g, step):
         sl = slice(lo, lo + step)
         noise = tuple(x[sl, None, None] for x in Q)
-        out[sl] = filter_columns(cols, noise, s2[sl, None, None], sv2[sl, None, None], False, prior)[0]
+        got = _pieces_loglik(cols, noise, s2[sl, None, None], sv2[sl, None, None], prior) if pieces else None
+        if got is None:
+            got = filter_columns(cols, noise, s2[sl, None, None], sv2[sl, None, None], False, prior)[0]
+        out[sl] = got
     return -0.5 * (out + cols.components * LOG_2PI)
 
 
@@ -349,3 +369,126 @@ def filter_one(cols: Columns, Q: tuple[float, float, float], s2: float, sv2: flo
     m = np.frombuffer(means, dtype=np.float64).reshape(n, 2, d, 1)
     C = np.frombuffer(covs, dtype=np.float64).reshape(n, 3, 1, 1)
     return m[:, 0], m[:, 1], C[:, 0], C[:, 1], C[:, 2]
+
+
+PIECE = 2048  # frames a piece of a long track owns in :func:`_pieces_loglik`
+WARM = 256  # frames a piece is filtered before its own, from a guess, to reach the filter's state
+TOL = 1e-9  # the largest mismatch at a seam, in standard deviations
+PIECES_FROM = 2 * PIECE + WARM  # frames from which a lane's likelihood is computed by pieces
+ROUNDS = 8  # restarts of the pieces whose seam does not match, before the sequential filter
+
+
+def _window(cols: Columns, piece: int, warm: int) -> tuple[Columns, np.ndarray, int]:
+    """``cols`` cut in pieces: piece 0 owns frames ``[0, piece + warm)``, piece ``j ≥ 1`` owns
+    ``[j piece + warm, (j + 1) piece + warm)`` and is filtered from frame ``j piece`` (its first
+    ``warm`` frames count nothing). Returns the pieces as tracks (column ``b P + j``: track ``b``'s
+    piece ``j``; past the track's end unobserved), their ``own`` weights (span, 1, B P) and ``P``."""
+    n, b = cols.zp.shape[0], cols.zp.shape[-1]
+    span = piece + warm
+    count = 1 + -(-max(0, n - span) // piece)
+    idx = np.arange(span)[:, None] + piece * np.arange(count)[None, :]  # (span, P) global frame
+    valid = idx < n
+    idx = np.minimum(idx, n - 1)
+    warmup = (np.arange(span)[:, None] < warm) & (np.arange(count)[None, :] > 0)
+
+    def cut(x: np.ndarray, fill: float, mask: np.ndarray | None = None) -> np.ndarray:
+        w = np.moveaxis(x[idx], 1, -1)  # (span, c, B, P)
+        keep = valid if mask is None else valid & ~mask
+        w = np.where(keep[:, None, None, :], w, fill)
+        return np.ascontiguousarray(w.reshape(span, x.shape[1], b * count))
+
+    zp, zv, rp, rv = cut(cols.zp, 0.0), cut(cols.zv, 0.0), cut(cols.rp, UNSEEN), cut(cols.rv, UNSEEN)
+    counted, counted_v = cut(cols.counted, 0.0, warmup), cut(cols.counted_v, 0.0, warmup)
+    own = np.broadcast_to((valid & ~warmup)[:, None, None, :], (span, 1, b, count)).reshape(span, 1, b * count) * 1.0
+    # the guess a piece starts from: the prior around its window's first observed position
+    seen = rp[:, 0, :] < UNSEEN
+    first = np.where(seen.any(axis=0), seen.argmax(axis=0), 0)
+    cols_idx = np.arange(b * count)
+    p0 = np.where(seen.any(axis=0), zp[first, :, cols_idx].T, 0.0)
+    r0 = np.where(seen.any(axis=0), rp[first, 0, cols_idx], 1.0)[None]
+    p0[:, ::count], r0[:, ::count] = cols.p0, cols.r0  # piece 0: the track's own prior
+    last = np.full(b * count, span - 1)
+    return Columns(zp, zv, rp, rv, counted, counted_v, p0, r0, np.zeros(b * count), last, cols.velocity), own, count
+
+
+def _columns_at(cols: Columns, which: np.ndarray) -> Columns:
+    """The tracks ``which`` of ``cols`` (for restarting some pieces)."""
+    return Columns(cols.zp[..., which], cols.zv[..., which], cols.rp[..., which], cols.rv[..., which],
+                   cols.counted[..., which], cols.counted_v[..., which], cols.p0[:, which], cols.r0[:, which],
+                   cols.components[which], cols.last[which], cols.velocity)
+
+
+def _seams(kept: dict, piece: int, warm: int, count: int, tol: float) -> np.ndarray:
+    """(G, B P): the pieces (and grid points) whose state at the end of their warm-up differs from
+    their predecessor's at the same frame (its last) by more than ``tol`` standard deviations
+    (means by their std, covariances by the product of their stds); never a track's first piece."""
+    (pa, ca), (pe, ce) = kept[warm - 1], kept[piece + warm - 1]
+    sa, sc = np.sqrt(ce[0][..., :-1]), np.sqrt(ce[2][..., :-1])  # (G, A, BP - 1)
+    worst = np.maximum(np.abs(pa[0][..., 1:] - pe[0][..., :-1]) / sa, np.abs(pa[1][..., 1:] - pe[1][..., :-1]) / sc)
+    worst = worst.max(axis=-2)
+    for k, scale in enumerate((sa * sa, sa * sc, sc * sc)):
+        worst = np.maximum(worst, (np.abs(ca[k][..., 1:] - ce[k][..., :-1]) / scale).max(axis=-2))
+    bad = np.zeros((worst.shape[0], worst.shape[-1] + 1), bool)
+    bad[:, 1:] = ~(worst <= tol)  # NaN: not matched
+    bad[:, ::count] = False  # a track's first piece starts from its prior
+    return bad
+
+
+def _take(x: np.ndarray, g: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """``x`` (k, G, X, C) at the pairs (grid point ``g``, column ``c``): (k, 1, X, K)."""
+    return np.moveaxis(x[:, g, :, c], 0, -1)[:, None]
+
+
+def _put(x: np.ndarray, g: np.ndarray, c: np.ndarray, y: np.ndarray) -> None:
+    """Inverse of :func:`_take`."""
+    x[:, g, :, c] = np.moveaxis(y[:, 0], -1, 0)
+
+
+def _pieces_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
+                   piece: int | None = None, warm: int | None = None, tol: float | None = None,
+                   stats: list | None = None) -> np.ndarray | None:
+    """:func:`_filter_loglik` of a long lane cut in pieces filtered side by side (issue 33): one
+    Python step a frame costs ~24 numpy calls whatever the arrays' size, so a long track's 140 grid
+    points paid that on every frame; its pieces, as columns, pay it once per piece length.
+
+    Each piece (:func:`_window`) is filtered from ``warm`` frames before its own, starting from a
+    guess (the prior around that window's first observation). The filter forgets its start (the
+    Kalman filter of an observable constant-velocity model is exponentially stable), so at the end
+    of the warm-up the piece holds the state its predecessor reached on that frame: this is
+    checked, per grid point, to ``tol`` standard deviations (:func:`_seams`). A piece that does
+    not match (a slow filter: small ``q``, large ``σ``) is filtered again from its predecessor's
+    state on the frame before its window, as many rounds as needed (each round carries a correct
+    state at least one piece further; at most :data:`ROUNDS`, else None: the caller filters frame
+    by frame). Each frame's terms are those of the sequential filter to within the seams'
+    tolerance; a piece's terms are summed in frame order, and the pieces' sums in order, so the
+    likelihood differs from the sequential sum by rounding only (relative ~1e-14; the tests allow
+    1e-12). ``piece``, ``warm``, ``tol``: :data:`PIECE`, :data:`WARM`, :data:`TOL` by default;
+    ``stats`` (a list) receives the number of unmatched seams of each round."""
+    piece, warm, tol = piece or PIECE, warm or WARM, TOL if tol is None else tol
+    win, own, count = _window(cols, piece, warm)
+    snaps = {warm - 1, piece - 1, piece + warm - 1}
+    quad, logs, kept = _filter_loglik(win, Q, s2, sv2, prior, own=own, snaps=snaps, sums=True)
+    noise = [np.broadcast_to(np.reshape(x, -1), quad.shape[:1]) for x in (*Q, s2, sv2)]  # (G,) each
+    for _ in range(ROUNDS + 1):
+        bad = _seams(kept, piece, warm, count, tol)
+        if stats is not None:
+            stats.append(int(bad.sum()))
+        if not bad.any():
+            break
+        g, c = np.nonzero(bad)
+        q3, q2, q, a2, b2 = (x[g][None, None] for x in noise)
+        start = tuple(_take(x, g, c - 1) for x in kept[piece - 1])
+        sub = _columns_at(win, c)
+        q_, l_, k_ = _filter_loglik(sub, (q3, q2, q), a2, b2, prior, start=start, own=own[..., c], snaps=snaps, sums=True)
+        quad[g, :, c], logs[g, :, c] = q_[0].T, l_[0].T
+        for f in snaps:
+            for x, y in zip(kept[f], k_[f]):
+                _put(x, g, c, y)
+    else:
+        return None
+    b = cols.zp.shape[-1]
+    quad, logs = quad.reshape(*quad.shape[:-1], b, count), logs.reshape(*logs.shape[:-1], b, count)
+    tq, tl = quad[..., 0], logs[..., 0]
+    for j in range(1, count):
+        tq, tl = tq + quad[..., j], tl + logs[..., j]
+    return tq.sum(axis=-2) + tl.sum(axis=-2) * (cols.zp.shape[1] // cols.rv.shape[1])

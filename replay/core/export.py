@@ -211,10 +211,10 @@ def _known(column: str) -> pl.Expr:
             & pl.col(column).fill_nan(None).is_not_null())
 
 
-def _tracks_of(path: Path) -> pl.DataFrame:
+def _tracks_of(path: Path, cast: bool = False) -> pl.DataFrame:
     """Per track (canonical order): its first and last frame, its rows, and how many known rows hold
     each float column (gap filling interpolates a column from 2 of them: a piece must do the same)."""
-    return (pl.scan_parquet(path).group_by("tracker", "track_id")
+    return (_scan(path, cast).group_by("tracker", "track_id")
             .agg(pl.col("frame").min().alias("_lo"), pl.col("frame").max().alias("_hi"),
                  *(_known(c).sum().alias(c) for c in FLOAT_COLUMNS))
             .collect(engine="streaming").sort("tracker", "track_id"))
@@ -230,31 +230,46 @@ def _anchor(counts: dict) -> pl.Expr:
     return ok
 
 
-def _pieces(path: Path, rows: int, split: bool) -> Iterator[tuple[pl.DataFrame, bool, dict | None]]:
+class CheckedParquet:
+    """A trajectory file (``trackreplay export TRAJ``) already checked a piece at a time as
+    :func:`read_trajectory` checks it whole (:func:`~trackreplay.replay.analysis.eval.checked_scan`):
+    exported a piece at a time like a replay's spill file, each piece cast to the ★ table as
+    :func:`read_trajectory` casts the whole (``conform``; the ``fill`` column and others left out)."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = Path(path)
+
+    def frame(self) -> pl.DataFrame:
+        return read_trajectory(self.path)
+
+
+def _pieces(path: Path, rows: int, split: bool, cast: bool = False) -> Iterator[tuple[pl.DataFrame, bool, dict | None]]:
     """A spilled trajectory in pieces, canonical order: (rows, drop its first row (the previous piece's
     last), a piece of one track: the track's known rows per column). Whole short tracks together up to
-    ``rows`` frames; a longer track (``split``) about ``rows`` frames at a time, cut at anchors."""
-    tracks = _tracks_of(path)
+    ``rows`` frames; a longer track (``split``) about ``rows`` frames at a time, cut at anchors.
+    ``cast``: each piece as :func:`read_trajectory` gives its rows (a user's file, not a spill file)."""
+    tracks = _tracks_of(path, cast)
     batch: list[tuple[str, int]] = []
     size = 0
     for track in tracks.iter_rows(named=True):
         key, span = (track["tracker"], track["track_id"]), track["_hi"] - track["_lo"] + 1
         if split and span > rows:
             if batch:  # the tracks before it first: canonical order
-                yield _read(path, _tracks(batch)), False, None
+                yield _read(path, _tracks(batch), cast), False, None
                 batch, size = [], 0
-            yield from _track_pieces(path, key, track, rows)
+            yield from _track_pieces(path, key, track, rows, cast)
             continue
         batch.append(key)
         size += span
         if size >= rows:
-            yield _read(path, _tracks(batch)), False, None
+            yield _read(path, _tracks(batch), cast), False, None
             batch, size = [], 0
     if batch:
-        yield _read(path, _tracks(batch)), False, None
+        yield _read(path, _tracks(batch), cast), False, None
 
 
-def _track_pieces(path: Path, key: tuple[str, int], track: dict, rows: int) -> Iterator[tuple[pl.DataFrame, bool, dict]]:
+def _track_pieces(path: Path, key: tuple[str, int], track: dict, rows: int,
+                  cast: bool = False) -> Iterator[tuple[pl.DataFrame, bool, dict]]:
     """One long track about ``rows`` frames at a time: each piece ends at the first anchor ``rows`` or
     more frames after its start (the next begins there); the last one at the track's end."""
     counts = {c: track[c] for c in FLOAT_COLUMNS}
@@ -263,7 +278,7 @@ def _track_pieces(path: Path, key: tuple[str, int], track: dict, rows: int) -> I
     while True:
         reach = rows
         while True:  # read on until a cut is found or the track ends
-            part = _read(path, same & pl.col("frame").is_between(start, start + 2 * reach))
+            part = _read(path, same & pl.col("frame").is_between(start, start + 2 * reach), cast)
             cuts = part.filter(pl.col("frame").is_between(start + rows, hi, closed="left") & _anchor(counts))
             if cuts.height or start + 2 * reach >= hi:
                 break
@@ -280,14 +295,27 @@ def _tracks(keys: list[tuple[str, int]]) -> pl.Expr:
     return pl.struct("tracker", "track_id").is_in(pl.Series([{"tracker": t, "track_id": i} for t, i in keys]).implode())
 
 
-def _read(path: Path, where: pl.Expr) -> pl.DataFrame:
-    return canonical_order(pl.scan_parquet(path).filter(where).collect())
+def _scan(path: Path, cast: bool = False) -> pl.LazyFrame:
+    """The file's rows lazily; with ``cast``, its ★ columns as :data:`SCHEMA` types (a file whose
+    every piece ``conform`` accepted: the same values as the strict cast)."""
+    scan = pl.scan_parquet(path)
+    if not cast:
+        return scan
+    names = scan.collect_schema().names()
+    return scan.select(pl.col(c).cast(t, strict=False) if c in names else pl.lit(None, dtype=t).alias(c)
+                       for c, t in SCHEMA.items())
+
+
+def _read(path: Path, where: pl.Expr, cast: bool = False) -> pl.DataFrame:
+    df = _scan(path, cast).filter(where).collect()
+    return canonical_order(conform(df, str(path)) if cast else df)
 
 
 def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: int = 15,
                       rows: int = EXPORT_ROWS) -> tuple[int, int]:
     """Gap-fill ``table`` (``method`` ``none``: as it is) and write it (:func:`write_trajectory`'s
-    formats); ``(rows, interpolated rows)`` written. A :class:`SpilledTrajectory` is read, filled and
+    formats); ``(rows, interpolated rows)`` written. A :class:`SpilledTrajectory` (or a checked
+    trajectory file, :class:`CheckedParquet`) is read, filled and
     written a piece at a time (whole short tracks, a long track ``rows`` frames at a time, cut at a known
     row both pieces hold) in Parquet or CSV: the same rows as filling the whole table, in memory
     bounded by ``rows`` instead of the log. Cubic splines span their whole track: a track is not cut
@@ -297,8 +325,9 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     if method not in (*METHODS, "none"):
         raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
     kind = trajectory_format(path)
-    if not isinstance(table, SpilledTrajectory) or kind == "mot":
-        df = table.frame() if isinstance(table, SpilledTrajectory) else table
+    streamed = isinstance(table, (SpilledTrajectory, CheckedParquet))
+    if not streamed or kind == "mot":
+        df = table.frame() if streamed else table
         df = df if method == "none" else fill_gaps(df, method, max_gap)
         write_trajectory(df, path)
         return df.height, df.filter(pl.col("status") == "interpolated").height
@@ -308,7 +337,8 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     written = filled = 0
     try:
         with _PieceWriter(tmp, kind) as out:
-            for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic"):
+            cast = isinstance(table, CheckedParquet)
+            for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic", cast=cast):
                 if method != "none" and counts is not None:  # a piece of one track
                     part = canonical_order(_fill_track(part, method, max_gap, counts))
                 elif method != "none":

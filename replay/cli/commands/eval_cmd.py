@@ -15,8 +15,8 @@ from pathlib import Path
 import polars as pl
 
 from trackreplay.replay.cli.commands.values import finite_json, positive_float
-from trackreplay.replay.analysis.eval import (check_frames, checked_scan, evaluate, evaluate_chunked, format_summary,
-                                              object_followed)
+from trackreplay.replay.analysis.eval import (check_frames, checked_scan, evaluate, evaluate_chunked, evaluate_parts,
+                                              format_summary, object_followed, truth_index, truth_parts)
 from trackreplay.replay.core.export import read_trajectory
 from trackreplay.replay.log.frames import image_times
 from trackreplay.replay.log.groundtruth import groundtruth_with_frames
@@ -24,6 +24,7 @@ from trackreplay.replay.analysis.mot import MAX_DISTANCE_M
 from trackreplay.replay.analysis.mot_files import drop_distractor_matches, read_mot_result, read_mot_sequence
 from trackreplay.replay.log.reader import LogReader
 from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.schemas.topics import GROUNDTRUTH
 
 
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
@@ -62,12 +63,20 @@ def run(args: argparse.Namespace) -> int:
     lazy = (checked_scan(args.trajectory) if args.trajectory.suffix.lower() == ".parquet" and args.trajectory.is_file()
             and not (args.mot or args.per_frame or _is_sequence(args.log)) else None)
     traj = lazy[1] if lazy else read_mot_result(args.trajectory) if mot_result else read_trajectory(args.trajectory)
+    index = None
     if _is_sequence(args.log):
         traj, gt, frames = _sequence_truth(args, traj)
     else:
         reader = LogReader(args.log)
-        gt, annotated = groundtruth_with_frames(reader, *([args.gt_topic] if args.gt_topic else []))
-        times = image_times(reader, args.image_topic)
+        topic = args.gt_topic or GROUNDTRUTH
+        # one track scored alone against one truth object: the truth is read a chunk at a time too
+        index, times = truth_index(reader, topic, args.image_topic) if lazy else (None, None)
+        if index is not None and index.in_order and (args.gt_id is not None or len(index.seen) == 1):
+            gt, annotated = None, index.annotated
+        else:
+            index = None
+            gt, annotated = groundtruth_with_frames(reader, topic)
+            times = image_times(reader, args.image_topic)
         if mot_result:  # a result file carries no times: its frames are the log's images, at their times
             beyond = traj.filter(~pl.col("frame").is_in(list(times)))
             if beyond.height:
@@ -76,9 +85,15 @@ def run(args: argparse.Namespace) -> int:
             traj = traj.with_columns(pl.col("frame").replace_strict(times, return_dtype=pl.Int64).alias("t_ns"))
         check_frames(traj, str(args.trajectory), times, annotated, str(args.log))
         frames = annotated["frame"]
-    if args.mot or _score_all(args, traj, gt):
+    objects = sorted(index.seen) if index is not None else None
+    if args.mot or _score_all(args, traj, gt, objects):
+        if gt is None:
+            gt = groundtruth_with_frames(reader, topic)[0]
         return _run_mot(args, read_trajectory(args.trajectory) if lazy else traj, gt, frames)
-    if lazy:
+    if index is not None:
+        parts = truth_parts(reader, topic, index.gt_id(args.gt_id))
+        summary, per_frame = evaluate_parts(lazy[0], parts, track_id=args.track_id), None
+    elif lazy:
         summary, per_frame = evaluate_chunked(lazy[0], gt, track_id=args.track_id, gt_id=args.gt_id), None
     else:
         summary, per_frame = evaluate(traj, gt, track_id=args.track_id, gt_id=args.gt_id)
@@ -90,10 +105,12 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame) -> bool:
-    """Whether to score every track (several tracks and no ``--track``); says what is scored either way."""
+def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame | None, objects: list[int] | None = None) -> bool:
+    """Whether to score every track (several tracks and no ``--track``); says what is scored either way.
+    ``objects``: the truth objects placed and visible, when ``gt`` is not read (exactly one, or ``--gt-id``)."""
     tracks = sorted(traj.filter(pl.col("x").is_not_null())["track_id"].unique().to_list())
-    objects = sorted(gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))["id"].unique().to_list())
+    if objects is None:
+        objects = sorted(gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))["id"].unique().to_list())
     if args.track_id is None and len(tracks) > 1:
         if args.gt_id is not None:
             raise TrackreplayError(f"{args.trajectory} holds {len(tracks)} tracks: --gt-id scores one of them, so name it "

@@ -1,4 +1,5 @@
 import json
+from pathlib import Path
 
 import numpy as np
 import polars as pl
@@ -245,3 +246,125 @@ def test_chunked_evaluation_refuses_frames_at_other_times() -> None:
             for f in range(8)]
     with pytest.raises(TrackreplayError, match=r"frame 4 is at t=9 ns in the trajectory but at t=4 ns .*\(4 frame"):
         evaluate_chunked(trajectory_table(rows).lazy(), gt, chunk_frames=3)
+
+
+def _long_log_bench():
+    import importlib.util
+    import sys
+
+    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_long_log.py"
+    spec = importlib.util.spec_from_file_location("bench_long_log", path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bench_long_log"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_eval_of_one_track_reads_the_truth_a_chunk_at_a_time(tmp_path, monkeypatch, capsys) -> None:
+    """Issue 33: `eval` of one Parquet track against a log's one truth object reads the truth from the
+    log a chunk at a time (truth_index, truth_parts) and checks the frames a piece at a time: the same
+    --json as the whole table's path (--per-frame takes it), and the same sentence for a frame at
+    another time."""
+    from trackreplay.replay.analysis import eval as ev
+    from trackreplay.replay.cli.main import main
+
+    bench = _long_log_bench()
+    log, traj = tmp_path / "long.mcap", tmp_path / "t.parquet"
+    bench.write_long_log(log, 700)
+    bench.write_spill(traj, 700)
+    monkeypatch.setattr(ev, "EVAL_CHUNK_FRAMES", 64)
+    monkeypatch.setattr(ev, "MATCH_ROWS", 50)
+    used: list = []
+    real = ev.truth_parts
+    monkeypatch.setattr(ev, "truth_parts", lambda *a, **k: used.append(a[2]) or real(*a, **k))
+    from trackreplay.replay.cli.commands import eval_cmd
+
+    monkeypatch.setattr(eval_cmd, "truth_parts", ev.truth_parts)
+    assert main(["eval", str(traj), str(log), "--json", str(tmp_path / "a.json")]) == 0
+    assert used == [1]
+    assert main(["eval", str(traj), str(log), "--json", str(tmp_path / "b.json"), "--per-frame",
+                 str(tmp_path / "pf.parquet")]) == 0
+    assert used == [1] and (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
+    table = pl.read_parquet(traj)
+    frame = int(table.filter((pl.col("frame") > 300) & (pl.col("status") == "measured"))["frame"][0])
+    moved = table.with_columns(pl.when(pl.col("frame") == frame).then(pl.col("t_ns") + 5).otherwise(pl.col("t_ns")).alias("t_ns"))
+    moved.write_parquet(traj)
+    capsys.readouterr()
+    assert main(["eval", str(traj), str(log)]) != 0
+    chunked = capsys.readouterr().err
+    assert main(["eval", str(traj), str(log), "--per-frame", str(tmp_path / "pf.parquet")]) != 0
+    assert f"frame {frame} " in chunked and chunked == capsys.readouterr().err
+
+
+@pytest.mark.parametrize("missing", [False, True])
+def test_frame_times_compared_a_piece_at_a_time_as_whole(missing: bool) -> None:
+    from trackreplay.replay.analysis.eval import _mismatches
+    from trackreplay.replay.core.trajectory import frame_time_mismatches
+
+    rng = np.random.default_rng(4)
+    n = 500
+    frames = np.sort(rng.integers(0, 300, n))  # a frame on several rows (several tracks)
+    a = pl.DataFrame({"frame": frames, "t_ns": frames * 10 + (rng.random(n) < 0.05),
+                      "status": rng.choice(["measured", "lost", "predicted"], n)})
+    bf = rng.permutation(np.arange(0, 300))[:280]  # some frames missing, in no order
+    b = pl.DataFrame({"frame": np.concatenate([bf, bf[:5]]), "t_ns": np.concatenate([bf * 10, bf[:5] * 10 + 1])})
+    for table in (a, a.sample(fraction=1.0, shuffle=True, seed=1)):  # by frame, or by track then frame
+        whole = frame_time_mismatches(table, b, missing=missing)
+        assert whole.height > 5
+        for rows in (1, 7, 64, 499):
+            assert _mismatches(table, b, missing=missing, rows=rows).equals(whole, null_equal=True)
+
+
+@pytest.mark.parametrize("extra", [[], ["--per-frame", "pf.parquet"]], ids=["truth-in-chunks", "whole-table"])
+def test_eval_of_a_log_time_beyond_int64_is_one_sentence(tmp_path, capsys, extra) -> None:
+    """Issue 33, defect 3, through `eval` (its own truth and image passes): exit 2, one sentence."""
+    import importlib.util
+
+    from trackreplay.replay.cli.main import main
+
+    golden = Path(__file__).resolve().parents[2] / "golden"
+    spec = importlib.util.spec_from_file_location("log_mutations", golden.parent / "fuzz" / "log_mutations.py")
+    mutations = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mutations)
+    log = mutations.rewrite(golden / "flow-sim1-24f.mcap", tmp_path / "t.mcap", time=2**63, at=5, library="test")
+    capsys.readouterr()
+    argv = ["eval", str(golden / "flow.trajectory.parquet"), str(log)] + [str(tmp_path / e) if e.endswith(".parquet") else e
+                                                                           for e in extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "beyond the signed 64-bit range" in err[0] and "internal error" not in err[0]
+
+
+@pytest.mark.parametrize("objects", [0, 2], ids=["truth-places-nothing", "two-objects"])
+def test_eval_of_one_track_when_the_truth_has_no_single_object(tmp_path, capsys, objects: int) -> None:
+    """The truth read in chunks is for one truth object: a truth that places none is refused in the
+    whole-table path's sentence, and two objects are told apart by the whole table (the object the
+    track lies on), with the same --json as with --per-frame."""
+    from trackreplay.recorder.image_codec import compressed_image
+    from trackreplay.recorder.writer import LogWriter
+    from trackreplay.replay.cli.main import main
+    from trackreplay.schemas import topics as T
+    from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject
+
+    bench = _long_log_bench()
+    log, traj = tmp_path / "t.mcap", tmp_path / "t.parquet"
+    bench.write_spill(traj, 60)
+    picture = bench.cv2.imencode(".png", np.zeros((8, 8), np.uint8))[1].tobytes()
+    with LogWriter(log) as out:
+        for i in range(60):
+            t_ns = i * 1_000_000_000 // 30
+            out.write(T.CAMERA_IMAGE, compressed_image(picture, "png", t_ns, "camera"), t_ns)
+            here = (GroundTruthObject(id=1, visible=False),) if objects == 0 else (
+                GroundTruthObject(id=1, x=15.5, y=15.5, w=5.0, h=5.0, visible=True),
+                GroundTruthObject(id=2, x=3.0, y=3.0, w=5.0, h=5.0, visible=True))
+            out.write(T.GROUNDTRUTH, GroundTruthFrame(i, t_ns, here).to_pb(), t_ns)
+    capsys.readouterr()
+    code = main(["eval", str(traj), str(log), "--json", str(tmp_path / "a.json")])
+    first = capsys.readouterr()
+    whole = main(["eval", str(traj), str(log), "--json", str(tmp_path / "b.json"), "--per-frame", str(tmp_path / "p.csv")])
+    second = capsys.readouterr()
+    assert "internal error" not in first.err and first.err == second.err and code == whole
+    if objects == 0:
+        assert code == 2 and "places no object" in first.err
+    else:
+        assert code == 0 and (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()

@@ -48,3 +48,70 @@ def test_likelihood_summed_by_blocks_is_summed_frame_by_frame(velocity: bool, mo
     monkeypatch.setattr(rts, "BLOCK", 1)  # one frame's terms at a time: the plain running sums
     plain = rts.grid_loglik(cols, Q, s * s, sv * sv, 1 << 14)
     assert np.isfinite(blocked).all() and np.array_equal(blocked, plain)
+
+
+def _grid(velocity: bool):
+    q = np.repeat([1e-4, 1e-2, 1.0], 4)
+    s = np.tile([0.3, 3.0], 6)
+    sv = np.tile(np.repeat([0.1, 3.0], 2), 3) if velocity else np.full(12, 0.1)
+    return rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv
+
+
+@pytest.mark.parametrize("velocity", [False, True])
+def test_likelihood_by_pieces_is_the_sequential_one(velocity: bool, monkeypatch) -> None:
+    """Issue 33: a long lane's likelihood computed by pieces filtered side by side (each started early
+    from a guess, restarted where it does not join its predecessor) is the frame-by-frame one up to
+    the order of the sums, at every grid point, slow filters (q = 1e-4, σ = 3) included."""
+    tracks = [_track(n, velocity, seed=n) for n in (1500, 1211)]
+    cols = rts.Columns.pack([z for z, _ in tracks], [r for _, r in tracks])
+    Q, s2, sv2 = _grid(velocity)
+    monkeypatch.setattr(rts, "PIECES_FROM", 10**9)
+    plain = rts.grid_loglik(cols, Q, s2, sv2, 1 << 14)
+    for piece, warm in ((256, 16), (128, 64)):
+        stats: list = []
+        noise = tuple(x[:, None, None] for x in Q)
+        got = rts._pieces_loglik(cols, noise, s2[:, None, None], sv2[:, None, None], rts.IMAGE_PRIOR, piece, warm,
+                                 stats=stats)
+        assert got is not None and stats[0] > 0 and stats[-1] == 0  # some seams needed a restart, all joined
+        pieces = -0.5 * (got + cols.components * rts.LOG_2PI)
+        assert np.abs(pieces - plain).max() <= 1e-12 * np.abs(plain).max()
+        assert np.array_equal(pieces.argmax(axis=0), plain.argmax(axis=0))
+
+
+def test_pieces_that_never_join_fall_back_to_the_sequential_filter(monkeypatch) -> None:
+    z, r = _track(1200, True)
+    cols = rts.Columns.pack([z], [r])
+    Q, s2, sv2 = _grid(True)
+    monkeypatch.setattr(rts, "PIECES_FROM", 10**9)
+    plain = rts.grid_loglik(cols, Q, s2, sv2, 1 << 14)
+    monkeypatch.setattr(rts, "PIECES_FROM", 300)
+    monkeypatch.setattr(rts, "PIECE", 128)
+    monkeypatch.setattr(rts, "ROUNDS", 0)  # no restart: a seam that does not join sends the lane back
+    noise = tuple(x[:, None, None] for x in Q)
+    assert rts._pieces_loglik(cols, noise, s2[:, None, None], sv2[:, None, None], rts.IMAGE_PRIOR, 128, 4) is None
+    monkeypatch.setattr(rts, "WARM", 4)
+    assert np.array_equal(rts.grid_loglik(cols, Q, s2, sv2, 1 << 14), plain)
+
+
+@pytest.mark.parametrize("tracker", ["flow", "groups"])
+def test_long_tracks_smooth_to_the_same_table_by_pieces(tracker: str, monkeypatch) -> None:
+    """The smoothed table of long tracks is the same to the bit whether the grid search filters them
+    frame by frame or by pieces (the same noise is chosen); the fits' likelihoods agree to 1e-12."""
+    from trackreplay.replay.analysis.smooth import smooth_trajectory
+    from tests.replay.analysis.test_smooth import _bench_smooth
+
+    table = _bench_smooth().synthetic_trajectory(5000, tracker, tracks=2, seed=3)
+    monkeypatch.setattr(rts, "PIECE", 512)
+    monkeypatch.setattr(rts, "WARM", 64)
+    monkeypatch.setattr(rts, "PIECES_FROM", 1100)
+    calls: list = []
+    real = rts._pieces_loglik
+    monkeypatch.setattr(rts, "_pieces_loglik", lambda *a, **k: calls.append(1) or real(*a, **k))
+    pieces, fits = smooth_trajectory(table)
+    assert calls
+    monkeypatch.setattr(rts, "PIECES_FROM", 10**9)
+    plain, plain_fits = smooth_trajectory(table)
+    assert pieces.equals(plain, null_equal=True)
+    for a, b in zip(fits, plain_fits):
+        assert (a.q, a.sigma, a.sigma_v, a.outliers, a.filled) == (b.q, b.sigma, b.sigma_v, b.outliers, b.filled)
+        assert abs(a.log_likelihood - b.log_likelihood) <= 1e-12 * abs(b.log_likelihood)

@@ -269,3 +269,37 @@ def test_a_spilled_replay_exports_as_it_would_in_memory(tmp_path: Path) -> None:
     out = tmp_path / "t.parquet"
     export_trajectory(result.table, out, "linear", 15, rows=6)
     assert pl.read_parquet(out).equals(fill_gaps(result.trajectory, "linear", 15), null_equal=True)
+
+
+@pytest.mark.parametrize("method", ["linear", "cubic", "none"])
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_export_of_a_parquet_file_streams_its_checks_and_pieces(tmp_path: Path, monkeypatch, capsys, method: str,
+                                                                 suffix: str) -> None:
+    """Issue 33: `trackreplay export TRAJ.parquet OUT` checks the file a piece at a time and exports it a
+    piece at a time, each piece cast as reading the whole file casts it (here: Float32 positions, Int32
+    ids, no confidence column, an extra column): the same rows and counts as the whole-table path."""
+    from trackreplay.replay.cli.commands import export as export_cmd
+    from trackreplay.replay.cli.main import main
+    from trackreplay.replay.core import export as ex
+
+    table = _long_tracks().drop("confidence").with_columns(
+        pl.col("x", "y").cast(pl.Float32), pl.col("track_id").cast(pl.Int32), pl.lit("rts").alias("fill"))
+    src = tmp_path / "in.parquet"
+    table.sample(fraction=1.0, shuffle=True, seed=2).write_parquet(src, row_group_size=64)  # in no order
+    want = read_trajectory(src)
+    want = want if method == "none" else fill_gaps(want, method, 15)
+    monkeypatch.setattr(ex, "EXPORT_ROWS", 100)
+    streamed: list = []
+    real = ex.export_trajectory
+    monkeypatch.setattr(export_cmd, "export_trajectory",
+                        lambda t, *a, **k: streamed.append(t) or real(t, *a, **{**k, "rows": 100}))
+    out = tmp_path / f"t{suffix}"
+    assert main(["export", str(src), str(out), "--interpolate", method]) == 0
+    assert len(streamed) == 1 and isinstance(streamed[0], ex.CheckedParquet)
+    got = pl.read_parquet(out) if suffix == ".parquet" else pl.read_csv(out, schema=want.schema)
+    assert got.equals(want, null_equal=True)
+    filled = want.filter(pl.col("status") == "interpolated").height
+    assert f"{want.height} rows, {filled} interpolated" in capsys.readouterr().out
+    table.vstack(table.head(1)).write_parquet(src)  # a second row for one track and frame: read whole, named
+    assert main(["export", str(src), str(out)]) != 0
+    assert "a second row for track" in capsys.readouterr().err and len(streamed) == 1
