@@ -484,11 +484,13 @@ class Validator:
     def _ready(self, kept: list[tuple[Tentative, int]], gated: GatedBlobs, scale: float,
                min_move: float) -> tuple[int, float]:
         """The blob row and track fit of the track to confirm: of several that could be, one from the mark
-        (:meth:`_branch_from_mark`) before any other, then the one most
+        (:meth:`_branch_from_mark`) before any other (while the ball's speed is unknown, none other), then the one most
         like the ball last seen (its area), then :attr:`best`; else the longest track's (-1: none)."""
         fits = [self._fit(track, scale, min_move) for track, _ in kept]
         ready = [j for j, fit in enumerate(fits) if fit >= self.cfg.confirm_fit]
-        ready = [j for j in ready if kept[j][0].seeded] or ready  # a path from the mark first: the ball's own
+        # a path from the mark first: the ball's own; while its speed is unknown (the anchor), only such a path:
+        # the blob the gate would have measured is "unconfirmed", and a track elsewhere must not win by default
+        ready = [j for j in ready if kept[j][0].seeded] or ([] if self.anchor is not None else ready)
         if ready:
             slack = self.blobs.area_slack_px * scale * scale
             target = float(gated.targets[0]) + slack
@@ -496,7 +498,7 @@ class Validator:
             j = ready[int(np.argmin(unlike))]
             self.best = kept[j][0]
             return kept[j][1], fits[j]
-        return (kept[0][1], fits[0]) if kept else (-1, 0.0)
+        return (kept[0][1], fits[0] if self.anchor is None else 0.0) if kept else (-1, 0.0)
 
     def confirmed_shape(self) -> tuple[float, float]:
         """Median area and roundness of the confirmed tentative blobs: the ball's new targets."""

@@ -186,10 +186,12 @@ def test_a_repeated_picture_long_ago_leaves_the_last_steps_alone():
     assert velocity.tolist() == [4.0, 0.0] and unsure == 4.0
 
 
-def discs_at(*points: tuple[float, float], radius: int = 4) -> GatedBlobs:
+def discs_at(*points: tuple[float, ...], radius: int = 4) -> GatedBlobs:
+    """Discs at ``points`` (x, y, or x, y, radius); the targets are the first disc's."""
     mask = np.zeros(SIZE[::-1], np.uint8)
-    for x, y in points:
-        cv2.circle(mask, (int(round(x)), int(round(y))), radius, 1, -1)
+    for point in points:
+        x, y, r = (*point, radius) if len(point) == 2 else point
+        cv2.circle(mask, (int(round(x)), int(round(y))), int(r), 1, -1)
     blobs = measure_blobs(mask)
     return GatedBlobs(blobs, np.zeros(len(blobs.area), np.int64), -1, np.array([float(blobs.area[0]), 0.9]), 1.0)
 
@@ -219,9 +221,13 @@ def test_a_blob_away_from_the_mark_is_no_measurement_until_a_track_from_the_mark
 
 
 def test_a_path_from_the_mark_waits_while_another_one_lives():
-    # as above, but the shoe stays in view: two paths leave the mark, neither is taken
+    # as above, but the shoe stays in view: two paths leave the mark, neither is taken; nor is a
+    # look-alike far from the mark moving steadily (out of the paths' reach: no path from the mark),
+    # though its own tentative track is long enough to confirm once the ball's speed is known
     shoe = (390.0, 330.0)
-    verdicts = after_a_mark([(shoe,), (shoe, (480.0, 300.0)), (shoe, (520.0, 300.0)), (shoe, (560.0, 300.0))])
+    far = [(1100.0 + 10 * k, 600.0) for k in range(5)]
+    verdicts = after_a_mark([(shoe, far[1]), (shoe, (480.0, 300.0), far[2]), (shoe, (520.0, 300.0), far[3]),
+                             (shoe, (560.0, 300.0), far[4])])
     assert "confirmed" not in verdicts and "measured" not in verdicts[1:]
 
 
@@ -234,3 +240,11 @@ def test_two_paths_from_the_mark_confirm_neither():
     frames = [((400.0 + 40 * k, 300.0), (400.0 - 40 * k, 300.0)) for k in range(1, 4)]
     verdicts = after_a_mark(frames)
     assert "confirmed" not in verdicts and "measured" not in verdicts[1:]
+
+
+def test_while_the_speed_is_unknown_no_track_elsewhere_is_confirmed():
+    # The ball is unseen for two frames after its mark, then seen 120 px away (a path from the mark
+    # starts, not yet ready); a look-alike far from the mark has moved steadily for three frames.
+    far = [(1100.0 + 10 * k, 600.0, 10) for k in range(4)]  # (five times the ball's area: no look-alike)
+    verdicts = after_a_mark([(far[1],), (far[2],), ((520.0, 300.0), far[3])])
+    assert verdicts[3] != "confirmed"  # a track elsewhere does not win because the ball's own path is young
