@@ -39,6 +39,7 @@ group that stays a group is any switch but ``at the merge``.
 from __future__ import annotations
 
 import argparse
+import json
 import re
 import sys
 import tempfile
@@ -192,8 +193,8 @@ def explain(s: Switch, first_switch: bool, traj: pl.DataFrame, gt: pl.DataFrame,
     return {**f, "cause": c, "stays_a_group": c != "at the merge"}
 
 
-def run(scene: str, seed: int, tmp: Path) -> tuple[dict, list[dict]]:
-    res, traj, gt = evaluate_scene(scene, 48.0, 4.0, seed, tmp)
+def run(scene: str, seed: int, tmp: Path, config: dict | None = None) -> tuple[dict, list[dict]]:
+    res, traj, gt = evaluate_scene(scene, 48.0, 4.0, seed, tmp, config)
     found, matched = switches(traj, gt)
     expected = mot_metrics(traj, gt, space="3d", max_distance_m=GATE_M).id_switches
     if len(found) != expected:
@@ -220,12 +221,14 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--runs", nargs="+", default=["groups-merging:0,2", "groups-stairs:1,4"],
                     help="scene:seeds, seeds as 0,2 or 0-9")
+    ap.add_argument("--config", type=json.loads, default=None,
+                    help='tracker config overrides as JSON, as groups_eval.py (e.g. \'{"grouping": {"near_gate": "start"}}\')')
     args = ap.parse_args()
     table, counts = [], {}
     with tempfile.TemporaryDirectory() as tmp:
         for scene, seeds in map(parse_run, args.runs):
             for seed in seeds:
-                res, rows = run(scene, seed, Path(tmp))
+                res, rows = run(scene, seed, Path(tmp), args.config)
                 print(f"{scene} seed {seed}: {len(rows)} switches; tracker events: {'; '.join(res['events'])}"
                       + (f"; true merge frame {res['true_merge_frame']}" if "true_merge_frame" in res else ""))
                 for r in rows:

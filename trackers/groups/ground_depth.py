@@ -141,6 +141,7 @@ class GroundDepth:
         history = max(2, int(round(self.cfg.history_s * fps))) if np.isfinite(fps) and fps > 0 else 500
         self.mog = cv2.createBackgroundSubtractorMOG2(history, self.cfg.var_threshold, self.cfg.shadows)
         self.mog.setBackgroundRatio(self.cfg.background_ratio)
+        self.mog.setShadowThreshold(self.cfg.shadow_threshold)
         for image in self.buffer:
             self.mog.apply(image)
         self.buffer = []

@@ -19,3 +19,8 @@ def test_out_of_range_values_are_refused(kwargs, message):
     with pytest.raises(ValueError, match=message):
         GroupsConfig(**kwargs)
     GroupsConfig()  # the defaults pass
+
+
+def test_an_unknown_near_gate_mode_is_refused():
+    with pytest.raises(ValueError, match='grouping.near_gate must be "join", "leave" or "start"'):
+        GroupingConfig(near_gate="absorb")

@@ -46,3 +46,82 @@ def test_a_merged_group_keeps_its_freshest_parts_misses():
 def test_the_lifecycle_follows_the_rescaled_deletion_count():
     assert TrackConfig(max_empty_frames=0).lifecycle.lost_after == 1
     assert GroupsConfig().at_rate(96.0).tracks.lifecycle.lost_after == 24 + 1
+
+
+def _points(xyz: np.ndarray, rig: StereoRig = RIG) -> ObservationPoints:
+    n = len(xyz)
+    return ObservationPoints(np.arange(n), rig.to_uvd(xyz), xyz, np.zeros((n, 3)), np.zeros((n, 2, 2)))
+
+
+@pytest.mark.parametrize("mode", ["join", "leave", "start"])
+def test_a_splinter_beside_a_confirmed_group_joins_it_is_left_or_starts_one(mode):
+    """12 points on an arc 1.25 m around a group (each outside its eq. 8 gate, 1.09 m, but the set's
+    region overlaps it: legs or a side the gate does not reach) join the group, are left unassigned or
+    start a group of their own (the paper), per grouping.near_gate; 12 points 4 m away start a group in
+    every mode, and so does the arc beside a group not yet confirmed."""
+    from dataclasses import replace
+
+    cfg = GroupsConfig()
+    cfg = replace(cfg, grouping=replace(cfg.grouping, near_gate=mode))
+    tracker = GroupTracker(cfg, np.random.default_rng(0))
+    g = _group(tracker, 1, [0.0, 0.0, 5.0], 12)
+    g.hits = cfg.merge.frames
+    tracker.groups = [g]
+    rng = np.random.default_rng(1)
+    body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
+    angle = np.linspace(-np.pi / 3, np.pi / 3, 12)
+    beside = np.array([0.0, 0.0, 5.0]) + 1.25 * np.stack([np.cos(angle), np.zeros(12), np.sin(angle)], axis=1)
+    far = np.array([4.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
+    points = _points(np.concatenate([body, beside, far]))
+    tracker.groups[0].ekf.predict()
+    labels = tracker._associate_and_update(points, RIG)
+    assert (labels[:12] == 0).all(), "the group's own points are in its gate"
+    labels, _, events = tracker._delete(labels)
+    labels = tracker._start_groups(points, labels, RIG, events)
+    started = [e for e in events if "started" in e]
+    if mode == "join":
+        assert (labels[12:24] == 0).all() and tracker.groups[0].members == 24 and len(started) == 1
+    elif mode == "leave":
+        assert (labels[12:24] == -1).all() and tracker.groups[0].members == 12 and len(started) == 1
+    else:
+        assert len(set(labels[12:24].tolist())) == 1 and labels[12] >= 1 and len(started) == 2
+    assert len(set(labels[24:].tolist())) == 1 and labels[24] >= 1, "a set far from every gate starts a group"
+
+    young = GroupTracker(cfg, np.random.default_rng(0))
+    young.groups = [_group(young, 1, [0.0, 0.0, 5.0], 12)]  # hits 0: not confirmed
+    young.groups[0].ekf.predict()
+    labels = young._associate_and_update(points, RIG)
+    labels, _, events = young._delete(labels)
+    young._start_groups(points, labels, RIG, events)
+    assert sum("started" in e for e in events) == 2
+
+
+@pytest.mark.parametrize("inside_box", [True, False])
+def test_a_set_seen_through_a_confirmed_group_s_box_at_another_depth_waits(inside_box):
+    """12 points 3 m behind a group (far outside its gate) whose image centre lies in the group's
+    image box start no group with grouping.inside_box (a part of the group at a wrong disparity, or
+    someone it hides), and start one without it."""
+    from dataclasses import replace
+
+    cfg = GroupsConfig()
+    cfg = replace(cfg, grouping=replace(cfg.grouping, inside_box=inside_box))
+    tracker = GroupTracker(cfg, np.random.default_rng(0))
+    tracker.source = "stereo"  # the box test is the stereo source's (one camera: each column's own foot)
+    g = _group(tracker, 1, [0.0, 0.0, 5.0], 12)
+    g.hits = cfg.merge.frames
+    centre = RIG.to_uvd(np.array([[0.0, 0.0, 5.0]]))[0]
+    g.box = np.array([centre[0] - 40.0, centre[1] - 80.0, centre[0] + 40.0, centre[1] + 80.0])
+    tracker.groups = [g]
+    rng = np.random.default_rng(1)
+    body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
+    behind = np.array([0.0, -0.3, 8.0]) + rng.normal(0.0, 0.1, (12, 3))
+    points = _points(np.concatenate([body, behind]))
+    tracker.groups[0].ekf.predict()
+    labels = tracker._associate_and_update(points, RIG)
+    labels, _, events = tracker._delete(labels)
+    labels = tracker._start_groups(points, labels, RIG, events)
+    assert (labels[:12] == 0).all()
+    if inside_box:
+        assert (labels[12:] == -1).all() and not any("started" in e for e in events)
+    else:
+        assert (labels[12:] == 1).all() and sum("started" in e for e in events) == 1

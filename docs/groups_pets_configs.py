@@ -1,0 +1,116 @@
+"""The group tracker on PETS09 S2L1 with config changes, and who is covered when: the tables behind
+docs/groups_pets.md ("Who was below 80 %, and why": the per-person table and the before/after rows).
+
+    trackreplay evaluate benchmarks/corpora/pets.toml --out runs/pets --seeds 0-2      # records runs/pets/logs/*.mcap
+    python docs/groups_pets_configs.py runs/pets/logs/pets09_s2l1-*.mcap \\
+        --config '{}' '{"grouping": {"near_gate": "start"}}' [--people]
+
+Each ``--config`` (JSON, the tracker's TOML tables; ``{}`` the defaults) is one replay (seed 0: the
+tracker draws no random number) of the log ``evaluate`` recorded, scored exactly as ``evaluate``
+scores it (:func:`trackreplay.replay.runs.evaluate.score`: the ``ground_*`` columns). ``--people``
+adds, per person below 80 % of their frames, where and when they are missed: their frames, the share
+covered, their median distance from the camera's ground point, how many of their missed frames they
+spend within 1.5 m of another person (a group the truth may or may not call one), on how many a
+``predicted`` row (a group coasting without points) is within 1.5 m and a ``measured`` one within
+1.5-3 m (placed too far off) and that row's median offset away from the camera (m; + farther),
+their truth box's median height and foot row on the missed frames, and the missed frames' span.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))
+
+from trackreplay.replay.analysis.group_ground import _nearest, derive_groups, group_ground_scores  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.log.groundtruth import groundtruth_with_frames  # noqa: E402
+from trackreplay.replay.log.reader import LogReader  # noqa: E402
+from trackreplay.replay.runs.batch import multi_object_metrics  # noqa: E402
+
+COLUMNS = ("person_coverage", "person_coverage_min", "people_at_goal", "people", "wrong_rate", "group_mota",
+           "group_idf1", "group_id_switches", "merges_found", "splits_found")
+
+
+def people_below(traj: pl.DataFrame, gt: pl.DataFrame, frames: list[int], camera_xy: np.ndarray | None,
+                 goal: float = 0.8, radius_m: float = 1.5) -> list[dict]:
+    """Per person under ``goal``: frames, covered share, median distance from the camera (m), missed
+    frames spent within ``radius_m`` of another person, and the missed frames' first and last."""
+    groups = derive_groups(gt).filter(pl.col("frame").is_in(frames))
+    near = _nearest(groups, traj.filter((pl.col("status") == "measured") & pl.col("X").is_not_null()
+                                        & pl.col("frame").is_in(frames)), radius_m)
+    out = []
+    for (pid,), p in near.group_by(["id"], maintain_order=True):
+        share = float(p["track"].is_not_null().mean())
+        if share >= goal:
+            continue
+        missed = p.filter(pl.col("track").is_null())["frame"].to_list()
+        me = groups.filter(pl.col("id") == pid)
+        dist = (float(np.median(np.linalg.norm(me.select("X", "Y").to_numpy() - camera_xy, axis=1)))
+                if camera_xy is not None else float("nan"))
+        crowded = coasting = off = 0
+        radial: list[float] = []
+        for f in missed:
+            here = groups.filter(pl.col("frame") == f)
+            xy = here.filter(pl.col("id") == pid).select("X", "Y").to_numpy()
+            others = here.filter(pl.col("id") != pid).select("X", "Y").to_numpy()
+            crowded += int(len(others) > 0 and np.linalg.norm(others - xy, axis=1).min() <= radius_m)
+            rows = traj.filter((pl.col("frame") == f) & pl.col("X").is_not_null())
+            d = np.linalg.norm(rows.select("X", "Y").to_numpy() - xy, axis=1) if rows.height else np.zeros(0)
+            status = rows["status"].to_list()
+            coasting += int(any(s == "predicted" and dd <= radius_m for s, dd in zip(status, d)))
+            off += int(any(s == "measured" and radius_m < dd <= 2 * radius_m for s, dd in zip(status, d)))
+            m = [k for k, (s, dd) in enumerate(zip(status, d)) if s == "measured" and radius_m < dd <= 2 * radius_m]
+            if m and camera_xy is not None:  # the nearest such row: farther from the camera (+) or nearer (-)
+                k = min(m, key=lambda k: d[k])
+                xy_row = rows.select("X", "Y").to_numpy()[k]
+                radial.append(float(np.linalg.norm(xy_row - camera_xy) - np.linalg.norm(xy[0] - camera_xy)))
+        box = gt.filter((pl.col("id") == pid) & pl.col("frame").is_in(missed))
+        out.append({"id": int(pid), "frames": p.height, "covered": round(share, 3), "camera_m": round(dist, 1),
+                    "missed": len(missed), "missed_near_another": crowded,
+                    "missed_predicted_within": coasting, "missed_measured_1_2x": off,
+                    "off_radial_m": round(float(np.median(radial)), 2) if radial else None,
+                    "missed_box_h_px": round(float(box["h"].median()), 0) if box.height else None,
+                    "missed_foot_row": round(float((box["y"] + box["h"] / 2).median()), 0) if box.height else None,
+                    "missed_span": f"{min(missed)}-{max(missed)}" if missed else "-"})
+    return sorted(out, key=lambda r: r["covered"])
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("log", type=Path)
+    ap.add_argument("--config", nargs="+", type=json.loads, default=[{}])
+    ap.add_argument("--people", action="store_true")
+    ap.add_argument("--save", type=Path, default=None, help="write each replay's trajectory here (config_<k>.parquet)")
+    args = ap.parse_args()
+    reader = LogReader(args.log)
+    gt, annotated = groundtruth_with_frames(reader)
+    frames = annotated["frame"].to_list()
+    print("| config | " + " | ".join(COLUMNS) + " | image MOTA |\n|" + "---|" * (len(COLUMNS) + 2))
+    for cfg in args.config:
+        result = replay(ReplayRequest(log=args.log, tracker="groups", seed=0, config=cfg or None))
+        traj = result.trajectory
+        if args.save is not None:
+            args.save.mkdir(parents=True, exist_ok=True)
+            traj.write_parquet(args.save / f"config_{args.config.index(cfg)}.parquet")
+        row = group_ground_scores(traj, gt, frames).row("")
+        mot = multi_object_metrics(traj, gt, annotated["frame"])
+        print(f"| `{json.dumps(cfg)}` | " + " | ".join(f"{row[c]:.3f}" if isinstance(row[c], float) else str(row[c])
+                                                      for c in COLUMNS) + f" | {mot.get('mota', float('nan')):.3f} |")
+        if args.people:
+            plane = reader.first("/camera/ground_plane")
+            camera = np.array([plane.camera_ground_x, plane.camera_ground_y]) if plane is not None else None
+            for r in people_below(traj, gt, frames, camera):
+                print("   ", r)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
