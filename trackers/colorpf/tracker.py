@@ -51,7 +51,9 @@ size the target (``camera.scale_size``); a region grows the box by at most ``ref
 past the last "measured" box; N = 100 particles; the reported confidence is the fitted probability that
 the row is right (``calibrate``, :mod:`.calibration`); on a grey picture the layout (template) cue is on too
 (``likelihood.grey_template``), and wherever that cue is on a colour match is "measured" only when the estimate's
-box correlates with the target's template (``likelihood.layout_vouches``, :meth:`_layout_agrees`). Off by default,
+box correlates with the target's template (``likelihood.layout_vouches``, :meth:`_layout_agrees`); while lost, a scan
+of the whole picture with the reference re-seeds the cloud on a single clear match (``redetect``, :meth:`_redetect`,
+:mod:`.redetect`). Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -82,6 +84,7 @@ from trackreplay.trackers.colorpf.hold import VouchedMotion
 from trackreplay.trackers.colorpf.intermediates import ColorPfIntermediates
 from trackreplay.trackers.colorpf.likelihood import ColourModel, Measurement, box_histogram, mean_shift, measure
 from trackreplay.trackers.colorpf.motion import position_sigma, standing_box, transition, vouched_prediction
+from trackreplay.trackers.colorpf.redetect import scan, unique_best
 from trackreplay.trackers.colorpf.reference import (BackgroundFrames, Reference, box_reference, marked_box,
                                                     subtract_and_mix)
 from trackreplay.trackers.colorpf.size import (WeakPerspectiveSize, foot_points, ground_distance, horizon_side,
@@ -190,6 +193,7 @@ class ColorPfTracker(TrackerBase):
         self.support = Support(np.zeros(2))  # [colorpf.support]: frames since the last supported row, its box's size
         self._vouched_area = float("inf")  # refine.max_growth: the area of the last "measured" row's box (the mark on)
         self._too_small = False  # the marked box holds fewer than min_box_pixels pixels
+        self._lost_unsupported = False  # the track is lost for lack of support (support.lost_unsupported)
         # camera.compensate: the camera's motion since the marked frame, snapped (the identity for a still camera)
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
@@ -535,10 +539,13 @@ class ColorPfTracker(TrackerBase):
         image, plane = frame.image, frame.ground_plane
         prev = self.pf.estimate()
         working = self.reference.histogram if self.adapted is None else self.adapted
+        view = self._foreground_view(image)
         if not weigh_only:
             self._predict(prev, plane)
+            self._lost_unsupported = self._lost_unsupported and self.life.lost  # cleared once found again
+            if self.config.redetect.enabled and self.life.lost:
+                self._redetect(image, view, prev)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
-        view = self._foreground_view(image)
         estimate = self._weigh(self._cues(m.likelihood, image, view, prev, mask))
         placed = held = False
         if not weigh_only:
@@ -563,6 +570,40 @@ class ColorPfTracker(TrackerBase):
         self.intermediates = self._intermediates(m, shown, score, size, mask, status, evidence)
         return self._rows(status, shown, prev, confidence, weigh_only)
 
+    def _redetect(self, image: np.ndarray, view: ForegroundView, prev: np.ndarray) -> None:
+        """``redetect.enabled``, while lost: a scan of the whole picture at the last supported size against H_ref
+        as built (:func:`.redetect.scan`), each box's confidence by the status's rule (:meth:`_score`'s ``c``), a box
+        that stands out from eq. (7)'s background where it exists on this frame. Nothing when the mark's
+        lead over the background (S_mark - S_back) is under the scanned scores' standard deviation (a match
+        is then the picture's own variation), the mark is too small or the track was lost for lack of support. When one box
+        alone matches (:func:`.redetect.unique_best`) and beats the cloud's last estimate ``prev`` on this
+        frame, ``redetect.share`` of the cloud is drawn around it with eq. (2)'s position noise."""
+        cfg, ref = self.config, self.reference
+        assert ref is not None
+        if self._too_small or self._s_mark is None or self._lost_unsupported:
+            return  # lost for lack of support: the colour matched where the cloud was and could not vouch
+        wh = self.support.wh
+        sigma = noise_for(position_sigma(wh, cfg.noise, cfg.min_noise_px), self.clock.ratio)
+        boxes, similarity = scan(self.model, image, ref.histogram, wh, cfg.redetect.stride, cfg.redetect.max_boxes)
+        s_back = float(self.model.pooled_similarity(ref.h_back, ref.histogram))
+        if self._s_mark - s_back < max(cfg.min_separation, float(similarity.std())):
+            # the mark stands out from the background by less than the scanned boxes' scores vary from box to
+            # box: c >= measured_fraction (half the mark's lead) is then reached by the picture's own variation
+            # (otb_human3: a lead of 0.056 against a spread of 0.13-0.15), and a match found so vouches for little
+            return
+        confidence = np.clip((similarity - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0)
+        if view.background is not None and self.reference.p_square > 0:
+            # eq. (7)'s background on this frame: a box must also stand out from it (the target moves; a
+            # static look-alike in the background does not): more foreground inside than in its ring
+            contrast = foreground_contrast(image, view.background, boxes[:, :2], boxes[0, 2:4], cfg.reference.threshold,
+                                           cfg.reference.open_px, view.gain, band=view.band)
+            confidence = np.where(contrast > 0.0, confidence, 0.0)
+        best = unique_best(boxes, confidence, cfg.measured_fraction)
+        if best is None or confidence[best] <= self._score(image, prev, False).confidence:
+            return  # no single match, or the cloud is where the colour matches as well
+        box = boxes[best]
+        self.pf.inject(cfg.redetect.share, box, np.concatenate([sigma, [0.0, 0.0]]))
+
     def _evidence(self, status: str, supported: bool, score: Score, estimate: np.ndarray,
                   unsupported: int) -> RowEvidence:
         """What ``calibrate`` reads of the row (:mod:`.calibration`; in the intermediates either way)."""
@@ -583,6 +624,7 @@ class ColorPfTracker(TrackerBase):
         # frame_rate: the same duration
         limit = frames_for(cfg.lost_unsupported, self.clock.typical) if cfg.lost_unsupported > 0 else None
         if support.expired(limit) and status != "lost":
+            self._lost_unsupported = True  # redetect: not a loss of the colour's (see _redetect)
             status = self.life.lose()  # as a miss: restarted by reacquire_frames matches, as after colour's misses
         if status != "predicted":
             return status, estimate, confidence

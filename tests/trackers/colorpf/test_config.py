@@ -24,12 +24,13 @@ def test_paper_overrides_change_only_the_default_departures():
     assert (paper.reacquire_frames, paper.min_box_pixels) == (1, 0) and ours.reacquire_frames > 1 and ours.min_box_pixels > 0
     assert (paper.n_particles, paper.calibrate, paper.likelihood.grey) == (40, False, "hsv")  # issue 31's defaults off
     assert ours.n_particles > 40 and ours.calibrate and ours.likelihood.grey == "gradient" and not ours.camera.scale_size
+    assert ours.redetect.enabled and not paper.redetect.enabled
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
                                neighbour_check=True, refine=ours.refine, hold=ours.hold, camera=ours.camera,
                                frame_rate=ours.frame_rate, reacquire_frames=ours.reacquire_frames,
                                min_box_pixels=ours.min_box_pixels, support=ours.support,
-                               n_particles=ours.n_particles, calibrate=ours.calibrate) == ours
+                               n_particles=ours.n_particles, calibrate=ours.calibrate, redetect=ours.redetect) == ours
     assert (ours.likelihood.parts, ours.motion.model, ours.size.no_plane) == (1, "random_walk", "constant")
 
 
@@ -43,6 +44,7 @@ def test_paper_overrides_change_only_the_default_departures():
     ("reference", {"exclude": 0.5}), ("hold", {"smoothing": 1.0}), ("hold", {"max_frames": -1}),
     ("camera", {"min_corners": 2}), ("camera", {"renew": "never"}),
     ("reference", {"registration_tolerance": "always"}),
+    ("redetect", {"stride": 0.0}), ("redetect", {"share": 0.0}), ("redetect", {"max_boxes": 0}),
 ])
 def test_bad_switch_values_are_named(table, values):
     with pytest.raises(TrackreplayError, match=f"invalid {table} .*{next(iter(values))}"):
