@@ -106,6 +106,10 @@ def write_page(rows: list[dict]) -> None:
     lines = [
         "# Golf tracker at 30-240 fps: what is `measured` off the ball",
         "",
+        "> Stays a script, not a `trackreplay evaluate` manifest (docs/README.md): `golf_frame_rates.py`: each of three "
+        "guards turned off in turn on the same logs, a configuration ablation `evaluate` does not express (it replays "
+        "every tracker with its defaults).",
+        "",
         "Written by `python docs/golf_frame_rates.py` (deterministic; see its docstring for the shots). Each cell:",
         f"visible frames `measured` within 5 px / `measured` rows more than {WRONG_PX:g} px off the ball or while it is",
         "out of view (worst, px). *default* is the tracker as shipped; each other column turns one guard off.",
