@@ -49,3 +49,22 @@ def disk_full_at(monkeypatch: pytest.MonkeyPatch) -> Callable[[str], None]:
         monkeypatch.setattr(os, "fsync", fsync)
 
     return fail_for
+
+
+@pytest.fixture
+def benchmark_module() -> Callable[[str], Any]:
+    """Loads ``benchmarks/NAME.py`` by path (the benchmarks are scripts, not an installed package), for the
+    tests that check a benchmark's synthetic inputs or its reference implementation:
+    ``benchmark_module("bench_smooth")``."""
+    import importlib.util
+    import sys
+
+    def load(name: str) -> Any:
+        path = Path(__file__).resolve().parents[2] / "benchmarks" / f"{name}.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module  # (dataclasses in the module look themselves up there)
+        spec.loader.exec_module(module)
+        return module
+
+    return load

@@ -248,19 +248,7 @@ def test_chunked_evaluation_refuses_frames_at_other_times() -> None:
         evaluate_chunked(trajectory_table(rows).lazy(), gt, chunk_frames=3)
 
 
-def _long_log_bench():
-    import importlib.util
-    import sys
-
-    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_long_log.py"
-    spec = importlib.util.spec_from_file_location("bench_long_log", path)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules["bench_long_log"] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_eval_of_one_track_reads_the_truth_a_chunk_at_a_time(tmp_path, monkeypatch, capsys) -> None:
+def test_eval_of_one_track_reads_the_truth_a_chunk_at_a_time(tmp_path, monkeypatch, capsys, benchmark_module) -> None:
     """Issue 33: `eval` of one Parquet track against a log's one truth object reads the truth from the
     log a chunk at a time (truth_index, truth_parts) and checks the frames a piece at a time: the same
     --json as the whole table's path (--per-frame takes it), and the same sentence for a frame at
@@ -268,7 +256,7 @@ def test_eval_of_one_track_reads_the_truth_a_chunk_at_a_time(tmp_path, monkeypat
     from trackreplay.replay.analysis import eval as ev
     from trackreplay.replay.cli.main import main
 
-    bench = _long_log_bench()
+    bench = benchmark_module("bench_long_log")
     log, traj = tmp_path / "long.mcap", tmp_path / "t.parquet"
     bench.write_long_log(log, 700)
     bench.write_spill(traj, 700)
@@ -336,7 +324,7 @@ def test_eval_of_a_log_time_beyond_int64_is_one_sentence(tmp_path, capsys, extra
 
 
 @pytest.mark.parametrize("objects", [0, 2], ids=["truth-places-nothing", "two-objects"])
-def test_eval_of_one_track_when_the_truth_has_no_single_object(tmp_path, capsys, objects: int) -> None:
+def test_eval_of_one_track_when_the_truth_has_no_single_object(tmp_path, capsys, objects: int, benchmark_module) -> None:
     """The truth read in chunks is for one truth object: a truth that places none is refused in the
     whole-table path's sentence, and two objects are told apart by the whole table (the object the
     track lies on), with the same --json as with --per-frame."""
@@ -346,7 +334,7 @@ def test_eval_of_one_track_when_the_truth_has_no_single_object(tmp_path, capsys,
     from trackreplay.schemas import topics as T
     from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject
 
-    bench = _long_log_bench()
+    bench = benchmark_module("bench_long_log")
     log, traj = tmp_path / "t.mcap", tmp_path / "t.parquet"
     bench.write_spill(traj, 60)
     picture = bench.cv2.imencode(".png", np.zeros((8, 8), np.uint8))[1].tobytes()

@@ -288,27 +288,12 @@ def test_a_filled_group_rows_velocity_is_its_positions_rate() -> None:
     assert np.allclose(_interp_rate(f, x, fill)[fill], [10.0, 10.0, 10.0, 2.0])  # the slope of the very line drawn
 
 
-def _bench_smooth():
-    """benchmarks/bench_smooth.py: its synthetic trajectories and the filterpy smoother the batched one
-    replaced (one track, one grid point at a time), kept there as the reference."""
-    import importlib.util
-
-    path = Path(__file__).resolve().parents[3] / "benchmarks" / "bench_smooth.py"
-    spec = importlib.util.spec_from_file_location("bench_smooth", path)
-    module = importlib.util.module_from_spec(spec)
-    import sys
-
-    sys.modules["bench_smooth"] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.mark.parametrize("tracker, rows", [("colorpf", 240), ("flow", 120), ("groups", 400)])
-def test_batched_smoother_gives_the_filterpy_smoothers_results(tracker: str, rows: int) -> None:
+def test_batched_smoother_gives_the_filterpy_smoothers_results(tracker: str, rows: int, benchmark_module) -> None:
     """Issue 33: every track and grid point at once (replay/analysis/rts.py, rts_space.py) gives what the
     per-track filterpy smoother gave, on tracks of different lengths with gaps, absent frames and
     wrong blobs: the same grid point, outliers, fills and statuses, positions within 1e-9."""
-    bench = _bench_smooth()
+    bench = benchmark_module("bench_smooth")
     table = bench.synthetic_trajectory(rows, tracker, tracks=3, seed=5)
     old, old_fits = bench.run_reference(table)
     new, new_fits = smooth_trajectory(table)
@@ -320,8 +305,8 @@ def test_batched_smoother_gives_the_filterpy_smoothers_results(tracker: str, row
 
 
 @pytest.mark.parametrize("name", ["flow", "colorpf", "golf", "groups"])
-def test_golden_trajectories_smooth_as_with_filterpy(name: str) -> None:
-    bench = _bench_smooth()
+def test_golden_trajectories_smooth_as_with_filterpy(name: str, benchmark_module) -> None:
+    bench = benchmark_module("bench_smooth")
     table = pl.read_parquet(GOLDEN / f"{name}.trajectory.parquet")
     old, old_fits = bench.run_reference(table)
     new, new_fits = smooth_trajectory(table)
