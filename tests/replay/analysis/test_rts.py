@@ -94,13 +94,12 @@ def test_pieces_that_never_join_fall_back_to_the_sequential_filter(monkeypatch) 
 
 
 @pytest.mark.parametrize("tracker", ["flow", "groups"])
-def test_long_tracks_smooth_to_the_same_table_by_pieces(tracker: str, monkeypatch) -> None:
+def test_long_tracks_smooth_to_the_same_table_by_pieces(tracker: str, monkeypatch, benchmark_module) -> None:
     """The smoothed table of long tracks is the same to the bit whether the grid search filters them
     frame by frame or by pieces (the same noise is chosen); the fits' likelihoods agree to 1e-12."""
     from trackreplay.replay.analysis.smooth import smooth_trajectory
-    from tests.replay.analysis.test_smooth import _bench_smooth
 
-    table = _bench_smooth().synthetic_trajectory(5000, tracker, tracks=2, seed=3)
+    table = benchmark_module("bench_smooth").synthetic_trajectory(5000, tracker, tracks=2, seed=3)
     monkeypatch.setattr(rts, "PIECE", 512)
     monkeypatch.setattr(rts, "WARM", 64)
     monkeypatch.setattr(rts, "PIECES_FROM", 1100)
