@@ -162,6 +162,7 @@ def test_bad_options_fail_with_one_sentence() -> None:
         GolfSceneConfig(camera="drone").validate()
 
 
+@pytest.mark.slow  # 6 s: the default suite took 4 min 13 s on a fresh clone (budget 4 min); CI runs -m slow
 def test_cli_writes_a_readable_golf_log(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "cli.mcap"
     assert main(["synth", "golf-teeshot", str(out), "--seed", "3", "--duration", "0.5", "--fps", "60",

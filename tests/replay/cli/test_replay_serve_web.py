@@ -70,6 +70,7 @@ def _streamed_entities(url: str, tmp_path: Path) -> set[str]:
         client.wait(timeout=30)
 
 
+@pytest.mark.slow  # 4 s: the default suite took 4 min 13 s on a fresh clone (budget 4 min); CI runs -m slow
 def test_serve_web_answers_streams_the_replay_and_stops_at_ctrl_c(tmp_path: Path) -> None:
     web, grpc = _free_port(), _free_port()
     cmd = [sys.executable, "-m", "trackreplay", "replay", str(GOLDEN_FLOW), "--tracker", "flow", "--end", "0.1",

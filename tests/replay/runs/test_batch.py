@@ -41,6 +41,7 @@ def local_ray():
     ray.shutdown()
 
 
+@pytest.mark.slow  # 12 s with its Ray start: the default suite took 4 min 13 s on a fresh clone (budget 4 min); CI runs -m slow
 def test_batch_digests_equal_serial_replays_and_a_bad_log_fails_in_its_row(local_ray, tmp_path: Path, capsys) -> None:
     bad = tmp_path / "bad.mcap"
     bad.write_bytes(b"not an mcap file")
@@ -158,6 +159,7 @@ def test_a_multi_object_tracker_gets_the_metrics_of_eval_mot(tmp_path: Path) -> 
     assert golf["success_auc"] > 0 and all(golf[m] is None for m in MOT_METRICS)
 
 
+@pytest.mark.slow  # 4 s: the default suite took 4 min 13 s on a fresh clone (budget 4 min); CI runs -m slow
 def test_a_ray_address_that_cannot_be_joined_is_one_sentence_and_leaves_no_folder(short_sim: Path, tmp_path: Path) -> None:
     """A review: exit 70, and an empty --out left behind. (A process of its own: this module's Ray is running.)"""
     import subprocess

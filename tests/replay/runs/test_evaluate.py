@@ -46,6 +46,7 @@ def _write(tmp_path: Path, text: str) -> Path:
     return path
 
 
+@pytest.mark.slow  # 4 s: the default suite took 4 min 13 s on a fresh clone (budget 4 min); CI runs -m slow
 def test_a_small_corpus_end_to_end_twice_gives_the_same_table(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     suite, out = _write(tmp_path, SMALL), tmp_path / "out"
     args = ["evaluate", str(suite), "--out", str(out), "--seeds", "0-1", "--serial", "--no-baseline", "--quiet"]
