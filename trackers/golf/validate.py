@@ -24,8 +24,8 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   roundness within the shape tolerance of a disc (``confirm_fit`` of :func:`track_fit`). The
   targets are not asked: after a loss they are stale (a receding ball under a zooming lens, a
   streak's fragments), and the ball's size starts again from the confirmed blobs. When another
-  accepted blob of a similar size is in view, nothing is confirmed (verdict ``ambiguous``): after
-  a loss the tracker cannot tell its ball from a spare one;
+  accepted blob of a similar size (to the track's or to the ball's as last seen) is in view, nothing
+  is confirmed (verdict ``ambiguous``): after a loss the tracker cannot tell its ball from a spare one;
 - **gone**: when the predicted mean is more than a ball diameter outside the picture nothing in
   the picture is accepted directly (the ball left it); when it is outside by less, only a blob the
   edge cuts (:func:`cut_by_edge`: what is left of a ball leaving); the track is ``predicted`` and then
@@ -317,17 +317,20 @@ class Validator:
         return Validation(verdict, 0.0, 0.0, 0.0, radius, k, self._rows(), in_gate)
 
     def _ambiguous(self, gated: GatedBlobs, k: int, scale: float) -> bool:
-        """Another shape-accepted blob this frame looks as much like the tentative ball (area within
-        ``area_tolerance`` of the tentative blobs' median): after a loss the tracker cannot tell which
-        of two such balls is its own (a spare ball, a tee marker), so it confirms neither."""
+        """Another shape-accepted blob this frame looks as much like the tentative ball, or like the ball
+        as last seen (area within ``area_tolerance`` of the tentative blobs' median or of the targets'):
+        after a loss the tracker cannot tell which of two such balls is its own (a spare ball, a tee
+        marker), so it confirms neither. The targets count because the tentative track may be the
+        look-alike: a player's white shoe walking off after a rally while the shuttle lies on the floor."""
         others = np.flatnonzero(gated.accepted | (gated.reason == STILL))  # still scenery is a look-alike too
         others = others[others != k]
         if not others.size or self.best is None:
             return False
         slack = self.blobs.area_slack_px * scale * scale
         typical = float(np.nanmedian(np.array(self.best.shapes, float).reshape(-1, 2)[:, 0]))
-        ratio = np.abs(np.log((gated.blobs.area[others] + slack) / (typical + slack)))
-        return bool((ratio <= math.log(self.blobs.area_tolerance)).any())
+        area = gated.blobs.area[others] + slack
+        like = np.minimum(np.abs(np.log(area / (typical + slack))), np.abs(np.log(area / (float(gated.targets[0]) + slack))))
+        return bool((like <= math.log(self.blobs.area_tolerance)).any())
 
     def _rival_from_mark(self, diameter: float) -> bool:
         """Another track from the mark is alive this frame on a blob more than a diameter from the one to
