@@ -248,3 +248,26 @@ def test_while_the_speed_is_unknown_no_track_elsewhere_is_confirmed():
     far = [(1100.0 + 10 * k, 600.0, 10) for k in range(4)]  # (five times the ball's area: no look-alike)
     verdicts = after_a_mark([(far[1],), (far[2],), ((520.0, 300.0), far[3])])
     assert verdicts[3] != "confirmed"  # a track elsewhere does not win because the ball's own path is young
+
+
+def test_after_a_loss_a_ball_sized_blob_in_view_keeps_a_bigger_track_from_confirmation():
+    # The rally is over: the shuttle lies on the floor of a fixed view (the ball's size, still: never
+    # confirmed itself), and a player's white shoe, five times its area, walks steadily across the
+    # picture. The shoe's track agrees with itself, but a blob that looks like the ball as last seen
+    # is in view: which is the ball is not known.
+    def run(with_shuttle: bool) -> list[str]:
+        validator = Validator(ValidateConfig(), BlobConfig())
+        out = []
+        for k in range(5):
+            shoe = (600.0 + 6 * k, 500.0, 9)
+            points = ((900.0, 600.0), shoe) if with_shuttle else (shoe,)
+            gated = discs_at(*points)
+            gated = GatedBlobs(gated.blobs, gated.reason, -1, np.array([50.0, 0.9]), 1.0)  # the ball as last seen
+            check = validator.validate(index=k, gated=gated, predicted=np.array([640.0, 360.0]), spread=np.full(2, 50.0),
+                                       diameter=8.0, size=SIZE, scale=1.0, lost=True, entry_only=True)
+            out.append(check.verdict)
+        return out
+
+    assert "confirmed" in run(with_shuttle=False)  # alone in view, a steady track is taken after a loss
+    verdicts = run(with_shuttle=True)
+    assert "confirmed" not in verdicts and "ambiguous" in verdicts
