@@ -130,6 +130,8 @@ class GroundDepth:
         self.mog: cv2.BackgroundSubtractorMOG2 | None = None
         self.rig: StereoRig | None = None
         self.rays: np.ndarray | None = None  # (H, W, 3) world ray of each pixel (camera z = 1)
+        self.history = 500  # MOG2's history (frames), set by :meth:`start`
+        self.applied = 0  # frames MOG2 has been given (its own frame count, for its learning rate)
 
     def add(self, image: np.ndarray) -> None:
         """One of the first ``frames`` frames, kept until the log's rate is known (:meth:`start`)."""
@@ -139,11 +141,13 @@ class GroundDepth:
         """MOG2 with a history of ``history_s`` at ``fps`` (500 frames when the rate is unknown), taught
         the kept frames in order."""
         history = max(2, int(round(self.cfg.history_s * fps))) if np.isfinite(fps) and fps > 0 else 500
+        self.history = history
         self.mog = cv2.createBackgroundSubtractorMOG2(history, self.cfg.var_threshold, self.cfg.shadows)
         self.mog.setBackgroundRatio(self.cfg.background_ratio)
         self.mog.setShadowThreshold(self.cfg.shadow_threshold)
         for image in self.buffer:
             self.mog.apply(image)
+        self.applied = len(self.buffer)
         self.buffer = []
 
     @property
@@ -162,10 +166,23 @@ class GroundDepth:
             self.rays = cam @ self.rig.pose.R.T
         return self.rig
 
-    def foreground(self, image: np.ndarray) -> np.ndarray:
-        """MOG2's foreground (shadows left out), opened then closed (bool)."""
+    def foreground(self, image: np.ndarray, held: np.ndarray | None = None) -> np.ndarray:
+        """MOG2's foreground (shadows left out), opened then closed (bool). ``held`` (H, W bool, with
+        ``ground.hold_tracked``): pixels MOG2 does not learn this frame — it is shown its own background
+        there — so a tracked person who stops is not absorbed."""
         assert self.mog is not None
-        mask = (self.mog.apply(image) == 255).astype(np.uint8)
+        self.applied += 1
+        if held is None:
+            raw = self.mog.apply(image)
+        else:  # classify without learning, then learn at MOG2's own rate (1 / min(2 n, history)) off the held pixels
+            raw = self.mog.apply(image, learningRate=0.0)
+            if held.any():
+                shown = image.copy()
+                shown[held] = self.mog.getBackgroundImage()[held]
+            else:
+                shown = image
+            self.mog.apply(shown, learningRate=1.0 / min(2 * self.applied, self.history))
+        mask = (raw == 255).astype(np.uint8)
         if self.cfg.open_px > 1:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((self.cfg.open_px, self.cfg.open_px), np.uint8))
         if self.cfg.close_px > 1:
@@ -192,11 +209,26 @@ class GroundDepth:
         half = np.floor(self.rig.f * self.cfg.column_m / np.where(keep & np.isfinite(dist), dist, np.inf) / 2.0)
         return np.clip(half, 0, width).astype(np.int64)
 
-    def observe(self, image: np.ndarray, plane: GroundPlane) -> DepthView:
-        """This frame's foreground and the virtual disparity of each region large enough to be a person."""
+    def held_pixels(self, shape: tuple[int, int], boxes: np.ndarray) -> np.ndarray | None:
+        """(H, W) bool: the pixels inside ``boxes`` (x0 y0 x1 y1 px; NaN rows skipped), or None when
+        ``ground.hold_tracked`` is off."""
+        if not self.cfg.hold_tracked:
+            return None
+        held = np.zeros(shape, bool)
+        boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
+        boxes = boxes[np.isfinite(boxes).all(axis=1)]
+        lo = np.maximum(np.floor(boxes[:, :2]), 0).astype(np.int64)  # x0 y0
+        hi = np.minimum(np.ceil(boxes[:, 2:]), [shape[1], shape[0]]).astype(np.int64)  # x1 y1
+        for (x0, y0), (x1, y1) in zip(lo.tolist(), hi.tolist()):
+            held[y0:y1, x0:x1] = True
+        return held
+
+    def observe(self, image: np.ndarray, plane: GroundPlane, tracked: np.ndarray | None = None) -> DepthView:
+        """This frame's foreground and the virtual disparity of each region large enough to be a person;
+        ``tracked`` (K, 4): the image boxes of the confirmed groups on the last frame (``ground.hold_tracked``)."""
         rig = self.camera(plane, image.shape[:2])
         assert self.rays is not None
-        fg = self.foreground(image)
+        fg = self.foreground(image, self.held_pixels(image.shape[:2], np.zeros((0, 4)) if tracked is None else tracked))
         n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), connectivity=8)
         big = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= self.cfg.min_area_px) + 1
         big = big[self.placeable(plane, region_feet(stats[big]))]

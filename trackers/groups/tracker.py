@@ -72,6 +72,8 @@ class Group:
     merged_from: str = ""
     hits: int = 0  # frames it was measured on (confirmed from merge.frames on: grouping.near_gate)
     box: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
+    origin: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))  # its position when it started
+    moved: bool = False  # it has been more than grouping.radius_m from its origin (ground.hold_tracked)
 
     @property
     def position(self) -> np.ndarray:
@@ -199,9 +201,20 @@ class GroupTracker(TrackerBase):
             view = self.stereo.observe(frame.image, frame.right, self.config)
         else:
             assert frame.ground_plane is not None
-            view = self.ground.observe(frame.image, frame.ground_plane)
+            view = self.ground.observe(frame.image, frame.ground_plane, self._confirmed_boxes())
         self.klt.step(to_grey(frame.image), view.fg_left, view.disparity)
         return view
+
+    def _confirmed_boxes(self) -> np.ndarray:
+        """(K, 4) the image boxes, as of the last frame, of the groups measured on ``merge.frames`` frames
+        that have moved (``ground.hold_tracked``): people who walked and stopped, not ghosts — a region
+        left where someone stood when the background was learnt never moves (Cucchiara et al.'s stopped
+        moving object vs ghost)."""
+        radius = self.config.grouping.radius_m
+        for g in self.groups:
+            g.moved = g.moved or bool(np.linalg.norm(g.position - g.origin) > radius)
+        boxes = [g.box for g in self.groups if g.hits >= self.config.merge.frames and g.moved]
+        return np.array(boxes, np.float64).reshape(-1, 4)
 
     def _ekf_config(self) -> EkfConfig:
         """The EKF's noises; with the ground's depth, σ_d is the foot row's jitter (``ground.sigma_foot_px``)."""
@@ -263,7 +276,9 @@ class GroupTracker(TrackerBase):
         (heads matched half as far, in the synthetic stairs), or someone the group hides, who starts
         once out of the box. Stereo only: the ground's depth is each column's own foot, never a
         mismatch, and on PETS09 the test held real people out (person coverage 0.86 -> 0.66).
-        Unchanged with ``"start"`` (the paper)."""
+        ``grouping.near_gate_ground`` (stereo with the rig's pose): the gate test on the ground, world
+        X Y (a group's legs under its torsos); ``grouping.box_overlap``: the set's image box overlapping
+        the group's box, not only its centre inside. Unchanged with ``"start"`` (the paper)."""
         self.held_out = np.zeros(len(points), bool)
         mode = self.config.grouping.near_gate
         confirmed = np.array([g.hits >= self.config.merge.frames for g in self.groups], bool)
@@ -272,11 +287,17 @@ class GroupTracker(TrackerBase):
         labels = labels.copy()
         gamma = self.config.association.gamma
         box_test = self.config.grouping.inside_box and self.source == "stereo"
+        # with a stereo rig's pose: on the ground (world X Y) — people stand upright, a person's legs are
+        # under their torso whatever the height between them — at the same probability as eq. (8)'s 3 dof
+        on_ground = self.config.grouping.near_gate_ground and self.pose is not None and self.source == "stereo"
+        R = self.pose.R[:2] if on_ground else np.eye(3)
+        if on_ground:
+            gamma = self.config.grouping.gamma_ground
         for idx in self._start_sets(points, labels):
             xyz = points.xyz[idx]
             c, spread = xyz.mean(axis=0), _cov(xyz)
-            d2 = np.array([mahalanobis_sq(c[None], centres[j], gate[j] + spread)[0] if confirmed[j] else np.inf
-                           for j in range(len(self.groups))])
+            d2 = np.array([mahalanobis_sq((R @ c)[None], R @ centres[j], R @ (gate[j] + spread) @ R.T)[0]
+                           if confirmed[j] else np.inf for j in range(len(self.groups))])
             j = int(np.argmin(d2))
             if d2[j] >= gamma:
                 if box_test and self._inside_a_box(points.uvd[idx, :2], confirmed):
@@ -289,11 +310,13 @@ class GroupTracker(TrackerBase):
         return labels
 
     def _inside_a_box(self, uv: np.ndarray, confirmed: np.ndarray) -> bool:
-        """Whether the centre of the points ``uv`` (px) lies in the image box of a confirmed group."""
+        """Whether the centre of the points ``uv`` (px) lies in the image box of a confirmed group, or with
+        ``grouping.box_overlap`` whether their own box overlaps it."""
         u, v = uv.mean(axis=0)
+        lo, hi = (uv.min(axis=0), uv.max(axis=0)) if self.config.grouping.box_overlap else (np.array([u, v]),) * 2
         for g, ok in zip(self.groups, confirmed):
             x0, y0, x1, y1 = g.box
-            if ok and x0 <= u <= x1 and y0 <= v <= y1:  # (NaN box: False)
+            if ok and lo[0] <= x1 and hi[0] >= x0 and lo[1] <= y1 and hi[1] >= y0:  # (NaN box: False)
                 return True
         return False
 
@@ -317,7 +340,7 @@ class GroupTracker(TrackerBase):
             P0[np.ix_(POS, POS)] = extent / len(idx) + np.eye(3) * 0.05**2
             P0[np.ix_(VEL, VEL)] = np.eye(3) * ecfg.init_velocity_sigma**2
             g = Group(self.next_id, GroupEkf(self._ekf_config(), rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx),
-                      TrackLife(self.config.tracks.lifecycle))
+                      TrackLife(self.config.tracks.lifecycle), origin=pos.copy())
             self.next_id += 1
             labels[idx] = len(self.groups)
             self.groups.append(g)
@@ -391,7 +414,8 @@ class GroupTracker(TrackerBase):
         g = Group(gid, parts[big].ekf, extent, vspread, int(sum(p.members for p in parts)),
                   TrackLife.merged(p.life for p in parts),
                   status="measured" if any(p.status == "measured" for p in parts) else "predicted",
-                  merged_from=",".join(str(p.gid) for p in parts), hits=max(p.hits for p in parts))
+                  merged_from=",".join(str(p.gid) for p in parts), hits=max(p.hits for p in parts),
+                  origin=parts[big].origin, moved=any(p.moved for p in parts))
         g.ekf.set(x, P)
         if not absorbed:
             self.next_id += 1

@@ -125,3 +125,71 @@ def test_a_set_seen_through_a_confirmed_group_s_box_at_another_depth_waits(insid
         assert (labels[12:] == -1).all() and not any("started" in e for e in events)
     else:
         assert (labels[12:] == 1).all() and sum("started" in e for e in events) == 1
+
+
+# the camera looking level along the world's Y: camera x -> world X, camera y (down) -> world -Z, z -> Y
+LEVEL = ((1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, -1.0, 0.0))
+
+
+@pytest.mark.parametrize("near_gate_ground", [True, False])
+def test_legs_under_a_confirmed_group_join_it_on_the_ground(near_gate_ground):
+    """With a stereo rig's pose, 12 points 1.5 m under a group's points (its legs: out of the 3-D gate
+    of a group tracked on its torsos, at its ground position) join it with grouping.near_gate_ground and
+    start a group of their own without; 12 points 1.5 m beside it, at its height, start a group either way."""
+    from dataclasses import replace
+
+    from trackreplay.trackers.geometry.rig_pose import RigPose
+
+    cfg = GroupsConfig()
+    cfg = replace(cfg, grouping=replace(cfg.grouping, near_gate_ground=near_gate_ground, inside_box=False))
+    rng = np.random.default_rng(1)
+    body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.05, (12, 3))
+    for offset, joins in ((np.array([0.0, 1.5, 0.0]), near_gate_ground), (np.array([1.5, 0.0, 0.0]), False)):
+        tracker = GroupTracker(cfg, np.random.default_rng(0))
+        tracker.source = "stereo"
+        tracker.pose = RigPose(tuple(float(v) for v in np.ravel(LEVEL)), (0.0, 0.0, 1.5))
+        g = _group(tracker, 1, [0.0, 0.0, 5.0], 12)
+        g.hits = cfg.merge.frames
+        tracker.groups = [g]
+        other = np.array([0.0, 0.0, 5.0]) + offset + rng.normal(0.0, 0.02, (12, 3))
+        points = _points(np.concatenate([body, other]))
+        tracker.groups[0].ekf.predict()
+        labels = tracker._associate_and_update(points, RIG)
+        assert (labels[:12] == 0).all() and (labels[12:] == (0 if joins else -1)).all(), offset
+        labels, _, events = tracker._delete(labels)
+        labels = tracker._start_groups(points, labels, RIG, events)
+        assert sum("started" in e for e in events) == (0 if joins else 1), offset
+
+
+@pytest.mark.parametrize("box_overlap", [True, False])
+def test_a_set_at_another_depth_overlapping_a_confirmed_group_s_box_waits(box_overlap):
+    """12 points 3 m behind a group whose image centre lies just above the group's image box but whose
+    own image box overlaps it (heads matched at half their disparity, on the box's top edge) start no
+    group with grouping.box_overlap, and start one with the centre test alone."""
+    from dataclasses import replace
+
+    cfg = GroupsConfig()
+    cfg = replace(cfg, grouping=replace(cfg.grouping, box_overlap=box_overlap))
+    tracker = GroupTracker(cfg, np.random.default_rng(0))
+    tracker.source = "stereo"
+    g = _group(tracker, 1, [0.0, 0.0, 5.0], 12)
+    g.hits = cfg.merge.frames
+    rng = np.random.default_rng(1)
+    behind = np.array([0.0, -0.3, 8.0]) + rng.normal(0.0, 0.1, (12, 3))
+    uv = RIG.to_uvd(behind)[:, :2]
+    centre = RIG.to_uvd(np.array([[0.0, 0.0, 5.0]]))[0]
+    top = float(uv[:, 1].mean()) + 2.0  # the set's centre 2 rows above the box; its lowest points inside it
+    assert uv[:, 1].max() > top
+    g.box = np.array([centre[0] - 40.0, top, centre[0] + 40.0, centre[1] + 80.0])
+    tracker.groups = [g]
+    body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
+    points = _points(np.concatenate([body, behind]))
+    tracker.groups[0].ekf.predict()
+    labels = tracker._associate_and_update(points, RIG)
+    labels, _, events = tracker._delete(labels)
+    labels = tracker._start_groups(points, labels, RIG, events)
+    assert (labels[:12] == 0).all()
+    if box_overlap:
+        assert (labels[12:] == -1).all() and not any("started" in e for e in events)
+    else:
+        assert (labels[12:] == 1).all() and sum("started" in e for e in events) == 1
