@@ -28,9 +28,13 @@ trajectory, checked and exported a piece at a time; its peak RSS is the whole pr
 path (replay/analysis/eval.py ``evaluate_chunked``) against the whole table (``--per-frame`` takes it); the
 two --json files compared.
 
-Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only]
+``--csv-only``: ``read_trajectory`` of that flow track written as CSV (what `export`, `smooth`, `flight` and `eval`
+do with a CSV input), in a fresh process: read, cast and checked in pieces (``export._csv_in_pieces``) against the
+whole file read as text; peak RSS (VmHWM) above the process's base; the two tables compared.
+
+Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only | --csv-only]
 Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json, ``--eval-only``:
-long_log_eval.json) and prints a table.
+long_log_eval.json, ``--csv-only``: long_log_csv.json) and prints a table.
 """
 
 from __future__ import annotations
@@ -236,14 +240,65 @@ def eval_only(sizes: list[int], out: Path) -> int:
     return 0
 
 
+CSV_READ = """
+import sys, time
+sys.path.insert(0, {root!r})
+import cv2, pyarrow.parquet, trackreplay.replay.core.engine
+from trackreplay.replay.core import export
+if {whole!r}:
+    export._csv_in_pieces = lambda *args: None
+def hwm():
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:"))
+before = hwm()
+started = time.perf_counter()
+df = export.read_trajectory({csv!r})
+print(before, hwm(), time.perf_counter() - started)
+df.write_parquet({out!r})
+"""
+
+
+def csv_only(sizes: list[int], out: Path) -> int:
+    """``read_trajectory`` of the scene's flow track as CSV: in pieces against the whole file as text."""
+    import polars as pl
+
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            spill, csv = Path(tmp) / f"spill-{n}.parquet", Path(tmp) / f"t-{n}.csv"
+            write_spill(spill, n)
+            pl.read_parquet(spill).write_csv(csv)
+            entry: dict = {"frames": n, "csv_bytes": csv.stat().st_size}
+            for name, whole in (("pieces", False), ("whole_file", True)):
+                target = Path(tmp) / f"{name}-{n}.parquet"
+                code = CSV_READ.format(root=str(ROOT), whole=whole, csv=str(csv), out=str(target))
+                res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
+                entry[name] = {"base_rss_kib": int(res[-3]), "peak_rss_kib": int(res[-2]),
+                               "read_mb": round((int(res[-2]) - int(res[-3])) / 1024, 1), "seconds": round(float(res[-1]), 2)}
+            entry["same_table"] = pl.read_parquet(Path(tmp) / f"pieces-{n}.parquet").equals(
+                pl.read_parquet(Path(tmp) / f"whole_file-{n}.parquet"), null_equal=True)
+            runs.append(entry)
+            print(json.dumps(entry), flush=True)
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("pieces", "whole_file")}
+    results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
+               "scene": "the flow track of the long-log scene as CSV, one row a frame, 3 % lost", "runs": runs,
+               "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"CSV read peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
+    return 0 if all(r["same_table"] for r in runs) else 1
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--export-only", action="store_true", help="the export step alone, on a spill file made directly")
     ap.add_argument("--eval-only", action="store_true", help="eval alone (chunked and whole table), on the flow track made directly")
+    ap.add_argument("--csv-only", action="store_true", help="read_trajectory of a CSV input: in pieces and whole")
     args = ap.parse_args()
     sizes = [int(x) for x in args.frames.split(",")]
+    if args.csv_only:
+        return csv_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_csv.json")
     if args.eval_only:
         return eval_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_eval.json")
     if args.export_only:

@@ -20,8 +20,15 @@ identical).
 be the same; their log-likelihoods are compared to a relative tolerance (a long track's grid search sums
 its terms piece by piece, ``rts._pieces_loglik``).
 
+``--long-sizes 1000,200000`` (issue 33, "memory flat"): one track of each model at each size, smoothed in a
+fresh process (``smooth_trajectory`` on the table read from Parquet, as ``trackreplay smooth`` reads it); its peak
+RSS (VmHWM) above the process's RSS with the table read, CPU and wall seconds; with ``--before``/``--before-dir``
+the same for the earlier files, and the two outputs compared (identical to the bit). Writes
+benchmarks/results/smooth_long.json.
+
 Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2] [--before HEAD | --before-dir DIR] [--layout-rows 60000]
-Writes benchmarks/results/smooth.json.
+       python benchmarks/bench_smooth.py --long-sizes 1000,200000 [--before REV | --before-dir DIR]
+Writes benchmarks/results/smooth.json (``--long-sizes``: smooth_long.json).
 """
 
 from __future__ import annotations
@@ -344,6 +351,68 @@ def bench_layouts(rows: int, repeats: int, before) -> dict:
     return out
 
 
+LONG = """
+import sys, time
+sys.path.insert(0, {root!r})
+import polars as pl
+sys.argv = ["bench_smooth"]
+from benchmarks import bench_smooth as b
+module = b.smooth if not {before!r} else b.smooth_at({before!r}) if {rev!r} else b.smooth_from(b.Path({before!r}))
+module.smooth_trajectory(pl.read_parquet({table!r}).head(300))  # imports, registry
+table = pl.read_parquet({table!r})
+base = b.high_water_kib()
+c0, w0 = time.process_time(), time.perf_counter()
+out, fits = module.smooth_trajectory(table)
+cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+peak = b.high_water_kib()
+out.write_parquet({out!r})
+print(base, peak, cpu, wall)
+"""
+
+
+def high_water_kib() -> int:
+    """This process's peak RSS (VmHWM, KiB): its own address space's (ru_maxrss keeps the parent's peak
+    across fork and exec, and this benchmark's parent builds the tables)."""
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:"))
+
+
+def bench_long(sizes: list[int], before: str | None, before_is_rev: bool) -> dict:
+    """One track of each model at each size, smoothed in a fresh process (see the module docstring)."""
+    import subprocess
+    import tempfile
+
+    result: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for tracker in MODELS:
+            for rows in sizes:
+                table = Path(tmp) / f"{tracker}-{rows}.parquet"
+                synthetic_trajectory(rows, tracker, tracks=1, seed=2).write_parquet(table)
+                entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item()}
+                for name, which in (("after", None), ("before", before)):
+                    if name == "before" and before is None:
+                        continue
+                    out = Path(tmp) / f"{name}-{tracker}-{rows}.parquet"
+                    code = LONG.format(root=str(ROOT), before=which, rev=before_is_rev, table=str(table), out=str(out))
+                    got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
+                                         cwd=ROOT).stdout.split()
+                    base, peak, cpu, wall = int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
+                    entry[name] = {"base_rss_kib": base, "peak_rss_kib": peak, "smooth_mb": round((peak - base) / 1024, 1),
+                                   "cpu_seconds": round(cpu, 2), "seconds": round(wall, 2),
+                                   "rows_per_cpu_s": round(entry["rows"] / cpu), "rows_per_s": round(entry["rows"] / wall)}
+                if before is not None:
+                    entry["identical"] = pl.read_parquet(Path(tmp) / f"after-{tracker}-{rows}.parquet").equals(
+                        pl.read_parquet(Path(tmp) / f"before-{tracker}-{rows}.parquet"), null_equal=True)
+                result[f"{tracker}/{rows}"] = entry
+                print(tracker, rows, json.dumps(entry), flush=True)
+    growth = {}
+    for tracker in MODELS:
+        lo, hi = result[f"{tracker}/{sizes[0]}"], result[f"{tracker}/{sizes[-1]}"]
+        growth[tracker] = {k: round((hi[k]["peak_rss_kib"] - lo[k]["peak_rss_kib"]) / 1024, 1) for k in ("after", "before")
+                           if k in hi}
+    return {"runs": result, "peak_rss_growth_mb": {"from_rows": sizes[0], "to_rows": sizes[-1], **growth}}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old-rows", type=int, default=600)
@@ -354,9 +423,21 @@ def main() -> int:
     ap.add_argument("--before-dir", type=Path, help="a folder with an earlier smooth.py and rts.py to time beside the tree's")
     ap.add_argument("--layout-rows", type=int, default=60_000)
     ap.add_argument("--skip-models", action="store_true", help="only the layouts")
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results" / "smooth.json")
+    ap.add_argument("--long-sizes", help="one track per model at these row counts (comma-separated), fresh processes")
+    ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     load_before = os.getloadavg()
+    if args.long_sizes:
+        sizes = [int(x) for x in args.long_sizes.split(",")]
+        before = args.before or (str(args.before_dir.resolve()) if args.before_dir else None)
+        long = bench_long(sizes, before, bool(args.before))
+        out = {"machine": describe(), "load_average_before": load_before, "load_average_after": os.getloadavg(),
+               "before": args.before or (args.before_dir and "files of --before-dir"), **long}
+        path = args.out or ROOT / "benchmarks" / "results" / "smooth_long.json"
+        path.write_text(json.dumps(out, indent=2) + "\n")
+        print(json.dumps(long["peak_rss_growth_mb"]), f"wrote {path}")
+        return 0
+    args.out = args.out or ROOT / "benchmarks" / "results" / "smooth.json"
     before = smooth_at(args.before) if args.before else smooth_from(args.before_dir) if args.before_dir else None
     layouts = bench_layouts(args.layout_rows, args.repeats, before)
     results = {} if args.skip_models else {m: bench_model(m, args.old_rows, tuple(args.sizes), args.repeats)

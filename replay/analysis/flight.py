@@ -559,23 +559,42 @@ class FlightFit:
     t_end: float
 
     def positions(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Fitted positions at log times (s), their 1-σ (per axis) and phase codes."""
-        pos, J, phase = self.sensitivity(times)
-        var = np.einsum("nap,pq,naq->na", J, self.cov, J)
-        return pos, np.sqrt(np.maximum(var, 0.0)), phase
+        """Fitted positions at log times (s), their 1-σ (per axis) and phase codes; computed
+        :data:`POSITION_CHUNK` times at a time (each time's values alone: the same as all at once),
+        so a long log's frames cost 49 bytes each (position, 1-σ, phase), not also their derivatives' 360."""
+        times = np.asarray(times, dtype=np.float64)
+        pos, std, phase = np.empty((len(times), 3)), np.empty((len(times), 3)), np.empty(len(times), np.int8)
+        shots = self._perturbed(times)
+        for lo in range(0, len(times), POSITION_CHUNK):
+            part = slice(lo, lo + POSITION_CHUNK)
+            pos[part], J, phase[part] = self._sensitivity(times[part], shots)
+            std[part] = np.sqrt(np.maximum(np.einsum("nap,pq,naq->na", J, self.cov, J), 0.0))
+        return pos, std, phase
 
     def sensitivity(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fitted positions at log times (s), their derivatives by the parameters ``(n, 3, p)``
         (finite differences: one flight per parameter) and phase codes; with :attr:`cov` they give
         any function of the positions its uncertainty."""
-        pos, phase = self.shot.at(times)
-        J = []
+        return self._sensitivity(times, self._perturbed(times))
+
+    def _perturbed(self, times: np.ndarray) -> list[tuple[float, Shot]]:
+        """Per parameter, its finite-difference step and the shot with it added (to the last of ``times``)."""
+        t_end = max(self.t_end, float(np.max(times))) if len(times) else self.t_end
+        out = []
         for i in range(len(self.theta)):
             d = _step(self.theta, i)
             th = self.theta.copy()
             th[i] += d
-            J.append((simulate(th, self.config, max(self.t_end, float(times.max()))).at(times)[0] - pos) / d)
+            out.append((d, simulate(th, self.config, t_end)))
+        return out
+
+    def _sensitivity(self, times: np.ndarray, shots: list[tuple[float, Shot]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        pos, phase = self.shot.at(times)
+        J = [(shot.at(times)[0] - pos) / d for d, shot in shots]
         return pos, np.stack(J, axis=-1), phase
+
+
+POSITION_CHUNK = 4096  # times whose derivatives (3 x 15 values each) FlightFit.positions holds at once
 
 
 def _step(theta: np.ndarray, i: int) -> float:

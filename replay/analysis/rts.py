@@ -8,7 +8,8 @@ track observed with ``R = s² I`` splits the same way (three axes). Every frame 
 all tracks and grid points as numpy elementwise operations on ``(grid, axis, track)`` arrays, the
 frames in a Python loop; the update by a position and a velocity of independent noise is two
 scalar updates (the same posterior; the log-likelihood is the joint density by the chain rule).
-The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds). The grid
+The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds, each composed
+in place a block of frames at a time: its memory is the maps themselves). The grid
 search's likelihood of a long track is computed by pieces filtered side by side, each started a
 little early from a guess and checked to join its predecessor (:func:`_pieces_loglik`).
 
@@ -176,7 +177,7 @@ BLOCK_ELEMENTS = 1 << 16  # ... and at most this many values of a state column (
 
 def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
                    start: tuple[np.ndarray, np.ndarray] | None = None, own: np.ndarray | None = None,
-                   snaps: tuple[int, ...] = (), sums: bool = False):
+                   snaps: tuple[int, ...] = (), sums: bool = False, columns: np.ndarray | None = None):
     """:func:`filter_columns` without ``keep``: ``-2 ×`` the log-likelihood (without its ``2π`` terms).
     The same operations in the same order, with fewer numpy calls a frame (the cost of a long track,
     whose arrays are small): each frame's innovations and variances go to a buffer, and every
@@ -187,7 +188,8 @@ def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
     For :func:`_pieces_loglik`: ``start`` the means and covariances before the first frame instead of
     the prior; ``own`` (N, 1, B) 1.0 on the frames whose position term counts (0.0 elsewhere; the
     velocity's and the ``log s`` terms follow ``counted``); ``snaps`` the frames after which the
-    state is copied; with ``sums``, returns ``(quad, logs, {frame: (means, covariances)})``."""
+    state is copied; with ``sums``, returns ``(quad, logs, {frame: (means, covariances)})``; ``columns``
+    the tracks of ``cols`` (and ``own``) filtered, gathered a block of frames at a time (not copied whole)."""
     q3, q2, q = Q
     axes = cols.rv.shape[1]
     pv, cov = _prior(cols, s2, axes, prior) if start is None else (start[0].copy(), start[1].copy())
@@ -204,10 +206,15 @@ def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
     Ky = np.empty(np.broadcast_shapes(K.shape, (1, *p.shape)))
     lead = (slice(None), *([None] * (a.ndim - 2)))  # the grid's axes, before the frames' (A, B)
     n = cols.zp.shape[0]
+
+    def rows(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
+        return x[lo:hi] if columns is None else x[lo:hi][..., columns]
+
     for lo in range(0, n, block):
         hi = min(n, lo + block)
-        rp = s2 * cols.rp[lo:hi][lead]
-        rv = sv2 * cols.rv[lo:hi][lead] if cols.velocity else None
+        rp = s2 * rows(cols.rp, lo, hi)[lead]
+        rv = sv2 * rows(cols.rv, lo, hi)[lead] if cols.velocity else None
+        zp, zv = rows(cols.zp, lo, hi), rows(cols.zv, lo, hi) if cols.velocity else None
         for j in range(hi - lo):
             p += v  # predict: a += b; t = b + c; a += t; a += q3; (b, c) = (t + q2, c + q)
             a += b
@@ -218,7 +225,7 @@ def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
             r = rp[j]  # position update: gains K = (a, b) / s
             w = np.reciprocal(np.add(a, r, out=S[step * j]), out=W[step * j])
             np.multiply(gains, w, out=K)
-            y = np.subtract(cols.zp[lo + j], p, out=Y[step * j])
+            y = np.subtract(zp[j], p, out=Y[step * j])
             pv += np.multiply(K, y, out=Ky)
             cb -= np.multiply(K_rev, b, out=Kb)  # c -= K₁ b, b -= K₀ b (the old b in both)
             np.multiply(K[0], r, out=a)
@@ -226,20 +233,20 @@ def _filter_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
                 r = rv[j]  # velocity update: K = (b, c) / s
                 w = np.reciprocal(np.add(c, r, out=S[step * j + 1]), out=W[step * j + 1])
                 np.multiply(gains_v, w, out=K)
-                y = np.subtract(cols.zv[lo + j], v, out=Y[step * j + 1])
+                y = np.subtract(zv[j], v, out=Y[step * j + 1])
                 pv += np.multiply(K, y, out=Ky)
                 gains -= np.multiply(K, b, out=Kb)  # a -= K₀ b, b -= K₁ b
                 np.multiply(K[1], r, out=c)
             if lo + j in snaps:
                 kept[lo + j] = (pv.copy(), cov.copy())
         m = step * (hi - lo)
-        counted = np.empty((m, *cols.counted_v.shape[1:]))
-        counted[::step] = cols.counted[lo:hi]
+        counted = np.empty((m, *cols.counted_v.shape[1:-1], Y.shape[-1]))
+        counted[::step] = rows(cols.counted, lo, hi)
         if cols.velocity:
-            counted[1::step] = cols.counted_v[lo:hi]
+            counted[1::step] = rows(cols.counted_v, lo, hi)
             W[1:m:2] = counted[1::2][lead] * W[1:m:2]  # a velocity's term counts only where observed
         if own is not None:
-            W[0:m:step] = own[lo:hi][lead] * W[0:m:step]
+            W[0:m:step] = rows(own, lo, hi)[lead] * W[0:m:step]
         quad = np.concatenate([quad[None], Y[:m] * Y[:m] * W[:m]]).sum(axis=0)  # 0 on the first observation
         logs = np.concatenate([logs[None], np.log(S[:m]) * counted[lead]]).sum(axis=0)
     if sums:
@@ -259,13 +266,11 @@ def _compose(first: tuple[np.ndarray, ...], then: tuple[np.ndarray, ...]) -> tup
             m11 * g11 + m12 * g12 + ua, m11 * g21 + m12 * g22 + ub, m21 * g21 + m22 * g22 + uc)
 
 
-def rts_columns(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], last: np.ndarray) -> tuple[np.ndarray, ...]:
-    """The RTS pass over filtered ``(p, v, a, b, c)`` (N, …, B) at process noise ``Q``, each track
-    ending at frame ``last`` (B,). Each frame's step back, ``x ↦ x_k + G (x - F x_k)`` and
-    ``P ↦ P_k + G (P - P⁻_{k+1}) Gᵀ`` with ``G = P_k Fᵀ (P⁻_{k+1})⁻¹``, is an affine map; the maps are
-    composed by a parallel prefix scan (log₂ N vectorised rounds instead of N Python steps), the
-    last frame's map the constant filtered state. Returns the smoothed ``(p, v, a, b, c)``."""
-    p, v, a, b, c = filtered
+SCAN_ELEMENTS = 1 << 15  # values of one state column a block of :func:`rts_columns` computes at once
+
+
+def _step_maps(p, v, a, b, c, Q, lo: int, last: np.ndarray) -> list[np.ndarray]:
+    """Each frame's backward map ``(G, u, U)`` for the frames from ``lo`` (see :func:`rts_columns`)."""
     bc = b + c
     A, B, C = a + b + bc + Q[0], bc + Q[1], c + Q[2]  # the next frame's prediction covariance P⁻
     det = A * C - B * B
@@ -276,13 +281,30 @@ def rts_columns(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], las
     m11, m12 = g[0] * A + g[1] * B, g[0] * B + g[1] * C  # G P⁻
     m21, m22 = g[2] * A + g[3] * B, g[2] * B + g[3] * C
     U = [a - m11 * g[0] - m12 * g[1], b - m11 * g[2] - m12 * g[3], c - m21 * g[2] - m22 * g[3]]
-    end = (np.arange(len(p))[:, None] >= last)[:, None, :]  # a track's last frame and the padding after it
-    maps = [np.where(end, 0.0, x) for x in g] + [np.where(end, x, y) for x, y in zip((p, v, a, b, c), (*u, *U))]
+    end = ((lo + np.arange(len(p)))[:, None] >= last)[:, None, :]  # a track's last frame and the padding after it
+    return [np.where(end, 0.0, x) for x in g] + [np.where(end, x, y) for x, y in zip((p, v, a, b, c), (*u, *U))]
+
+
+def rts_columns(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], last: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The RTS pass over filtered ``(p, v, a, b, c)`` (N, …, B) at process noise ``Q``, each track
+    ending at frame ``last`` (B,). Each frame's step back, ``x ↦ x_k + G (x - F x_k)`` and
+    ``P ↦ P_k + G (P - P⁻_{k+1}) Gᵀ`` with ``G = P_k Fᵀ (P⁻_{k+1})⁻¹``, is an affine map; the maps are
+    composed by a parallel prefix scan (log₂ N vectorised rounds instead of N Python steps), the
+    last frame's map the constant filtered state. Returns the smoothed ``(p, v, a, b, c)``."""
+    p, v, a, b, c = filtered
+    n = len(p)
+    rows = max(1, SCAN_ELEMENTS // max(p[0].size, a[0].size))
+    maps = [np.empty(a.shape) for _ in range(4)] + [np.empty(x.shape) for x in (p, v, a, b, c)]
+    for lo in range(0, n, rows):  # the maps a block of frames at a time (the temporaries stay small)
+        for x, y in zip(maps, _step_maps(*(x[lo:lo + rows] for x in filtered), Q, lo, last)):
+            x[lo:lo + rows] = y
     d = 1
-    while d < len(p):
-        head = _compose(tuple(x[:-d] for x in maps), tuple(x[d:] for x in maps))
-        for x, y in zip(maps, head):
-            x[:-d] = y
+    while d < n:  # each map becomes itself ∘ the one d frames later (all from the previous round's maps)
+        for lo in range(0, n - d, rows):  # in place by blocks: a block reads only frames not yet written
+            hi = min(n - d, lo + rows)
+            head = _compose(tuple(x[lo:hi] for x in maps), tuple(x[lo + d:hi + d] for x in maps))
+            for x, y in zip(maps, head):
+                x[lo:hi] = y
         d *= 2
     return tuple(maps[4:])
 
@@ -411,13 +433,6 @@ def _window(cols: Columns, piece: int, warm: int) -> tuple[Columns, np.ndarray, 
     return Columns(zp, zv, rp, rv, counted, counted_v, p0, r0, np.zeros(b * count), last, cols.velocity), own, count
 
 
-def _columns_at(cols: Columns, which: np.ndarray) -> Columns:
-    """The tracks ``which`` of ``cols`` (for restarting some pieces)."""
-    return Columns(cols.zp[..., which], cols.zv[..., which], cols.rp[..., which], cols.rv[..., which],
-                   cols.counted[..., which], cols.counted_v[..., which], cols.p0[:, which], cols.r0[:, which],
-                   cols.components[which], cols.last[which], cols.velocity)
-
-
 def _seams(kept: dict, piece: int, warm: int, count: int, tol: float) -> np.ndarray:
     """(G, B P): the pieces (and grid points) whose state at the end of their warm-up differs from
     their predecessor's at the same frame (its last) by more than ``tol`` standard deviations
@@ -478,8 +493,8 @@ def _pieces_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
         g, c = np.nonzero(bad)
         q3, q2, q, a2, b2 = (x[g][None, None] for x in noise)
         start = tuple(_take(x, g, c - 1) for x in kept[piece - 1])
-        sub = _columns_at(win, c)
-        q_, l_, k_ = _filter_loglik(sub, (q3, q2, q), a2, b2, prior, start=start, own=own[..., c], snaps=snaps, sums=True)
+        q_, l_, k_ = _filter_loglik(win, (q3, q2, q), a2, b2, prior, start=start, own=own, snaps=snaps, sums=True,
+                                    columns=c)  # gathered as filtered: a copy per pair was ~3 KB a row
         quad[g, :, c], logs[g, :, c] = q_[0].T, l_[0].T
         for f in snaps:
             for x, y in zip(kept[f], k_[f]):

@@ -62,6 +62,7 @@ Measured against ground truth in ``docs/smoothing.md`` (``python docs/smoothing.
 from __future__ import annotations
 
 import math
+from array import array
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -74,6 +75,7 @@ from trackreplay.replay.core import registry
 from trackreplay.replay.core.observations import OBS_SCHEMA, observation_rows, observations_table  # noqa: F401 (re-exported)
 from trackreplay.replay.core.trajectory import COLUMNS, SCHEMA
 from trackreplay.schemas.errors import TrackreplayError
+from trackreplay.schemas.records import PtzReading
 from trackreplay.trackers.geometry.ptz import PtzCamera
 from trackreplay.trackers.smoothing import DEFAULT_SMOOTHING, SmoothingModel, SpaceSmoothing
 
@@ -265,7 +267,46 @@ class _Spans:
 
 
 def _spans(table: pl.DataFrame, positioned: pl.Expr) -> _Spans:
+    """The spans from numpy offsets and one gather of the table's rows (not a join of the frame grid
+    with the table, which held both and their hash tables); the joins where a track repeats a frame."""
     t = table.with_columns(pl.struct("tracker", "track_id").rle_id().alias("_tid"))
+    tid = t["_tid"].to_numpy().astype(np.int64)
+    frame = t["frame"].to_numpy().astype(np.int64)
+    pos = t.select(positioned.fill_null(False)).to_series().to_numpy()
+    tracks = int(tid.max()) + 1 if len(tid) else 0
+    lo, hi = np.full(tracks, np.iinfo(np.int64).max), np.full(tracks, np.iinfo(np.int64).min)
+    np.minimum.at(lo, tid[pos], frame[pos])
+    np.maximum.at(hi, tid[pos], frame[pos])
+    has = np.zeros(tracks, bool)
+    has[tid[pos]] = True
+    ids = np.flatnonzero(has)
+    row_has = has[tid]
+    inside = row_has & (frame >= lo[tid]) & (frame <= hi[tid])
+    length = hi[ids] - lo[ids] + 1
+    begin = np.concatenate([[0], np.cumsum(length)])
+    slot = np.full(tracks, -1)
+    slot[ids] = np.arange(len(ids))
+    k = slot[tid[inside]]
+    at = begin[k] + frame[inside] - lo[ids][k]
+    if (np.diff(at) <= 0).any():  # a frame twice in a track (rows sorted by track and frame otherwise)
+        return _spans_join(t, positioned)
+    src = np.zeros(int(begin[-1]), np.int64)
+    src[at] = np.flatnonzero(inside)
+    gap = np.ones(len(src), bool)
+    gap[at] = False
+    which = np.repeat(np.arange(len(ids)), length)
+    heads = np.searchsorted(tid, ids)  # each track's first row (rle ids ascend)
+    keys = t.select(pl.col("_tid", "tracker", "track_id").gather(heads[which]))
+    rest = [c for c in t.columns if c not in ("_tid", "tracker", "track_id", "frame")]
+    index = pl.select(pl.when(pl.Series(gap)).then(None).otherwise(pl.Series(src))).to_series()  # null: an absent frame
+    body = t.select(pl.col(rest).gather(index))
+    full = pl.concat([keys.with_columns(pl.Series("frame", lo[ids][which] - begin[which] + np.arange(len(which)),
+                                                  dtype=pl.Int64)), body], how="horizontal")
+    return _Spans(full, begin.astype(np.int64), t.filter(pl.Series(row_has & ~inside)), t.filter(pl.Series(~row_has)))
+
+
+def _spans_join(t: pl.DataFrame, positioned: pl.Expr) -> _Spans:
+    """:func:`_spans` by joins (``t`` with ``_tid``)."""
     span = (t.filter(positioned).group_by("_tid")
             .agg(pl.col("frame").min().alias("_lo"), pl.col("frame").max().alias("_hi"),
                  pl.col("tracker").first(), pl.col("track_id").first()).sort("_tid"))
@@ -332,7 +373,10 @@ def _smooth_image(table: pl.DataFrame, models: Mapping[str, SmoothingModel], cfg
         idle, idle_starts = _rows(full, ~rows)
         parts.append(_finish(_no_extra(idle), idle_starts, frame_times))
     fits: list[TrackFit] = []
-    if rows.any():
+    if rows.size and rows.all():  # (every track: no copies)
+        out, fits = _image_result(models, full, starts, z, measured, has_pos, status, cfg, cameras)
+        parts.append(_finish(out, starts, frame_times))
+    elif rows.any():
         full, starts = _rows(full, rows)
         out, fits = _image_result(models, full, starts, z[rows], measured[rows], has_pos[rows], status[rows], cfg,
                                   cameras)
@@ -347,8 +391,8 @@ def _image_result(models: Mapping[str, SmoothingModel], full: pl.DataFrame, star
     conf = full["confidence"].to_numpy().astype(float)
     bounds = list(zip(starts[:-1].tolist(), starts[1:].tolist()))
     smoothed = smooth_tracks([z[a:b] for a, b in bounds], [conf[a:b] for a, b in bounds], cfg)
-    xs, var = np.concatenate([s[0] for s in smoothed]), np.concatenate([s[1] for s in smoothed])
-    outliers = np.concatenate([s[2] for s in smoothed])
+    xs, var, outliers = (smoothed[0][k] if len(smoothed) == 1 else np.concatenate([s[k] for s in smoothed])
+                         for k in range(3))  # (one track: its own arrays)
     plan = _plan(measured & ~outliers, measured, has_pos, status, starts, cfg.max_gap)
     out = _assemble(full, _image_columns(full, starts, xs, var, plan, has_pos, cameras),
                     np.where(plan.filled, np.nan, conf), plan)
@@ -488,24 +532,35 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
         raise TrackreplayError(f"--max-gap must be >= 0, not {config.max_gap}")
     if df.is_empty():
         return df.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items())).select(SMOOTH_COLUMNS), []
-    table = df.select(COLUMNS).sort(KEYS)
+    table = _sorted(df.select(COLUMNS))
     raw = observations.select(list(OBS_SCHEMA)) if observations is not None and observations.height else None
     models = {t: smoothing_model(t, (configs or {}).get(t)) for t in table["tracker"].unique(maintain_order=True).to_list()}
     image = [t for t, m in models.items() if not isinstance(m, SpaceSmoothing)]
     parts, fits = [], []
     if image:
-        parts, fits = _smooth_image(table.filter(pl.col("tracker").is_in(image)), models, config, raw, frame_times, cameras)
+        mine = table if len(image) == len(models) else table.filter(pl.col("tracker").is_in(image))
+        parts, fits = _smooth_image(mine, models, config, raw, frame_times, cameras)
     for tracker, model in models.items():
         if isinstance(model, SpaceSmoothing):
-            more, more_fits = _smooth_space(table.filter(pl.col("tracker") == tracker), model, config, raw, frame_times)
+            mine = table if len(models) == 1 else table.filter(pl.col("tracker") == tracker)
+            more, more_fits = _smooth_space(mine, model, config, raw, frame_times)
             parts, fits = parts + more, fits + more_fits
     out = pl.concat([p.select(SMOOTH_COLUMNS).cast({**SCHEMA, **EXTRA_SCHEMA}) for p in parts])
-    return out.sort(KEYS, maintain_order=True), sorted(fits, key=lambda f: (f.tracker, f.track_id))
+    return _sorted(out), sorted(fits, key=lambda f: (f.tracker, f.track_id))
+
+
+def _sorted(df: pl.DataFrame) -> pl.DataFrame:
+    """``df`` sorted by :data:`KEYS` (stable), not copied when it already is (a long table's copy)."""
+    now, before = [pl.col(k) for k in KEYS], [pl.col(k).shift(1) for k in KEYS]
+    ascending = (now[0] > before[0]) | ((now[0] == before[0]) & ((now[1] > before[1]) | ((now[1] == before[1]) &
+                                                                                         (now[2] >= before[2]))))
+    ok = df.select(ascending.fill_null(True).all() & ~pl.any_horizontal(pl.col(KEYS).is_null()).any()).item()
+    return df if ok else df.sort(KEYS, maintain_order=True)
 
 
 @dataclass(frozen=True)
 class _SpaceTrack:
-    """A 3-D track's observations for the smoother (its own arrays: outliers are removed in place)."""
+    """A 3-D track's observations for the smoother (its rows of the observation arrays: outliers are removed in place)."""
 
     z: np.ndarray  # (n, 3), NaN where not observed
     R0: np.ndarray  # (n, 3, 3), I where not observed
@@ -532,12 +587,15 @@ def _smooth_space(table: pl.DataFrame, model: SpaceSmoothing, cfg: SmoothConfig,
     if not rows.any():
         return parts, []
     bounds = [(a, b) for a, b, e in zip(starts[:-1].tolist(), starts[1:].tolist(), enough) if e]
-    tracks = [_SpaceTrack(z[a:b].copy(), R0[a:b].copy(), ok[a:b].copy(), g) for (a, b), g in
+    # each track's own rows of z and R0 (views: the outliers are removed in place, and z, R0 serve nothing after)
+    tracks = [_SpaceTrack(z[a:b], R0[a:b], ok[a:b].copy(), g) for (a, b), g in
               zip(bounds, [g for g, e in zip(grids, enough) if e])]
     fitted = _fit_space(model, tracks, cfg)
-    full, starts = _rows(full, rows)
-    out, fits = _space_result(model, full, starts, fitted, status[rows], P3[rows], has_pos[rows], measured[rows], cfg,
-                              frame_times)
+    del z, R0, tracks
+    if not rows.all():
+        full, starts = _rows(full, rows)
+        status, P3, has_pos, measured = status[rows], P3[rows], has_pos[rows], measured[rows]
+    out, fits = _space_result(model, full, starts, fitted, status, P3, has_pos, measured, cfg, frame_times)
     return parts + [_finish(out, starts, frame_times)], fits
 
 
@@ -545,8 +603,11 @@ def _space_result(model: SpaceSmoothing, full: pl.DataFrame, starts: np.ndarray,
                   P3: np.ndarray, has_pos: np.ndarray, measured: np.ndarray, cfg: SmoothConfig,
                   frame_times: Mapping[int, int] | None) -> tuple[pl.DataFrame, list[TrackFit]]:
     """The 3-D tracks' rows (groups): 3-D position and velocity smoothed, gaps filled."""
-    xs, Ps = np.concatenate([f[3] for f in fitted]), np.concatenate([f[4] for f in fitted])
-    ok, outliers = np.concatenate([f[5] for f in fitted]), np.concatenate([f[6] for f in fitted])
+    def joined(k: int, of=lambda x: x) -> np.ndarray:  # (one track: its own array)
+        return of(fitted[0][k]) if len(fitted) == 1 else np.concatenate([of(f[k]) for f in fitted])
+
+    xs, ok, outliers = joined(3), joined(5), joined(6)
+    Ps = joined(4, lambda P: P if P.ndim == 2 else np.diagonal(P, axis1=1, axis2=2))  # variances
     plan = _plan(ok, measured, has_pos, status, starts, cfg.max_gap)
     cols = _space_columns(full, starts, xs, Ps, plan, has_pos, P3, frame_times)
     out = _assemble(full, cols, np.where(plan.filled, np.nan, full["confidence"].to_numpy().astype(float)), plan)
@@ -615,16 +676,15 @@ def _space_filter_axes(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: 
         for j, i in enumerate(lane):
             n = len(tracks[i].z)
             xs = np.stack([p[:n, :, j], v[:n, :, j]], axis=2).reshape(n, 6)  # X Ẋ Y Ẏ Z Ż
-            block = np.stack([np.stack([pa[:n, 0, j], pb[:n, 0, j]], -1), np.stack([pb[:n, 0, j], pc[:n, 0, j]], -1)], -2)
-            out[i] = (xs, np.einsum("ij,nab->niajb", np.eye(3), block).reshape(n, 6, 6))
+            out[i] = (xs, np.tile(np.stack([pa[:n, 0, j], pc[:n, 0, j]], axis=1), 3))  # the axes share one covariance
     return out
 
 
 def _space_filter(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: np.ndarray, s: np.ndarray, keep: bool):
     """:func:`rts_space.filter_space` of ``tracks`` in lanes, at grid points ``(accel, s)`` (each (G,))
     or, with ``keep``, at one ``(accel, s)`` per track (each (B,)) followed by the RTS pass.
-    Returns per track its log-likelihoods (G,) or its smoothed ``(x, P)``. Tracks that split into
-    axes go through the image kernel."""
+    Returns per track its log-likelihoods (G,) or its smoothed ``x`` (n, 6) and the diagonal of ``P``
+    (n, 6: the output needs only the variances). Tracks that split into axes go through the image kernel."""
     axes = [_per_axis(model, t) for t in tracks]
     if any(axes):
         out: list = [None] * len(tracks)
@@ -650,14 +710,14 @@ def _space_filter(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: np.nd
             xs, Ps = rts_space.rts_space(xs, Ps, F, Q)
         for j, i in enumerate(lane):
             n = len(tracks[i].z)
-            out[i] = (xs[:n, 0, j], Ps[:n, 0, j]) if keep else ll[:, j]
+            out[i] = (xs[:n, 0, j], np.diagonal(Ps[:n, 0, j], axis1=1, axis2=2).copy()) if keep else ll[:, j]
     return out
 
 
 def _fit_space(model: SpaceSmoothing, tracks: list[_SpaceTrack], cfg: SmoothConfig) -> list[tuple]:
     """Per track, the acceleration and ``R`` scale of the highest likelihood (first on ties), the
     smoothed ``x, P``; then again without the measurements beyond ``outlier_sigma`` of their own
-    noise (a splinter, a merge). Per track ``(accel, s, log-likelihood, x, P, observed rows, outliers)``;
+    noise (a splinter, a merge). Per track ``(accel, s, log-likelihood, x, diag P, observed rows, outliers)``;
     its ``z`` and ``R0`` lose the outliers in place."""
     best: list = [None] * len(tracks)
     for grid in dict.fromkeys(t.grid for t in tracks):
@@ -708,7 +768,7 @@ def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: n
     cols: dict[str, np.ndarray] = {}
     for k, name in enumerate(("X", "Y", "Z")):
         cols[name] = np.where(plan.keep, np.where(plan.smoothed, xs[:, 2 * k], P3[:, k]), np.nan)
-        cols[f"{name}_std"] = np.where(plan.smoothed, np.sqrt(np.maximum(Ps[:, 2 * k, 2 * k], 0.0)), np.nan)
+        cols[f"{name}_std"] = np.where(plan.smoothed, np.sqrt(np.maximum(Ps[:, 2 * k], 0.0)), np.nan)
         cols[f"V{name}"] = np.where(plan.smoothed, xs[:, 2 * k + 1] * per_s, np.nan)
     for name in ("x", "y", "w", "h", "vx", "vy"):
         values = np.where(has_pos, full[name].to_numpy().astype(float), np.nan)
@@ -720,9 +780,55 @@ def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: n
 
 
 
-def log_context(log) -> tuple[dict[int, int], dict[int, PtzCamera]]:
+class FrameCameras(Mapping):
+    """Frame -> the posed camera of that frame (:class:`PtzCamera`), built when asked from the frame's
+    pan, tilt, zoom and focus kept as arrays (32 bytes a frame; a dict of cameras made ``log_context``
+    of a 200k-frame log peak at 167 MB, now 59: ``benchmarks/bench_flight.py``). Iterates in the order
+    the poses were added (the frames' times); the last few cameras asked for are kept (a caller that
+    asks for one frame again)."""
+
+    def __init__(self, frames, poses, lens) -> None:
+        """``frames`` (n,), ``poses`` (n × 4 values: pan, tilt, zoom, focus), ``lens`` the lens table."""
+        self._frames = np.array(frames, dtype=np.int64)
+        self._poses = np.array(poses, dtype=np.float64).reshape(-1, 4)
+        self._order = np.argsort(self._frames, kind="stable")
+        self._sorted = self._frames[self._order]
+        self._lens = lens
+        self._recent: dict[int, PtzCamera] = {}
+
+    def _row(self, frame) -> int:
+        if not isinstance(frame, (int, np.integer)) or isinstance(frame, bool):
+            return -1
+        i = int(np.searchsorted(self._sorted, frame))
+        return int(self._order[i]) if i < len(self._sorted) and self._sorted[i] == frame else -1
+
+    def __getitem__(self, frame) -> PtzCamera:
+        cam = self._recent.get(frame)
+        if cam is not None:
+            return cam
+        row = self._row(frame)
+        if row < 0:
+            raise KeyError(frame)
+        pan, tilt, zoom, focus = self._poses[row].tolist()
+        cam = PtzCamera.from_reading(PtzReading(0, pan, tilt, zoom, focus), self._lens)
+        if len(self._recent) >= 64:
+            self._recent.pop(next(iter(self._recent)))
+        self._recent[int(frame)] = cam
+        return cam
+
+    def __contains__(self, frame) -> bool:
+        return self._row(frame) >= 0
+
+    def __iter__(self):
+        return iter(self._frames.tolist())
+
+    def __len__(self) -> int:
+        return len(self._frames)
+
+
+def log_context(log) -> tuple[dict[int, int], Mapping[int, PtzCamera]]:
     """Frame times and (where the log has PTZ encoders and a lens table) the posed camera of every
-    frame, read from ``log`` without decoding any image."""
+    frame (:class:`FrameCameras`), read from ``log`` without decoding any image."""
     from trackreplay.replay.log.frames import FrameTopics, PtzInterpolator, _ptz_stream
     from trackreplay.replay.log.reader import LogReader
     from trackreplay.schemas.records import LensTable
@@ -733,13 +839,15 @@ def log_context(log) -> tuple[dict[int, int], dict[int, PtzCamera]]:
     for item in reader.messages([topics.image]):
         if item.lost is None:
             times[item.index] = item.log_time
-    cameras: dict[int, PtzCamera] = {}
     lens_pb = reader.first(topics.lens) if topics.lens else None
-    if topics.ptz and lens_pb is not None:
-        lens = LensTable.from_pb(lens_pb)
-        ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, None), 100_000_000)
-        for index in sorted(times, key=lambda i: times[i]):
-            pose = ptz.at(times[index])
-            if pose is not None:
-                cameras[index] = PtzCamera.from_reading(pose, lens)
-    return times, cameras
+    if not (topics.ptz and lens_pb is not None):
+        return times, {}
+    lens = LensTable.from_pb(lens_pb)
+    ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, None), 100_000_000)
+    frames, poses = array("q"), array("d")  # 8 bytes a value, not a tuple of floats a frame
+    for index in sorted(times, key=times.__getitem__):
+        pose = ptz.at(times[index])
+        if pose is not None:
+            frames.append(index)
+            poses.extend((pose.pan, pose.tilt, pose.zoom, pose.focus))
+    return times, FrameCameras(frames, poses, lens) if frames else {}

@@ -177,6 +177,8 @@ def read_trajectory(path: str | Path, keep_fill: bool = False) -> pl.DataFrame:
     suffix = path.suffix.lower()
     if suffix not in (".parquet", ".csv"):
         raise TrackreplayError(f"{path}: trajectories are read from .parquet or .csv")
+    if suffix == ".csv" and (pieces := _csv_in_pieces(path, keep_fill)) is not None:
+        return pieces
     try:
         # CSV cells are read as text and cast by conform, which names the line of a bad one
         df = pl.read_parquet(path) if suffix == ".parquet" else pl.read_csv(path, infer_schema=False)
@@ -192,6 +194,64 @@ def read_trajectory(path: str | Path, keep_fill: bool = False) -> pl.DataFrame:
     if fill is not None:
         return canonical_order(df.with_columns(fill), extra=("fill",))
     return canonical_order(df)
+
+
+CSV_BYTES = 1 << 18  # bytes of a CSV trajectory read as text, cast and checked at a time
+
+
+def _csv_in_pieces(path: Path, keep_fill: bool) -> pl.DataFrame | None:
+    """:func:`read_trajectory` of a CSV file read ``CSV_BYTES`` at a time (whole lines, the header put
+    before each piece), each piece cast and checked (``conform``) as the whole table is: only the typed
+    rows are kept, not the whole file as text (~50 bytes a cell at the peak, ``benchmarks/bench_long_log.py
+    --csv-only``). None when any check fails, the file does not read, it holds no rows, or it has a quoted
+    cell (a quoted line break would not split at a line): the whole read then names the defect in its own
+    sentence."""
+    import io
+
+    try:
+        parts, fills = [], []
+        with open(path, "rb") as fh:
+            header = fh.readline()
+            if not header.endswith(b"\n") or b'"' in header:
+                return None
+            rest = b""
+            while True:
+                block = fh.read(CSV_BYTES)
+                text = rest + block
+                cut = len(text) if not block else text.rfind(b"\n") + 1
+                piece, rest = text[:cut], text[cut:]
+                if b'"' in piece:
+                    return None
+                if piece.strip():
+                    part = pl.read_csv(io.BytesIO(header + piece), infer_schema=False)
+                    if "confidence" not in part.columns:  # tables written before the column existed
+                        part = part.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
+                    if keep_fill and "fill" in part.columns:
+                        fills.append(part.get_column("fill").cast(pl.String, strict=False))
+                    parts.append(conform(part, str(path)))
+                if not block:
+                    break
+    except (TrackreplayError, pl.exceptions.PolarsError, OSError):
+        return None
+    if not parts:
+        return None
+    df = pl.concat(parts, rechunk=False)
+    del parts
+    if not df.select(pl.struct("tracker", "track_id", "frame").is_first_distinct().all()).item():
+        return None  # a track's frame twice, in two pieces
+    if fills:
+        df = df.with_columns(pl.concat(fills))
+    extra = ("fill",) if fills else ()
+    return df.select(*COLUMNS, *extra) if _in_canonical_order(df) else canonical_order(df, extra=extra)
+
+
+def _in_canonical_order(df: pl.DataFrame) -> bool:
+    """Whether ``df``'s rows are already in canonical order (then not sorted: a copy of a long table)."""
+    later, same = None, None
+    for c in ("tracker", "track_id", "frame"):
+        gt, eq = pl.col(c) > pl.col(c).shift(1), pl.col(c) == pl.col(c).shift(1)
+        later, same = (gt, eq) if later is None else (later | (same & gt), same & eq)
+    return bool(df.select((later | same).fill_null(True).all()).item())
 
 
 def _first_line(err: Exception) -> str:
@@ -291,6 +351,14 @@ def _track_pieces(path: Path, key: tuple[str, int], track: dict, rows: int,
         start, first = end, False
 
 
+def checked_tracks(path: str | Path, rows: int = EXPORT_ROWS) -> Iterator[pl.DataFrame]:
+    """A trajectory file :func:`~trackreplay.replay.analysis.eval.checked_scan` accepted, whole tracks at a
+    time (canonical order; short tracks together up to ``rows`` frames, a longer one alone), each as
+    :func:`read_trajectory` gives those rows: the tracks of the whole table, a few at a time."""
+    for part, _, _ in _pieces(Path(path), rows, split=False, cast=True):
+        yield part
+
+
 def _tracks(keys: list[tuple[str, int]]) -> pl.Expr:
     return pl.struct("tracker", "track_id").is_in(pl.Series([{"tracker": t, "track_id": i} for t, i in keys]).implode())
 
@@ -336,7 +404,7 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     tmp = claim_partial(path)
     written = filled = 0
     try:
-        with _PieceWriter(tmp, kind) as out:
+        with PieceWriter(tmp, kind) as out:
             cast = isinstance(table, CheckedParquet)
             for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic", cast=cast):
                 if method != "none" and counts is not None:  # a piece of one track
@@ -353,13 +421,15 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     return written, filled
 
 
-class _PieceWriter:
-    """Parquet (a row group per piece) or CSV (one header) written a piece at a time."""
+class PieceWriter:
+    """Parquet (a row group per piece) or CSV (one header) written a piece at a time; with no piece at
+    all, the header of ``schema`` alone."""
 
-    def __init__(self, path: Path, kind: str) -> None:
+    def __init__(self, path: Path, kind: str, schema: dict | None = None) -> None:
         self.path, self.kind, self._writer, self._fh = path, kind, None, None
+        self.schema = SCHEMA if schema is None else schema
 
-    def __enter__(self) -> _PieceWriter:
+    def __enter__(self) -> PieceWriter:
         if self.kind == "csv":
             self._fh = open(self.path, "wb")
         return self
@@ -379,9 +449,9 @@ class _PieceWriter:
     def __exit__(self, *exc) -> None:
         if self._fh is not None:
             if self._writer is None:  # no rows at all: the header alone
-                pl.DataFrame(schema=SCHEMA).write_csv(self._fh)
+                pl.DataFrame(schema=self.schema).write_csv(self._fh)
             self._fh.close()
         elif self._writer is not None:
             self._writer.close()
         elif exc[0] is None:
-            pl.DataFrame(schema=SCHEMA).write_parquet(self.path)
+            pl.DataFrame(schema=self.schema).write_parquet(self.path)

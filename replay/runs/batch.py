@@ -42,7 +42,7 @@ from trackreplay.recorder.interrupts import deferred_interrupts
 from trackreplay.replay.core import registry
 from trackreplay.replay.runs.batch_config import apply_sets
 from trackreplay.replay.core.config import load_config
-from trackreplay.replay.core.outputs import remove_empty, write_bytes, write_json, write_parquet
+from trackreplay.replay.core.outputs import remove_empty, write_bytes, write_json, write_parquet, write_parquet_with
 from trackreplay.schemas.errors import TrackreplayError
 
 SINGLE_METRICS = ("coverage", "centre_error_mean", "centre_error_rmse", "precision_at_20px", "success_auc",
@@ -151,7 +151,8 @@ def run_task(task: BatchTask, opts: BatchOptions, log_bytes: bytes | None = None
         write_parquet(table, out / "trajectory.parquet")
         summary = result.summary(task.log) | {"params": task.params}
         summary["frame_digests"] = sidecar_path(out / "summary.json").name
-        write_parquet(result.frame_digests.table(), sidecar_path(out / "summary.json"))
+        # the per-frame digests' spill file copied row group by row group, not read back whole (issue 33)
+        write_parquet_with(sidecar_path(out / "summary.json"), result.frame_digests.write_table)
         write_json(out / "summary.json", summary)
         if result.report.lost:  # as `replay` exits 7: the run finished, but not over the whole log
             lost = [f.index for f in result.report.lost]

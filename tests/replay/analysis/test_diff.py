@@ -154,3 +154,28 @@ def test_a_seed_or_config_given_two_ways_is_refused(short_sim: Path, capsys) -> 
     assert "--seed and --set seed=... both give the seed" in capsys.readouterr().err
     assert main(["diff", str(short_sim), str(short_sim), "--b", "seed=1", "--b", "seed=2"]) == 2
     assert "--b seed given twice" in capsys.readouterr().err
+
+
+@pytest.mark.slow  # two replays of the short simulation (~8 s on 2 loaded cores)
+def test_a_batch_task_writes_its_sidecar_without_reading_the_digests_whole(short_sim: Path, tmp_path: Path,
+                                                                           monkeypatch) -> None:
+    """Issue 33: a batch task copies the per-frame digests to its sidecar a row group at a time (a spilled
+    replay's spill file as it is), never as one table; `diff` reads the same digests from it."""
+    import polars as pl
+
+    from trackreplay.replay.analysis.diff import read_sidecar
+    from trackreplay.replay.core.digest import FrameDigests
+    from trackreplay.replay.runs.batch import BatchOptions, plan, run_task
+
+    whole = replay(ReplayRequest(log=short_sim, tracker="flow", frame_digests=True)).frame_digests.table()
+
+    def refuse(self):
+        raise AssertionError("the per-frame digests were read whole")
+
+    monkeypatch.setattr(FrameDigests, "table", refuse)
+    (task,) = plan([short_sim], "flow", [0], [])
+    row = run_task(task, BatchOptions(out=tmp_path))
+    assert row["status"] == "ok", row["error"]
+    side = sidecar_path(tmp_path / "tasks" / task.name / "summary.json")
+    assert pl.read_parquet(side).equals(whole)
+    assert read_sidecar(side).frames == FrameDigests.from_table(whole).frames

@@ -98,3 +98,19 @@ def test_bad_lines_of_sight_and_a_ball_that_never_moves_are_named() -> None:
     obs = observations(_rows(12, (1.0, 0.0, -0.1)), cams)
     with pytest.raises(FlightUnavailable, match="the ball does not move in the 12 measured frames"):
         fit_flight(obs)
+
+
+def test_positions_in_chunks_are_the_positions_at_once(chip, monkeypatch) -> None:
+    """Issue 33: ``flight_rows`` over a long log computes positions and their 1-σ a chunk of frames at a
+    time (the 15 perturbed flights simulated once): the same values to the bit as all frames at once."""
+    import trackreplay.replay.analysis.flight as flight
+
+    _, _, fit = chip
+    t = np.linspace(fit.observations.t[0] - 1.0, fit.t_end + 2.0, 503)  # before the launch and after the log
+    whole = fit.positions(t)
+    monkeypatch.setattr(flight, "POSITION_CHUNK", 37)
+    chunked = fit.positions(t)
+    assert all(np.array_equal(a, b) for a, b in zip(whole, chunked)) and np.isfinite(whole[0]).all()
+    pos, J, phase = fit.sensitivity(t)
+    assert np.array_equal(pos, whole[0]) and J.shape == (len(t), 3, len(fit.theta))
+    assert np.array_equal(whole[1], np.sqrt(np.maximum(np.einsum("nap,pq,naq->na", J, fit.cov, J), 0.0)))

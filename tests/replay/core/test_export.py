@@ -303,3 +303,63 @@ def test_export_of_a_parquet_file_streams_its_checks_and_pieces(tmp_path: Path, 
     table.vstack(table.head(1)).write_parquet(src)  # a second row for one track and frame: read whole, named
     assert main(["export", str(src), str(out)]) != 0
     assert "a second row for track" in capsys.readouterr().err and len(streamed) == 1
+
+
+def _csv_table(rows: int = 900) -> pl.DataFrame:
+    """Three tracks of ``rows`` frames in all, gaps and lost rows, shuffled, with a ``fill`` column."""
+    rng = np.random.default_rng(4)
+    states = []
+    for tid in (1, 2, 3):
+        for f in range(rows // 3):
+            lost = rng.random() < 0.1
+            pos = {} if lost else {"x": float(f) + rng.random(), "y": 2.0 * f, "w": 5.0, "h": 5.0, "vx": 1.0, "vy": 2.0}
+            states.append(state_row("flow", f, f * 33_333_333, TrackState(
+                tid, **pos, status="lost" if lost else "measured", confidence=None if lost else float(rng.uniform(0.1, 1.0)))))
+    table = trajectory_table(states)
+    return table.with_columns(pl.lit("rts").alias("fill")).sample(fraction=1.0, shuffle=True, seed=0)
+
+
+def test_a_csv_trajectory_read_in_pieces_is_the_whole_read(tmp_path: Path, monkeypatch) -> None:
+    """Issue 33: a CSV trajectory is read, cast and checked ``CSV_BYTES`` at a time (the typed rows
+    kept, not the file as text): the same table as reading it whole; a defect anywhere falls back to the
+    whole read, so its sentence is the same (a bad cell after an earlier defect, a frame twice across
+    pieces)."""
+    from trackreplay.replay.core import export
+
+    path = tmp_path / "t.csv"
+    _csv_table().write_csv(path)
+    pieces = []
+    real = export._csv_in_pieces
+    monkeypatch.setattr(export, "_csv_in_pieces", lambda *a: pieces.append(real(*a)) or pieces[-1])
+    monkeypatch.setattr(export, "CSV_BYTES", 4000)  # ~40 lines a piece
+    got = read_trajectory(path, keep_fill=True)
+    assert pieces[-1] is not None  # the pieces' path answered
+    monkeypatch.setattr(export, "_csv_in_pieces", lambda *a: None)
+    whole = read_trajectory(path, keep_fill=True)
+    assert got.equals(whole, null_equal=True) and got.schema == whole.schema and "fill" in got.columns
+    monkeypatch.setattr(export, "_csv_in_pieces", real)
+    assert read_trajectory(path).equals(whole.drop("fill"), null_equal=True)
+
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    frame, x = header.index("frame"), header.index("x")
+
+    def broken(edits: dict[int, tuple[int, str]], extra: list[str] = ()) -> Path:
+        out = lines[:] + list(extra)
+        for i, (col, value) in edits.items():
+            cells = out[i].split(",")
+            cells[col] = value
+            out[i] = ",".join(cells)
+        bad = tmp_path / f"bad{len(list(tmp_path.iterdir()))}.csv"
+        bad.write_text("\n".join(out) + "\n")
+        return bad
+
+    for bad in (broken({5: (frame, "-3"), 800: (x, "abc")}), broken({}, [lines[700]])):
+        messages = []
+        for pieces_fn in (real, lambda *a: None):
+            monkeypatch.setattr(export, "_csv_in_pieces", pieces_fn)
+            with pytest.raises(TrackreplayError) as err:
+                read_trajectory(bad)
+            messages.append(str(err.value))
+        assert messages[0] == messages[1]
+    assert "not a number" in messages[0] or "second row" in messages[0]
