@@ -383,6 +383,9 @@ class GolfConfig:
 
     ball_diameter_m: float = _BALL.diameter  # the regulation ball (ball_flight.BallModel)
     max_predicted_frames: int = 5  # misses reported as "predicted" before the track is "lost" (no position)
+    # The reported confidence is P(within 10 px), fitted on the ball corpus (trackers/golf/calibration.py);
+    # False: the validation's own confidence (the shape fit times the motion term)
+    calibrate: bool = True
     trail_length: int = 600  # past measurements kept for the drawn trajectory
     reference_height: int = 1080  # the frame height the pixel parameters are given for
     # ... and the ball diameter (px) they suit: a marked ball larger than this in a 1080-line frame

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from trackreplay.trackers.golf.blobs import GatedBlobs
+from trackreplay.trackers.golf.calibration import RowEvidence
 from trackreplay.trackers.golf.landing import EkfState
 from trackreplay.trackers.golf.particles import ParticleSet
 from trackreplay.trackers.golf.reinit import Reinit
@@ -29,6 +30,7 @@ class GolfIntermediates:
     trail: TrailPoints
     notice: str = ""
     validation: Validation = field(default_factory=Validation.empty)  # ours: the motion gate, confidence and why a frame is not measured
+    evidence: RowEvidence | None = None  # ours: what the reported confidence is calibrated from (:mod:`.calibration`)
 
     @classmethod
     def idle(cls, notice: str) -> GolfIntermediates:

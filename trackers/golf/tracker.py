@@ -41,6 +41,7 @@ from trackreplay.trackers.geometry.box import clip_box, crop
 from trackreplay.trackers.geometry.ptz import PtzCamera, zoom_area_ratio
 from trackreplay.trackers.golf.blobs import (STILL, ApparentMotion, BlobTargets, GatedBlobs, refuse, roundness, select_ball,
                                              spills_over, start_targets)
+from trackreplay.trackers.golf.calibration import RowEvidence, calibrated
 from trackreplay.trackers.golf.config import GolfConfig
 from trackreplay.trackers.golf.intermediates import GolfIntermediates
 from trackreplay.trackers.golf.landing import BallisticEkf, EkfState
@@ -159,8 +160,8 @@ class GolfTracker(TrackerBase):
         self.intermediates = GolfIntermediates(
             "ptz" if view.camera is not None else "image", reinit, ball.search, found.silhouette, found.gated,
             ParticleSet(self.pf.particles, self.pf.weights, estimate), EkfState.of(self.ekf, view.camera),
-            self.trail.points(view.camera), notice, check)
-        return [self._report(view, box, los, estimate, status, check.confidence)]
+            self.trail.points(view.camera), notice, check, evidence := self._evidence(status, check.confidence))
+        return [self._report(view, box, los, estimate, status, evidence)]
 
     # --- the stages, in pipeline order --------------------------------------------------------------
     def _read_marks(self, frame: Frame) -> str:
@@ -322,10 +323,17 @@ class GolfTracker(TrackerBase):
                             ball.scale)
         self.trail.add(measured, los, self.ekf.x)
 
+    def _evidence(self, status: str, confidence: float) -> RowEvidence:
+        """What the row's reported confidence is calibrated from (:mod:`.calibration`): the validation's
+        confidence, whether the ball was measured, and the misses in a row over ``lost_after``."""
+        return RowEvidence(float(min(max(confidence, 0.0), 1.0)), status == "measured",
+                           self.life.misses / self.config.lifecycle.lost_after)
+
     def _report(self, view: FrameView, box: tuple[float, float, float, float], los: np.ndarray, estimate: np.ndarray,
-                status: str, confidence: float) -> TrackState:
+                status: str, evidence: RowEvidence) -> TrackState:
         """The frame's row: the image position and size, with a pose the EKF's X, Y, Z and the line of
-        sight, the samples' velocity (with the camera's own motion when compensated); "lost": no position."""
+        sight, the samples' velocity (with the camera's own motion when compensated), the confidence as
+        P(within 10 px) (:mod:`.calibration`); "lost": no position."""
         if status == "lost":
             return TrackState(1, status="lost")
         x, y, w, h = box
@@ -334,7 +342,8 @@ class GolfTracker(TrackerBase):
             vx, vy = with_camera_motion((vx, vy), (x, y), view.pose_change)
         X, Y, Z = (float(v) for v in self.ekf.x[:3]) if self.ekf.initialised else (None, None, None)
         dx, dy, dz = (float(v) for v in los) if view.camera is not None else (None, None, None)
-        return TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=float(min(max(confidence, 0.0), 1.0)))
+        confidence = calibrated(evidence) if self.config.calibrate else evidence.gate
+        return TrackState(1, x, y, w, h, X, Y, Z, dx, dy, dz, vx, vy, status, confidence=confidence)
 
     # --- §2.3: start, predict, re-initialise ---------------------------------------------------------
     def _start(self, frame: Frame, region: InitRegion) -> Reinit:

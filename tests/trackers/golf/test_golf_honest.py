@@ -11,6 +11,7 @@ from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.golf import GolfConfig, GolfTracker
 from trackreplay.trackers.golf.config import ParticleConfig, SnapConfig, ValidateConfig, WorldBehindConfig
 from trackreplay.trackers.golf.blobs import BlobTargets, disc_circularity, roundness
+from trackreplay.trackers.golf.calibration import calibrated
 from trackreplay.trackers.foreground.blobs import measure_blobs
 
 from .conftest import BALL_BGR
@@ -82,8 +83,9 @@ def test_confidence_in_the_trajectory(backdrop, draw_ball):
     path = [(300.0 + 4 * k, 250.0) for k in range(10)]
     results = run(sequence(backdrop, draw_ball, path, [(0, path[0])]))
     for (s,), inter in results:
-        assert s.status == "measured" and 0.25 <= s.confidence <= 1.0
-        assert inter.validation.confidence == s.confidence
+        assert s.status == "measured" and 0.25 <= inter.validation.confidence <= 1.0
+        assert inter.evidence.gate == inter.validation.confidence and inter.evidence.measured
+        assert s.confidence == calibrated(inter.evidence) > 0.9  # reported: P(within 10 px) of that evidence
 
 
 def test_every_mark_re_anchors(backdrop, draw_ball):
