@@ -11,6 +11,8 @@ starts from the same marks.
 ``--jitter PX`` moves each mark by an offset drawn uniformly from [-PX, PX]² by a generator seeded
 with the replay's seed, the case's name and the marked frame: the same for every tracker and run,
 different per seed, so the spread over seeds measures robustness to where a user draws the box.
+``--jitter-scale LO:HI`` also scales each mark's sides round its centre by a factor drawn uniformly from
+[LO, HI] (another draw of the same generator): how large a box the user draws.
 """
 
 from __future__ import annotations
@@ -152,7 +154,8 @@ def chosen_object(truth: pl.DataFrame, case: Case) -> int | None:
     return int(counts["id"][0])
 
 
-def prepare_case(case: Case, logs: Path, code: str, seeds: tuple[int, ...], jitter: float) -> PreparedCase:
+def prepare_case(case: Case, logs: Path, code: str, seeds: tuple[int, ...], jitter: float,
+                 scale: tuple[float, float] | None = None) -> PreparedCase:
     """Record the case (cached), find what to start from and write the marked log of every seed."""
     log, key = record_case(case, logs, code)
     reader = LogReader(log)
@@ -167,7 +170,7 @@ def prepare_case(case: Case, logs: Path, code: str, seeds: tuple[int, ...], jitt
     prep = PreparedCase(case, log, key, obj, start, picture_size(log))
     marked = []
     for seed in seeds:
-        marks = case_marks(prep, seed, jitter)
+        marks = case_marks(prep, seed, jitter, scale)
         marked.append((seed, marked_log(prep, marks, logs), tuple(marks)))
     return dataclasses.replace(prep, marked=tuple(marked))
 
@@ -181,14 +184,28 @@ def jitter_offset(case: str, seed: int, frame: int, jitter: float) -> tuple[floa
     return float(dx), float(dy)
 
 
-def case_marks(prep: PreparedCase, seed: int, jitter: float) -> list[Mark]:
-    """The marks a replay of ``prep`` with ``seed`` starts from (empty: the log's own, or none needed)."""
+def jitter_factor(case: str, seed: int, frame: int, scale: tuple[float, float] | None) -> float:
+    """The deterministic factor on the sides of the mark on ``frame`` for ``seed``: uniform in ``scale``
+    (``(lo, hi)``; None: 1), drawn after :func:`jitter_offset`'s offset from the same generator."""
+    if scale is None:
+        return 1.0
+    rng = np.random.default_rng(np.random.SeedSequence([seed, zlib.crc32(case.encode()), frame]))
+    rng.uniform(-1.0, 1.0, 2)  # the offset's draw: the factor does not change where the box is moved to
+    return float(rng.uniform(scale[0], scale[1]))
+
+
+def case_marks(prep: PreparedCase, seed: int, jitter: float, scale: tuple[float, float] | None = None) -> list[Mark]:
+    """The marks a replay of ``prep`` with ``seed`` starts from (empty: the log's own, or none needed):
+    each moved by :func:`jitter_offset` and its sides scaled round its centre by :func:`jitter_factor`."""
     case = prep.case
     marks = []
     for frame in prep.start:
         (mark,) = marks_from_truth(prep.log, frame, case.mark_size, case.label, [prep.object])
         dx, dy = jitter_offset(case.name, seed, frame, jitter)
-        marks.append(clip_mark(dataclasses.replace(mark, x=mark.x + dx, y=mark.y + dy), *prep.size))
+        k = jitter_factor(case.name, seed, frame, scale)
+        w, h = mark.w * k, mark.h * k
+        x, y = mark.x + dx + (mark.w - w) / 2, mark.y + dy + (mark.h - h) / 2
+        marks.append(clip_mark(dataclasses.replace(mark, x=x, y=y, w=w, h=h), *prep.size))
     return marks
 
 

@@ -79,6 +79,7 @@ class EvalOptions:
     jitter: float = 0.0
     csrt_python: Path | None = None  # CSRT's venv python (None: no baseline rows)
     code: str = ""  # recorder_code(): part of each recording's cache key
+    scale: tuple[float, float] | None = None  # --jitter-scale: the marks' sides times a factor drawn in [lo, hi]
 
     @property
     def logs(self) -> Path:
@@ -106,7 +107,7 @@ def prepare_or_error(case: Case, opts: EvalOptions) -> PreparedCase | str:
     """:func:`prepare_case`, or the one-line reason it failed (every task of the case reports it)."""
     try:
         with contextlib.redirect_stderr(io.StringIO()):
-            return prepare_case(case, opts.logs, opts.code, opts.seeds, opts.jitter)
+            return prepare_case(case, opts.logs, opts.code, opts.seeds, opts.jitter, opts.scale)
     except Exception as err:  # noqa: BLE001 - a bad case is a row, never the end of the run
         return _clean(one_line(err), opts)
 

@@ -111,12 +111,13 @@ def ground_section(ok: pl.DataFrame) -> list[str]:
 
 
 def summary_markdown(table: pl.DataFrame, *, title: str, command: str, seeds: list[int], jitter: float,
-                     skipped: list[str], notes: list[str]) -> str:
+                     skipped: list[str], notes: list[str], scale: tuple[float, float] | None = None) -> str:
     """``summary.md``: aggregate per tracker and per case for each kind of case, failures, skipped cases."""
     ok = table.filter(pl.col("status") == "ok")
     parts = [f"# {title}", "", f"`{command}`", "",
              f"{table['case'].n_unique()} case(s), seeds {', '.join(map(str, seeds))}"
              + (f", start marks moved by up to {jitter:g} px per seed" if jitter else "")
+             + (", their sides scaled by {:g}-{:g} per seed".format(*scale) if scale else "")
              + f"; {ok.height} of {table.height} replays scored. Figures: mean over cases, then mean ± standard "
                "deviation over seeds (docs/evaluate.md defines every column).", ""]
     parts += [f"- {n}" for n in notes] + ([""] if notes else [])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import shlex
 import sys
 from pathlib import Path
@@ -36,6 +37,9 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                                       "default: every tracker each case names or its target suits")
     p.add_argument("--jitter", type=non_negative_float, default=0.0, metavar="PX",
                    help="move each start mark by up to PX pixels, differently per seed (robustness to the marking)")
+    p.add_argument("--jitter-scale", type=scale_range, metavar="LO:HI",
+                   help="also scale each start mark's sides round its centre by a factor drawn in [LO, HI] per seed "
+                        "(e.g. 0.7:1.5: robustness to how large a box the user draws)")
     p.add_argument("--no-baseline", action="store_true", help="no OpenCV CSRT rows on box cases")
     p.add_argument("--address", help="join this Ray cluster (auto, ray://head:10001, …); its nodes must see --out")
     p.add_argument("--workers", type=positive_int, help="CPUs of the local Ray (default: all cores)")
@@ -43,6 +47,18 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
     return p
+
+
+def scale_range(text: str) -> tuple[float, float]:
+    """``LO:HI`` with 0 < LO <= HI, both finite: the range of --jitter-scale's factor."""
+    lo, sep, hi = text.partition(":")
+    try:
+        low, high = float(lo), float(hi)
+    except ValueError:
+        low = high = math.nan
+    if not sep or not (math.isfinite(low) and math.isfinite(high) and 0 < low <= high):
+        raise argparse.ArgumentTypeError(f"give two factors LO:HI with 0 < LO <= HI (e.g. 0.7:1.5), not {text!r}")
+    return low, high
 
 
 def parse_trackers(text: str | None) -> tuple[str, ...] | None:
@@ -97,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         raise TrackreplayError(f"--out {args.out} is a file, not a folder")
     out.mkdir(parents=True, exist_ok=True)
-    opts = EvalOptions(out, seeds, args.jitter, csrt, recorder_code())
+    opts = EvalOptions(out, seeds, args.jitter, csrt, recorder_code(), args.jitter_scale)
     progress = not args.quiet and sys.stderr.isatty()
     if _use_ray(args):
         rows = run_ray(cases, tasks, opts, address=args.address, workers=args.workers, progress=progress)
@@ -129,8 +145,9 @@ def _write(args: argparse.Namespace, name: str, rows, seeds, skipped: list[str],
     command = shlex.join(["trackreplay", "evaluate", str(args.manifest), "--out", str(args.out), "--seeds", args.seeds,
                           *(["--trackers", args.trackers] if args.trackers else []),
                           *(["--jitter", f"{args.jitter:g}"] if args.jitter else []),
+                          *(["--jitter-scale", "{:g}:{:g}".format(*args.jitter_scale)] if args.jitter_scale else []),
                           *(["--no-baseline"] if args.no_baseline else [])])
-    text = summary_markdown(table, title=f"Evaluation: {name}", command=command, seeds=list(seeds), jitter=args.jitter,
+    text = summary_markdown(table, title=f"Evaluation: {name}", command=command, seeds=list(seeds), jitter=args.jitter, scale=args.jitter_scale,
                             skipped=skipped, notes=notes)
     text += "\n" + speed_markdown(timings)
     write_bytes(out / "summary.md", text.encode())

@@ -9,7 +9,7 @@ import polars as pl
 import pytest
 
 from trackreplay.replay.cli.main import main
-from trackreplay.replay.runs.case_logs import jitter_offset, prepare_case, recorder_code
+from trackreplay.replay.runs.case_logs import jitter_factor, jitter_offset, prepare_case, recorder_code
 from trackreplay.replay.runs.corpus import load_corpus
 from trackreplay.replay.runs.csrt import _has_csrt, csrt_venv
 from trackreplay.replay.runs.evaluate import EvalOptions, cases_table, plan, run_serial
@@ -109,6 +109,24 @@ def test_jitter_moves_the_mark_per_seed_within_bounds(tmp_path: Path) -> None:
     assert log0 != log1 and (m0.x, m0.y) != (m1.x, m1.y)
     truth_x = 148.0 - 13 / 2  # the square's truth on frame 0 (centre 148, side 13)
     assert abs(m0.x - truth_x) <= 2.0 and abs(m1.x - truth_x) <= 2.0
+
+
+def test_jitter_scale_draws_each_seeds_box_size_round_the_same_centre(tmp_path: Path) -> None:
+    k0, k1 = jitter_factor("rally", 0, 12, (0.7, 1.5)), jitter_factor("rally", 1, 12, (0.7, 1.5))
+    assert k0 == jitter_factor("rally", 0, 12, (0.7, 1.5)) and k0 != k1 and 0.7 <= min(k0, k1) <= max(k0, k1) <= 1.5
+    assert jitter_factor("rally", 0, 12, None) == 1.0
+    suite = _write(tmp_path, '[[case]]\nname = "square"\nsynth = "flow-sim1"\nsynth_options = { frames = 3 }\n')
+    case = load_corpus(suite).cases[0]
+    plain = prepare_case(case, tmp_path / "logs", recorder_code(), (0, 1), 2.0)
+    sized = prepare_case(case, tmp_path / "logs", recorder_code(), (0, 1), 2.0, (0.7, 1.5))
+    for (seed, _, (m,)), (_, log, (s,)) in zip(plain.marked, sized.marked):
+        k = jitter_factor("square", seed, s.frame, (0.7, 1.5))
+        assert (s.w, s.h) == pytest.approx((m.w * k, m.h * k))  # the square's 13 px truth box, scaled
+        assert (s.x + s.w / 2, s.y + s.h / 2) == pytest.approx((m.x + m.w / 2, m.y + m.h / 2))  # the same moved centre
+        assert log.is_file()
+    with pytest.raises(SystemExit) as refused:
+        main(["evaluate", str(suite), "--out", str(tmp_path / "o"), "--jitter-scale", "1.5:0.7", "--serial"])
+    assert refused.value.code == 2
 
 
 @pytest.mark.skipif(not _has_csrt(csrt_venv() / "bin" / "python"), reason="the CSRT venv is not built here")
