@@ -53,7 +53,11 @@ the row is right (``calibrate``, :mod:`.calibration`); on a grey picture the lay
 (``likelihood.grey_template``), and wherever that cue is on a colour match is "measured" only when the estimate's
 box correlates with the target's template (``likelihood.layout_vouches``, :meth:`_layout_agrees`); while lost, a scan
 of the whole picture with the reference re-seeds the cloud on a single clear match (``redetect``, :meth:`_redetect`,
-:mod:`.redetect`). Off by default,
+:mod:`.redetect`); an eq. (7) reference against which the mark does not stand out from the background is refused
+(``reference.refuse_unseparated``, :meth:`_refuse_reference`: the marked box's own histogram, a match "measured" only as
+the picture's single match, :meth:`_single_match`), and once a frame's background fails to explain it, the background
+and the eq. (7) reference made from it are given up for good (``reference.forget_on_change``, :meth:`_forget_background`).
+Off by default,
 two-part histograms, a constant-velocity drift, a final mean-shift refinement (the particle cloud
 moves with it) and a scale random walk without a ground plane. ``config.PAPER`` restores the paper.
 
@@ -97,6 +101,9 @@ from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ground_plane import GroundPlane
 from trackreplay.trackers.lifecycle import Run, TrackLife
 
+# reference.refuse_unseparated: the box sizes a single match is checked over, an octave each way in half octaves
+# (nothing sets the size once eq. (7)'s background is refused: the target may have grown or shrunk since)
+SINGLE_MATCH_SCALES = (0.5, 2 ** -0.5, 1.0, 2 ** 0.5, 2.0)
 GREY_SHARE = 0.005  # fewer saturated pixels than this share around the marked box: a grey picture
 GREY_CONTEXT = 3.0  # ... in the marked box times this per axis: where the particles' boxes will be (a coloured
 # logo or timestamp elsewhere in a grey frame says nothing about the target's colours)
@@ -109,6 +116,9 @@ GREY_USES = {"hsv": "the brightness histogram of Perez et al. is used instead (l
                          "Perez et al.'s brightness histogram)"}
 GREY_LAYOUT = ("a grey histogram drifts with the light and shadows share it, so the layout cue is on too (the "
                "marked box's grey template, NCC at weight {:g}, likelihood.grey_template)")
+FORGET_NOTICE = ("from then on the background is not used (no foreground cue, region, hold or neighbour check, and "
+                 "the marked box's own histogram is the reference again): a background that fails to explain a whole "
+                 "frame is not this scene's (reference.forget_on_change)")
 NO_MARK_NOTICE = "the log marks no target (/annotations/init is empty): the colour particle filter needs a marked box; nothing is tracked"
 SCENE_NOTICE = ("a frame differs from the background over more than half its area (the camera moved or the scene "
                 "changed): on such frames the foreground cue and the neighbour check are off")
@@ -198,6 +208,8 @@ class ColorPfTracker(TrackerBase):
         self.camera: CameraMotion | None = None
         self.camera_transform = NO_MOTION.copy()
         self._pending: list[str] = []
+        self._box_reference: tuple[Reference, float] | None = None  # the marked box's own reference and S_mark
+        self._refused = False  # reference.refuse_unseparated: eq. (7)'s reference was refused
         # frame_rate: each step's interval over the stated one (colorpf.timing; 1 at the stated rate)
         self.clock = FrameClock(config.frame_rate)
         self.intermediates = ColorPfIntermediates.idle()
@@ -258,13 +270,43 @@ class ColorPfTracker(TrackerBase):
             return None
         marked = self._marked_image
         early = self.background.early_frames()  # (let go by early_model)
-        mask = self._rebuild_reference(self.background.early_model(), "early")
+        box_ref = self.reference
+        median = self.background.early_model()
+        if box_ref is not None and self._s_mark is not None:
+            self._box_reference = (box_ref, self._s_mark)  # forget_on_change: the reference and S_mark until now
+        mask = self._rebuild_reference(median, "early")
         if self.config.hold.enabled and self.config.hold.early == "region":
             self._revouch(early)
         assert self.reference is not None
         if marked is not None and self.reference.kind != "box":  # the marked box against the new reference
             self._s_mark = self._mark_score(marked)
+            if self.config.reference.refuse_unseparated and box_ref is not None and not self._mark_stands_out():
+                self._refuse_reference(box_ref, marked)
+                return None
         return mask
+
+    def _mark_stands_out(self) -> bool:
+        """The marked box scores at least ``min_separation`` above the whole background against the reference."""
+        ref = self.reference
+        assert ref is not None and self._s_mark is not None
+        s_back = float(self.model.pooled_similarity(ref.h_back, ref.histogram))
+        return self._s_mark - s_back >= self.config.min_separation
+
+    def _refuse_reference(self, box_ref: Reference, marked: np.ndarray) -> None:
+        """``reference.refuse_unseparated``: eq. (7)'s reference, against which the mark does not stand out from the
+        background, is refused: the marked box's own histogram stays the reference, the background's histogram
+        (``H_back``) only places the confidence, and nothing uses the background as foreground (cue, region, hold,
+        neighbours); a colour match is then "measured" only as the picture's single match (:meth:`_single_match`)."""
+        ref = self.reference
+        assert ref is not None
+        self._say(f"the marked box scores S = {self._s_mark:.2f} against eq. (7)'s reference, no more than the whole "
+                  "background: the reference is refused, the marked box's own histogram stays (the background's "
+                  "histogram places the confidence; no foreground cue, region or hold; a match is \"measured\" only "
+                  "where it is the picture's single match: reference.refuse_unseparated)")
+        self.reference = dataclasses.replace(box_ref, h_back=ref.h_back)
+        self.adapted = self.layout = self.background_image = None
+        self._s_mark = self._mark_score(marked)
+        self._refused = True
 
     def _leave_out(self, frame: Frame, out: list[TrackState]) -> None:
         """``reference.exclude``: the target is in its tracked box on this frame (out of the early median)."""
@@ -304,6 +346,7 @@ class ColorPfTracker(TrackerBase):
         box = self._marked_pixels(frame.image)
         self._choose_histogram(frame.image)
         self.reference = box_reference(self.model, frame.image, box)
+        self._box_reference = (self.reference, self._mark_score(frame.image))  # forget_on_change (a "before" background)
         mask = self._start_reference(frame.image, box)
         self._start_size(frame.ground_plane)
         self.initial_wh = np.array([mark.w, mark.h], dtype=np.float64)
@@ -663,9 +706,21 @@ class ColorPfTracker(TrackerBase):
             if scene_changed(image, background, cfg.reference.threshold, gain):
                 self._say(SCENE_NOTICE)
                 background = None  # no foreground cue and no neighbour check on this frame
+                if cfg.reference.forget_on_change:  # ... nor on any later one: the background is not this scene's
+                    self._forget_background()
             else:  # resampled (not a whole-pixel shift): its edges may be off by a fraction of a pixel
                 band = registration_band(background, self.camera_transform, cfg.reference.registration_tolerance)
         return ForegroundView(background, gain, band)
+
+    def _forget_background(self) -> None:
+        """``reference.forget_on_change``: the background is no longer this scene's: nothing uses it as foreground
+        from now on, and an eq. (7) reference made with it gives way to the marked box's own histogram (its
+        ``H_back`` no longer the picture's), with the mark's own score."""
+        self._say(FORGET_NOTICE)
+        self.background_image = self.layout = None
+        if self._box_reference is not None and self.reference is not None and self.reference.kind != "box":
+            self.reference, self._s_mark = self._box_reference
+            self.adapted = None
 
     def _vouchable(self, view: ForegroundView) -> bool:
         """A foreground region can place or hold the estimate: a background on this frame, a marked box
@@ -788,7 +843,7 @@ class ColorPfTracker(TrackerBase):
             self.placed_run.reset()
             status = life.supported()
             if not weigh_only and (self._beside_larger_region(image, view, estimate)
-                                   or not self._layout_agrees(image, estimate)):
+                                   or not self._layout_agrees(image, estimate) or not self._single_match(image, estimate)):
                 return "predicted"
             return status
         if placed and cfg.refine.keeps_track and self.placed_run.within(cfg.refine.keep_frames):
@@ -806,6 +861,24 @@ class ColorPfTracker(TrackerBase):
         ncc = template_scores(image, self.template.template, estimate[None, :2], estimate[2:4], cfg.template_side,
                               self.template.weights)
         return bool(ncc[0] > 0.0)
+
+    def _single_match(self, image: np.ndarray, estimate: np.ndarray) -> bool:
+        """``reference.refuse_unseparated``: where eq. (7)'s reference was refused (no background vouches for a match), a
+        colour match is "measured" only when no box of the estimate's size apart from it (a scan of the picture,
+        :func:`.redetect.scan`) matches too by the same rule (:func:`.redetect.unique_best`'s look-alike)."""
+        if not self._refused or self._s_mark is None:
+            return True
+        cfg, ref = self.config, self.reference
+        assert ref is not None
+        s_back = float(self.model.pooled_similarity(ref.h_back, ref.histogram))
+        for scale in SINGLE_MATCH_SCALES:  # nothing here sets the size: the target may be a look-alike's size
+            boxes, similarity = scan(self.model, image, ref.histogram, estimate[2:4] * scale, cfg.redetect.stride,
+                                     cfg.redetect.max_boxes)
+            confidence = np.clip((similarity - s_back) / max(self._s_mark - s_back, 1e-6), 0.0, 1.0)
+            apart = np.any(np.abs(boxes[:, :2] - estimate[:2]) >= estimate[2:4], axis=1)
+            if apart.any() and confidence[apart].max() >= cfg.measured_fraction:
+                return False
+        return True
 
     def _beside_larger_region(self, image: np.ndarray, view: ForegroundView, estimate: np.ndarray) -> bool:
         """``neighbour_check``: a neighbour holds more foreground than the marked box did: the estimate is on

@@ -25,6 +25,8 @@ def test_paper_overrides_change_only_the_default_departures():
     assert (paper.n_particles, paper.calibrate, paper.likelihood.grey) == (40, False, "hsv")  # issue 31's defaults off
     assert ours.n_particles > 40 and ours.calibrate and ours.likelihood.grey == "gradient" and not ours.camera.scale_size
     assert ours.redetect.enabled and not paper.redetect.enabled
+    assert ours.reference.refuse_unseparated and not paper.reference.refuse_unseparated
+    assert ours.reference.forget_on_change and not paper.reference.forget_on_change
     # everything else equal: the switches of ours that are off by default stay off under PAPER
     assert dataclasses.replace(paper, likelihood=ours.likelihood, reference=ours.reference,
                                neighbour_check=True, refine=ours.refine, hold=ours.hold, camera=ours.camera,
