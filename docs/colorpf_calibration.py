@@ -25,6 +25,8 @@ import polars as pl
 
 ROOT = Path(__file__).resolve().parents[1]
 
+from trackreplay.replay.analysis import calibration_fit  # noqa: E402
+from trackreplay.replay.analysis.calibration_fit import case_weights, ece, fit, leave_one_case_out, per_case  # noqa: E402,F401
 from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
 from trackreplay.replay.runs.case_logs import recorder_code, truth_table  # noqa: E402
 from trackreplay.replay.runs.corpus import DATA_ROOT_ENV, load_corpus  # noqa: E402
@@ -44,7 +46,6 @@ FIT_CONFIG = {"calibrate": False, "refine": {"max_growth": None},
 FEATURES = ("colour", "measured", "placed", "separation", "effective_share", "spread", "unsupported")
 L2 = 1.0  # on the slopes, not the intercept
 RIGHT_IOU = 0.5
-BINS = 10
 
 
 def replay_rows(log: Path, seed: int) -> pl.DataFrame:
@@ -90,69 +91,21 @@ def design(rows: pl.DataFrame) -> np.ndarray:
     return rows.select("intercept", *FEATURES).to_numpy()
 
 
-def case_weights(cases: list[str]) -> np.ndarray:
-    """Each case weighs alike (1 / its rows), scaled to 100 per case in all."""
-    names, counts = np.unique(cases, return_counts=True)
-    per = dict(zip(names.tolist(), (1.0 / counts).tolist()))
-    w = np.array([per[c] for c in cases])
-    return w / w.sum() * len(names) * 100
-
-
-def fit(x: np.ndarray, right: np.ndarray, weights: np.ndarray, l2: float = L2, steps: int = 50) -> np.ndarray:
-    """Weighted logistic regression by Newton's method, an L2 penalty on every coefficient but the intercept."""
-    beta = np.zeros(x.shape[1])
-    penalty = np.r_[0.0, np.ones(x.shape[1] - 1)] * l2
-    for _ in range(steps):
-        p = 1 / (1 + np.exp(-x @ beta))
-        grad = x.T @ (weights * (p - right)) + penalty * beta
-        hess = (x * (weights * p * (1 - p))[:, None]).T @ x + np.diag(penalty)
-        beta -= np.linalg.solve(hess, grad)
-    return beta
-
-
 def fit_rows(rows: pl.DataFrame) -> np.ndarray:
-    return fit(design(rows), rows["right"].to_numpy().astype(float), case_weights(rows["case"].to_list()))
+    return calibration_fit.fit_rows(rows, ["intercept", *FEATURES], L2)
 
 
 def predict(rows: pl.DataFrame, beta: np.ndarray) -> np.ndarray:
-    return 1 / (1 + np.exp(-design(rows) @ beta))
-
-
-def ece(confidence: np.ndarray, right: np.ndarray) -> float:
-    """Expected calibration error over ten equal-width bins of the confidence."""
-    b = np.clip((confidence * BINS).astype(int), 0, BINS - 1)
-    return float(sum((b == i).mean() * abs(confidence[b == i].mean() - right[b == i].mean())
-                     for i in range(BINS) if (b == i).any()))
-
-
-def per_case(rows: pl.DataFrame, confidence: np.ndarray) -> dict[str, float]:
-    """ECE per case: the mean over seeds of each replay's ECE."""
-    rows = rows.with_columns(pl.Series("c", confidence))
-    out: dict[str, list[float]] = {}
-    for (case, _), g in rows.group_by(["case", "seed"], maintain_order=True):
-        out.setdefault(case, []).append(ece(g["c"].to_numpy(), g["right"].to_numpy().astype(float)))
-    return {c: float(np.mean(v)) for c, v in out.items()}
+    return calibration_fit.predict(design(rows), beta)
 
 
 def loso_table(rows: pl.DataFrame) -> tuple[np.ndarray, dict[str, tuple[float, float, float]]]:
     """The fit on every row, and per case: ECE of the colour's confidence, in sample, left out of the fit."""
-    beta = fit_rows(rows)
-    colour = per_case(rows, rows["confidence"].to_numpy())
-    inside = per_case(rows, predict(rows, beta))
-    table = {}
-    for case in sorted(colour):
-        held = rows.filter(pl.col("case") == case)
-        left_out = per_case(held, predict(held, fit_rows(rows.filter(pl.col("case") != case))))[case]
-        table[case] = (colour[case], inside[case], left_out)
-    return beta, table
+    return leave_one_case_out(rows, ["intercept", *FEATURES], "confidence", L2)
 
 
 def markdown(table: dict[str, tuple[float, float, float]]) -> str:
-    lines = ["| case | ECE, colour's confidence | in-sample fit | left out of the fit |", "|---|---|---|---|"]
-    lines += [f"| {c} | {a:.3f} | {b:.3f} | {d:.3f} |" for c, (a, b, d) in table.items()]
-    mean = np.mean(list(table.values()), axis=0)
-    lines.append("| **mean** | " + " | ".join(f"**{v:.3f}**" for v in mean) + " |")
-    return "\n".join(lines)
+    return calibration_fit.markdown(table, "colour's confidence")
 
 
 def main() -> None:

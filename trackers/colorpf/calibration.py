@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from trackreplay.trackers.confidence import logistic
+
 # Intercept, then one slope per feature of RowEvidence.features(), in that order; fitted on
 # benchmarks/corpora/colorpf-box.toml (docs/colorpf.md, "Calibrated confidence").
 COEFFICIENTS = (1.26, -1.751, 0.749, 1.218, 3.921, -3.523, -2.967, -0.577)
@@ -42,9 +44,8 @@ class RowEvidence:
 
 
 def calibrated(evidence: RowEvidence, coefficients: tuple[float, ...] = COEFFICIENTS) -> float:
-    """P(IoU >= 0.5) for the row: ``1 / (1 + exp(-beta . features))``."""
-    z = float(np.dot(np.asarray(coefficients, dtype=np.float64), evidence.features()))
-    return float(1.0 / (1.0 + np.exp(-z)))
+    """P(IoU >= 0.5) for the row (:func:`trackreplay.trackers.confidence.logistic`)."""
+    return logistic(evidence.features().tolist(), coefficients)
 
 
 def cloud_evidence(weights: np.ndarray, particles: np.ndarray, estimate: np.ndarray) -> tuple[float, float]:

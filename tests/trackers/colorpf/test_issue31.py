@@ -5,6 +5,7 @@ region's bound on growth, refine.max_growth, is in test_refine_foreground.py."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from trackreplay.replay.core.config import config_from_dict
 from trackreplay.trackers.colorpf.calibration import COEFFICIENTS, RowEvidence, calibrated, cloud_evidence
@@ -37,7 +38,7 @@ def test_the_scene_zoom_moves_the_cloud_but_sizes_it_only_when_asked():
 
 def test_the_calibration_follows_the_evidence_and_paper_keeps_the_colour():
     tight = RowEvidence(0.9, True, False, 0.3, 0.5, 0.1, 0)
-    assert calibrated(tight) == 1.0 / (1.0 + np.exp(-np.dot(COEFFICIENTS, tight.features())))
+    assert calibrated(tight) == pytest.approx(1.0 / (1.0 + np.exp(-np.dot(COEFFICIENTS, tight.features()))), rel=1e-12)
     assert 0.0 < calibrated(RowEvidence(0.9, False, False, 0.3, 0.5, 0.1, 55)) < calibrated(tight) < 1.0
     assert calibrated(RowEvidence(0.9, True, False, -0.2, 0.5, 0.1, 0)) < calibrated(tight)  # mark inside the background
     assert calibrated(RowEvidence(0.9, True, False, 0.3, 0.5, 1.5, 0)) < calibrated(tight)  # a wide cloud
