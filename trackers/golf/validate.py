@@ -225,9 +225,13 @@ class Validator:
         reach = self.cfg.confirm_px if len(self.best.rows) > 1 else self.cfg.confirm_first_step_px
         return self.best.expected(), reach * scale + diameter
 
-    def gate(self, spread: np.ndarray, diameter: float, scale: float) -> tuple[float, float]:
-        """``(s, radius)``: the motion scale and the gate radius for this frame."""
+    def gate(self, spread: np.ndarray, diameter: float, scale: float,
+             size: tuple[int, int] | None = None) -> tuple[float, float]:
+        """``(s, radius)``: the motion scale and the gate radius for this frame; the radius at most a
+        quarter of the picture's shorter side when ``size`` is given."""
         s = min(float(np.hypot(*spread)), self.cfg.max_spread_px * scale) + 0.5 * diameter
+        if size is not None:
+            s = min(s, min(size) / (4.0 * self.cfg.gate_sigmas))
         return s, self.cfg.gate_sigmas * s
 
     def seen_in_gate(self, *, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
@@ -236,7 +240,7 @@ class Validator:
         (None: no blob in the gate), the in-gate mask and whether the prediction left the picture.
         Changes nothing (the tracker also asks it of the other LUT's silhouette)."""
         width, height = size
-        s, radius = self.gate(spread, diameter, scale)
+        s, radius = self.gate(spread, diameter, scale, size)
         ok = gated.accepted
         c = gated.blobs.centroid
         d = np.hypot(c[:, 0] - predicted[0], c[:, 1] - predicted[1]) if len(c) else np.zeros(0)
@@ -281,7 +285,7 @@ class Validator:
         ``seen``: what :meth:`seen_in_gate` already answered for these same arguments (it changes
         nothing, so the answer is the same; None: asked here)."""
         cfg = self.cfg
-        _, radius = self.gate(spread, diameter, scale)
+        _, radius = self.gate(spread, diameter, scale, size)
         ok = gated.accepted
         if seen is None:
             seen = self.seen_in_gate(gated=gated, predicted=predicted, spread=spread, diameter=diameter, size=size,

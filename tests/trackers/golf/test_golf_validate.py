@@ -2,6 +2,7 @@
 
 import cv2
 import numpy as np
+import pytest
 
 from trackreplay.trackers.foreground.blobs import measure_blobs
 from trackreplay.trackers.golf.blobs import AREA_LARGE, CIRCULARITY, ELONGATED, OK, GatedBlobs
@@ -271,3 +272,23 @@ def test_after_a_loss_a_ball_sized_blob_in_view_keeps_a_bigger_track_from_confir
     assert "confirmed" in run(with_shuttle=False)  # alone in view, a steady track is taken after a loss
     verdicts = run(with_shuttle=True)
     assert "confirmed" not in verdicts and "ambiguous" in verdicts
+
+
+def test_the_gate_is_never_wider_than_a_quarter_of_the_picture():
+    # A ball 32 px across on a 320x240 hand-held clip: its size scales the gate's spread (scale 2), and
+    # a white cabinet 100 px from the prediction was inside it. The gate stops at 240 / 4 = 60 px.
+    size = (320, 240)
+    validator = Validator(ValidateConfig(), BlobConfig())
+    s, radius = validator.gate(np.full(2, 50.0), 32.0, 2.0, size)
+    assert radius == pytest.approx(60.0) and s == pytest.approx(60.0 / ValidateConfig().gate_sigmas)
+    assert validator.gate(np.full(2, 50.0), 32.0, 2.0)[1] > 200.0  # without the picture: the spread's own gate
+    mask = np.zeros(size[::-1], np.uint8)
+    cv2.circle(mask, (250, 60), 14, 1, -1)  # the cabinet, 100 px from the prediction (190, 140)
+    blobs = measure_blobs(mask)
+    gated = GatedBlobs(blobs, np.zeros(1, np.int64), -1, np.array([float(blobs.area[0]), 0.9]), 1.0)
+    found, in_gate, _ = validator.seen_in_gate(gated=gated, predicted=np.array([190.0, 140.0]), spread=np.full(2, 50.0),
+                                               diameter=32.0, size=size, scale=2.0, lost=False)
+    assert found is None and not in_gate.any()
+    wide = validator.seen_in_gate(gated=gated, predicted=np.array([190.0, 140.0]), spread=np.full(2, 50.0),
+                                  diameter=32.0, size=(1280, 960), scale=2.0, lost=False)[0]
+    assert wide is not None and wide.verdict == "measured"  # the same blob in a picture four times as large
