@@ -28,9 +28,9 @@ ROOT = Path(__file__).resolve().parents[1]
 from trackreplay.replay.analysis import calibration_fit  # noqa: E402
 from trackreplay.replay.analysis.calibration_fit import case_weights, ece, fit, leave_one_case_out, per_case  # noqa: E402,F401
 from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.runs.case_logs import recorder_code, truth_table  # noqa: E402
+from trackreplay.replay.runs.case_logs import recorder_code  # noqa: E402
 from trackreplay.replay.runs.corpus import DATA_ROOT_ENV, load_corpus  # noqa: E402
-from trackreplay.replay.runs.evaluate import EvalOptions, prepare_or_error  # noqa: E402
+from trackreplay.replay.runs.evaluate import EvalOptions, prepared_replays  # noqa: E402
 from trackreplay.trackers.colorpf.calibration import COEFFICIENTS  # noqa: E402
 from trackreplay.trackers.geometry.box import iou  # noqa: E402
 
@@ -65,24 +65,17 @@ def replay_rows(log: Path, seed: int) -> pl.DataFrame:
 def collect(out: Path, environ: dict[str, str] | None) -> pl.DataFrame:
     """Every case's rows for every seed on a frame the truth lists, with ``right``: IoU with the case's truth
     >= 0.5 (a frame whose truth has no box, the target out of sight: wrong)."""
-    corpus = load_corpus(CORPUS, environ)
-    opts = EvalOptions(out, SEEDS, 0.0, None, recorder_code())
     parts = []
-    for case in corpus.cases:
-        prep = prepare_or_error(case, opts)
-        if isinstance(prep, str):
-            print(f"{case.name}: skipped ({prep})", file=sys.stderr)
-            continue
-        for seed in SEEDS:
-            log, _ = prep.for_seed(seed)
-            truth = truth_table(log).filter(pl.col("id") == prep.object).select("frame", "x", "y", "w", "h")
-            rows = replay_rows(log, seed).join(truth, on="frame", how="inner", suffix="_truth")
-            box = rows.select("x", "y", "w", "h").to_numpy()
-            true = rows.select("x_truth", "y_truth", "w_truth", "h_truth").to_numpy().astype(np.float64)
-            overlap = iou(box, true, centred=True)  # NaN truth (not visible): union NaN -> 0
-            parts.append(rows.with_columns(pl.lit(case.name).alias("case"), pl.lit(seed).alias("seed"),
-                                           pl.Series("right", overlap >= RIGHT_IOU)))
-            print(f"{case.name} seed {seed}: {rows.height} rows", file=sys.stderr, flush=True)
+    for case, seed, log, truth in prepared_replays(load_corpus(CORPUS, environ),
+                                                   EvalOptions(out, SEEDS, 0.0, None, recorder_code())):
+        rows = replay_rows(log, seed).join(truth.select("frame", "x", "y", "w", "h"), on="frame", how="inner",
+                                           suffix="_truth")
+        box = rows.select("x", "y", "w", "h").to_numpy()
+        true = rows.select("x_truth", "y_truth", "w_truth", "h_truth").to_numpy().astype(np.float64)
+        overlap = iou(box, true, centred=True)  # NaN truth (not visible): union NaN -> 0
+        parts.append(rows.with_columns(pl.lit(case).alias("case"), pl.lit(seed).alias("seed"),
+                                       pl.Series("right", overlap >= RIGHT_IOU)))
+        print(f"{case} seed {seed}: {rows.height} rows", file=sys.stderr, flush=True)
     return pl.concat(parts)
 
 

@@ -27,9 +27,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 from trackreplay.replay.analysis.calibration_fit import ece, leave_one_case_out, markdown, predict  # noqa: E402
 from trackreplay.replay.core.engine import ReplayRequest, iter_steps  # noqa: E402
-from trackreplay.replay.runs.case_logs import recorder_code, truth_table  # noqa: E402
+from trackreplay.replay.runs.case_logs import recorder_code  # noqa: E402
 from trackreplay.replay.runs.corpus import DATA_ROOT_ENV, load_corpus  # noqa: E402
-from trackreplay.replay.runs.evaluate import EvalOptions, prepare_or_error  # noqa: E402
+from trackreplay.replay.runs.evaluate import EvalOptions, prepared_replays  # noqa: E402
 from trackreplay.schemas.errors import TrackreplayError  # noqa: E402
 from trackreplay.trackers.golf.calibration import COEFFICIENTS  # noqa: E402
 
@@ -57,29 +57,21 @@ def replay_rows(log: Path, seed: int) -> pl.DataFrame:
 
 def collect(out: Path, environ: dict[str, str] | None) -> pl.DataFrame:
     """Every case's rows for every seed on a frame the truth lists, with ``right``: within 10 px of a visible ball."""
-    corpus = load_corpus(CORPUS, environ)
-    opts = EvalOptions(out, SEEDS, JITTER, None, recorder_code())
     parts = []
-    for case in corpus.cases:
-        prep = prepare_or_error(case, opts)
-        if isinstance(prep, str):
-            print(f"{case.name}: skipped ({prep})", file=sys.stderr)
+    opts = EvalOptions(out, SEEDS, JITTER, None, recorder_code())
+    for case, seed, log, truth in prepared_replays(load_corpus(CORPUS, environ), opts):
+        truth = truth.select("frame", pl.col("x").alias("x_truth"), pl.col("y").alias("y_truth"), "visible")
+        try:
+            rows = replay_rows(log, seed).join(truth, on="frame", how="inner")
+        except TrackreplayError as err:  # a refused mark (the tracker's own error) skips the replay
+            print(f"{case} seed {seed}: skipped ({str(err).splitlines()[0][:160]})", file=sys.stderr)
             continue
-        for seed in SEEDS:
-            log, _ = prep.for_seed(seed)
-            truth = truth_table(log).filter(pl.col("id") == prep.object).select(
-                "frame", pl.col("x").alias("x_truth"), pl.col("y").alias("y_truth"), "visible")
-            try:
-                rows = replay_rows(log, seed).join(truth, on="frame", how="inner")
-            except TrackreplayError as err:  # a refused mark (the tracker's own error) skips the replay
-                print(f"{case.name} seed {seed}: skipped ({str(err).splitlines()[0][:160]})", file=sys.stderr)
-                continue
-            d = np.hypot(rows["x"].to_numpy() - rows["x_truth"].to_numpy().astype(float),
-                         rows["y"].to_numpy() - rows["y_truth"].to_numpy().astype(float))
-            seen = rows["visible"].fill_null(True).to_numpy() & np.isfinite(d)
-            parts.append(rows.with_columns(pl.lit(case.name).alias("case"), pl.lit(seed).alias("seed"),
-                                           pl.Series("right", seen & (np.nan_to_num(d, nan=np.inf) <= RIGHT_PX))))
-            print(f"{case.name} seed {seed}: {rows.height} rows", file=sys.stderr, flush=True)
+        d = np.hypot(rows["x"].to_numpy() - rows["x_truth"].to_numpy().astype(float),
+                     rows["y"].to_numpy() - rows["y_truth"].to_numpy().astype(float))
+        seen = rows["visible"].fill_null(True).to_numpy() & np.isfinite(d)
+        parts.append(rows.with_columns(pl.lit(case).alias("case"), pl.lit(seed).alias("seed"),
+                                       pl.Series("right", seen & (np.nan_to_num(d, nan=np.inf) <= RIGHT_PX))))
+        print(f"{case} seed {seed}: {rows.height} rows", file=sys.stderr, flush=True)
     return pl.concat(parts)
 
 

@@ -19,7 +19,8 @@ from __future__ import annotations
 import contextlib
 import io
 import math
-from collections.abc import Callable
+import sys
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -226,6 +227,20 @@ def _bar(total: int, enabled: bool):
 
 
 Rows = list[tuple[dict[str, Any], dict[str, Any] | None]]
+
+
+def prepared_replays(corpus: Corpus, opts: EvalOptions) -> Iterator[tuple[str, int, Path, pl.DataFrame]]:
+    """``(case name, seed, marked log, the followed object's truth rows)`` for every case of ``corpus``
+    and seed of ``opts`` that can be prepared, as ``evaluate`` marks them (a case that cannot: one line on
+    stderr, skipped). For scripts that replay a corpus themselves (a confidence calibration's rows)."""
+    for case in corpus.cases:
+        prep = prepare_or_error(case, opts)
+        if isinstance(prep, str):
+            print(f"{case.name}: skipped ({prep})", file=sys.stderr)
+            continue
+        for seed in opts.seeds:
+            log, _ = prep.for_seed(seed)
+            yield case.name, seed, log, truth_table(log).filter(pl.col("id") == prep.object)
 
 
 def run_serial(cases: list[Case], tasks: list[EvalTask], opts: EvalOptions, progress: bool = False) -> Rows:

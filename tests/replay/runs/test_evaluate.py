@@ -173,3 +173,16 @@ def test_the_aggregate_is_the_mean_over_cases_then_over_seeds_and_the_reliabilit
     assert count[9] == 10 and count[0] == 10
     assert conf[9] == pytest.approx((8 * 0.95 + 2 * 0.9) / 10) and acc[9] == pytest.approx((6 + 2) / 10)
     assert ece == pytest.approx(0.5 * abs(0.8 - 0.94) + 0.5 * abs(0.2 - 0.0))
+
+
+def test_prepared_replays_yield_each_seeds_marked_log_and_the_followed_truth(tmp_path: Path, capsys) -> None:
+    from trackreplay.replay.runs.evaluate import prepared_replays
+
+    suite = _write(tmp_path, '[[case]]\nname = "square"\nsynth = "flow-sim1"\nsynth_options = { frames = 3 }\n'
+                             '[[case]]\nname = "clip"\nvideo = "absent.mp4"\ntruth = "absent.txt"\n')
+    corpus = load_corpus(suite)
+    got = list(prepared_replays(corpus, EvalOptions(tmp_path / "out", (0, 1), 2.0, None, recorder_code())))
+    assert [(case, seed) for case, seed, _, _ in got] == [("square", 0), ("square", 1)]
+    assert got[0][2] != got[1][2] and all(log.is_file() for _, _, log, _ in got)  # each seed's own marks
+    assert got[0][3]["id"].n_unique() == 1 and got[0][3].height == 3
+    assert "clip: skipped" in capsys.readouterr().err
