@@ -14,6 +14,8 @@ spend within 1.5 m of another person (a group the truth may or may not call one)
 ``predicted`` row (a group coasting without points) is within 1.5 m and a ``measured`` one within
 1.5-3 m (placed too far off) and that row's median offset away from the camera (m; + farther),
 their truth box's median height and foot row on the missed frames, and the missed frames' span.
+``--foreground ID ...`` adds, per such person and 40 frames, the share of their truth box that the
+tracker's foreground covers (from a second replay, stepped) and the share of their frames under 10 %.
 """
 
 from __future__ import annotations
@@ -30,7 +32,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent))
 
 from trackreplay.replay.analysis.group_ground import _nearest, derive_groups, group_ground_scores  # noqa: E402
-from trackreplay.replay.core.engine import ReplayRequest, replay  # noqa: E402
+from trackreplay.replay.core.engine import ReplayRequest, iter_steps, replay  # noqa: E402
 from trackreplay.replay.log.groundtruth import groundtruth_with_frames  # noqa: E402
 from trackreplay.replay.log.reader import LogReader  # noqa: E402
 from trackreplay.replay.runs.batch import multi_object_metrics  # noqa: E402
@@ -83,11 +85,41 @@ def people_below(traj: pl.DataFrame, gt: pl.DataFrame, frames: list[int], camera
     return sorted(out, key=lambda r: r["covered"])
 
 
+def foreground_in_boxes(log: Path, cfg: dict, gt: pl.DataFrame, ids: list[int], span: int = 40) -> list[dict]:
+    """Per person of ``ids`` and per ``span`` frames: the mean share of their truth box that the tracker's
+    foreground covers, and the share of their frames with under 10 % of it (a second replay, stepped)."""
+    boxes = {(f, i): (x, y, w, h) for f, i, x, y, w, h in
+             gt.filter(pl.col("id").is_in(ids)).select("frame", "id", "x", "y", "w", "h").iter_rows()}
+    seen: dict[int, list[tuple[int, float]]] = {i: [] for i in ids}
+    steps = iter_steps(ReplayRequest(log=log, tracker="groups", seed=0, config=cfg or None))
+    for step in steps:
+        fg = step.intermediates.fg_left
+        for i in ids:
+            box = boxes.get((step.frame.index, i))
+            if box is None:
+                continue
+            x, y, w, h = box  # (x, y) the box's centre
+            x0, y0 = max(int(x - w / 2), 0), max(int(y - h / 2), 0)
+            inside = fg[y0:int(y + h / 2), x0:int(x + w / 2)]
+            seen[i].append((step.frame.index, float(inside.mean()) if inside.size else 0.0))
+    out = []
+    for i in ids:
+        a = np.array(seen[i]).reshape(-1, 2)
+        for lo in range(0, int(a[:, 0].max()) + 1 if len(a) else 0, span):
+            part = a[(a[:, 0] >= lo) & (a[:, 0] < lo + span), 1]
+            if len(part):
+                out.append({"id": i, "frames": f"{lo}-{lo + span - 1}", "foreground": round(float(part.mean()), 2),
+                            "under_10pct": round(float((part < 0.1).mean()), 2)})
+    return out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("log", type=Path)
     ap.add_argument("--config", nargs="+", type=json.loads, default=[{}])
     ap.add_argument("--people", action="store_true")
+    ap.add_argument("--foreground", type=int, nargs="+", default=None, metavar="ID",
+                    help="per person ID and 40 frames, the share of their truth box in the foreground (a second replay)")
     ap.add_argument("--save", type=Path, default=None, help="write each replay's trajectory here (config_<k>.parquet)")
     args = ap.parse_args()
     reader = LogReader(args.log)
@@ -109,6 +141,9 @@ def main() -> int:
             camera = np.array([plane.camera_ground_x, plane.camera_ground_y]) if plane is not None else None
             for r in people_below(traj, gt, frames, camera):
                 print("   ", r)
+        if args.foreground:
+            for r in foreground_in_boxes(args.log, cfg, gt, args.foreground):
+                print("    foreground", r)
     return 0
 
 

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from trackreplay.trackers.appearance.color import to_grey
-from trackreplay.trackers.base import TrackerBase, TrackState
+from trackreplay.trackers.base import Ahead, TrackerBase, TrackState
 from trackreplay.trackers.filters.gaussians import merge_gaussians
 from trackreplay.trackers.filters.gating import mahalanobis_sq
 from trackreplay.trackers.frame import Frame
@@ -108,6 +108,7 @@ class GroupTracker(TrackerBase):
         self.rng = rng  # handed in by the engine; nothing here is random
         self.stereo = StereoDepth(config)
         self.ground = GroundDepth(config.ground, config.background.frames)
+        self.ahead_fps = float("nan")  # the log's rate from the frames read ahead (ground.read_ahead)
         self.source = ""  # "stereo" or "ground": the depth source, chosen on the first frame with one
         self.learnt = False
         self.klt = KltFeatures(config.klt, config.stereo.disparity_window)
@@ -118,6 +119,23 @@ class GroupTracker(TrackerBase):
         self.held_out = np.zeros(0, bool)  # this frame's points that may not start a group (grouping.near_gate)
         self.prev_t: int | None = None
         self.intermediates = GroupsIntermediates.idle("idle", (1, 1))
+
+    def read_ahead(self, frames: Ahead) -> None:
+        """Frames spread over the replayed window (``ground.read_ahead``; one camera only): the ground
+        source's MOG2 is taught their background before the first frame (:meth:`GroundDepth.read_ahead`),
+        so it tracks from the first frame; the log's rate is their frame numbers' slope in time."""
+        first = None
+        images, index, times = [], [], []
+        for i, t, image in frames:
+            first = image.shape if first is None else first
+            if image.shape == first:
+                images.append(image)
+                index.append(i)
+                times.append(t)
+        self.ground.read_ahead(images)
+        di, dt = np.diff(np.asarray(index, np.int64)), np.diff(np.asarray(times, np.int64))
+        ok = (di > 0) & (dt > 0)
+        self.ahead_fps = float(1e9 / np.median(dt[ok] / di[ok])) if ok.any() else float("nan")
 
     # --- the pipeline -------------------------------------------------------------------------
 
@@ -133,6 +151,10 @@ class GroupTracker(TrackerBase):
         self.pose = rig.pose
         dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
         self.prev_t = frame.t_ns
+        if not self.learnt and self.source == "ground" and self.ground.ahead:  # read ahead: no frames to wait for
+            self._set_rate(self.ahead_fps)
+            self.ground.start(self.fps)
+            self.learnt = True
         if not self.learnt:  # §2: learn the background (of both views)
             window = self.config.klt.window  # (the window before the rate is known, on the last such frame too)
             self._learn(frame)
@@ -221,11 +243,12 @@ class GroupTracker(TrackerBase):
         ekf = self.config.ekf
         return ekf if self.source == "stereo" else replace(ekf, sigma_d=self.config.ground.sigma_foot_px)
 
-    def _set_rate(self) -> None:
-        """The log's frame rate from the background frames' times; the per-frame parameters rescaled to it."""
+    def _set_rate(self, fps: float | None = None) -> None:
+        """The log's frame rate (``fps``, else from the background frames' times); the per-frame
+        parameters rescaled to it."""
         steps = np.diff(np.asarray(self.learn_t, np.int64))
         steps = steps[steps > 0]
-        self.fps = float(1e9 / np.median(steps)) if len(steps) else float("nan")
+        self.fps = fps if fps is not None else float(1e9 / np.median(steps)) if len(steps) else float("nan")
         self.config = self.user_config.at_rate(self.fps)
         self.klt = KltFeatures(self.config.klt, self.config.stereo.disparity_window)
 
