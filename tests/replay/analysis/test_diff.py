@@ -48,8 +48,9 @@ def test_identical_runs(short_sim: Path, capsys: pytest.CaptureFixture) -> None:
 
 
 def test_a_perturbed_config_is_pinpointed() -> None:
-    """golf with max_predicted_frames=1 reports a miss as lost a frame earlier: the diff must name
-    that frame and field, and everything before it must really be equal."""
+    """golf with max_predicted_frames=1 reports a miss as lost earlier (and its confidence, calibrated on
+    the misses over lost_after, differs from the first miss): the diff must name the first frame that
+    differs and its fields, and everything before it must really be equal."""
     a = RunSpec(GOLF, "golf")
     b = RunSpec(GOLF, "golf", config={"max_predicted_frames": 1})
     result = diff_runs(a, b)
@@ -61,8 +62,11 @@ def test_a_perturbed_config_is_pinpointed() -> None:
     va, vb = out_a[first][1], out_b[first][1]
     differing = [k for k in va if not _same(va[k], vb.get(k))]
     assert [f.field for f in result.fields][:len(differing)] == differing
-    status = next(f for f in result.fields if f.field == "states.0.status")
-    assert "'predicted' vs 'lost'" in status.note
+    # the first frame that differs is the first miss: the reported confidence's evidence counts misses
+    # over lost_after (trackers/golf/calibration.py); the status differs on the next miss, predicted vs lost
+    assert differing == ["intermediates.evidence.misses", "states.0.confidence"]
+    later = next(i for (i, va), (_, vb) in zip(out_a, out_b) if va.get("states.0.status") != vb.get("states.0.status"))
+    assert later > first and (out_a[later][1]["states.0.status"], out_b[later][1]["states.0.status"]) == ("predicted", "lost")
     assert result.trajectory_diverges and result.trajectory_equal_until == first - 1
     assert result.report().startswith(f"frame {first}: ")
 
