@@ -210,6 +210,9 @@ def run_part(part: str, args) -> list[dict]:
 
 def write(store: dict) -> None:
     L = ["# Offline smoothing: RTS over the whole log vs the causal trackers", "",
+         "> Stays a script, not a `trackreplay evaluate` manifest (docs/README.md): `smoothing.py`: offline RTS "
+         "smoothing against the causal trajectories, position and velocity RMSE; it scores a post-processing of the "
+         "replay, not a tracker.", "",
          "Generated end to end by `python docs/smoothing.py [--quick]` (tables and the lists under them; seed 0",
          "everywhere, deterministic). Each synthetic scene is replayed with the trackers' raw measurements kept",
          "(as `replay --smooth` does), then replay/analysis/smooth.py smooths every track: a Rauch–Tung–Striebel smoother",
