@@ -137,6 +137,9 @@ def f(v, spec=".2f") -> str:
 
 def write(results: list[dict], commit: str, dirty: bool) -> None:
     L = ["# Golf: the 3-D flight from one PTZ camera, fitted offline vs the causal EKF", "",
+         "> Stays a script, not a `trackreplay evaluate` manifest (docs/README.md): `golf_flight.py`: the offline 3-D "
+         "flight fit against the causal EKF (landing, carry and apex errors in metres), not a tracking score of image "
+         "rows.", "",
          "Generated end to end by `python docs/golf_flight.py [--quick]` (synthetic tee shots of docs/golf_synthetic.py,",
          f"replay seed 0, deterministic), on commit {commit}" + (" with trackers/golf modified in the working tree" if dirty else "")
          + ". `trackreplay flight TRAJ LOG` (replay/analysis/flight.py) fits launch time and point, launch",
