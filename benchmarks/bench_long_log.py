@@ -26,15 +26,30 @@ trajectory, checked and exported a piece at a time; its peak RSS is the whole pr
 
 ``--eval-only``: `eval` alone, on the scene's log and that flow track as T.parquet: the chunked single-object
 path (replay/analysis/eval.py ``evaluate_chunked``) against the whole table (``--per-frame`` takes it); the
-two --json files compared.
+two --json files compared. ``--objects 3``: the truth holds three objects (the square and two still boxes), so
+eval first finds the object the track lies on most often (``object_followed_parts``, a chunk at a time);
+writes long_log_eval_objects.json.
 
 ``--csv-only``: ``read_trajectory`` of that flow track written as CSV (what `export`, `smooth`, `flight` and `eval`
 do with a CSV input), in a fresh process: read, cast and checked in pieces (``export._csv_in_pieces``) against the
 whole file read as text; peak RSS (VmHWM) above the process's base; the two tables compared.
 
-Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only | --csv-only]
+``--csv-export-only``: `trackreplay export T.csv OUT.parquet` on that flow track written as CSV, in a fresh process:
+cast and checked a piece at a time into a temporary Parquet file and exported from it a piece at a time
+(``export.csv_as_parquet``) against the whole table (``csv_as_parquet`` made to decline: the CSV read, filled and
+written whole); peak RSS (VmHWM) above the process with its modules loaded; the two outputs compared.
+
+``--sidecar-only``: `diff`'s reading of a summary's per-frame digest sidecar (replay/analysis/diff.py
+``read_sidecar``) and a pass over every frame's fields and kept values, as ``diff_recordings`` asks for them: a
+block of frames at a time (``FrameDigests.from_file``) against the whole table (``FrameDigests.from_table``), in a
+fresh process; a sidecar of the scene's shape (a track's state and a few filter fields a frame, one large field
+without values) written by ``FrameDigests`` spilling as a replay does; the two passes' hashes compared.
+
+Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only | --csv-only |
+       --csv-export-only | --sidecar-only]
 Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json, ``--eval-only``:
-long_log_eval.json, ``--csv-only``: long_log_csv.json) and prints a table.
+long_log_eval.json, ``--csv-only``: long_log_csv.json, ``--csv-export-only``: long_log_csv_export.json,
+``--sidecar-only``: long_log_sidecar.json) and prints a table.
 """
 
 from __future__ import annotations
@@ -83,8 +98,9 @@ print(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, time.perf_counter()
 """
 
 
-def write_long_log(path: Path, frames: int) -> None:
-    """The scene: PERIOD pre-encoded PNG pictures cycled (the square's circle repeats every PERIOD frames)."""
+def write_long_log(path: Path, frames: int, objects: int = 1) -> None:
+    """The scene: PERIOD pre-encoded PNG pictures cycled (the square's circle repeats every PERIOD frames);
+    ``objects`` > 1: the square and ``objects`` - 1 still truth boxes near the corners (not drawn)."""
     background = cv2.GaussianBlur(np.random.default_rng(0).integers(40, 120, (SIZE, SIZE), dtype=np.uint8), (3, 3), 0)
     t = np.arange(PERIOD)
     c = (SIZE - 1) / 2
@@ -103,7 +119,9 @@ def write_long_log(path: Path, frames: int) -> None:
                 log.write(T.ANNOTATIONS_INIT, init_annotations_pb([mark], t_ns), t_ns)
             log.write(T.CAMERA_IMAGE, compressed_image(pictures[i % PERIOD], "png", t_ns, "camera"), t_ns)
             truth = GroundTruthObject(id=1, x=x, y=y, w=float(SQUARE), h=float(SQUARE), vx=None, vy=None, visible=True)
-            log.write(T.GROUNDTRUTH, GroundTruthFrame(i, t_ns, (truth,)).to_pb(), t_ns)
+            still = tuple(GroundTruthObject(id=k + 1, x=3.0 + 26.0 * (k % 2), y=3.0 + 26.0 * (k // 2 % 2), w=4.0, h=4.0,
+                                            vx=None, vy=None, visible=True) for k in range(1, objects))
+            log.write(T.GROUNDTRUTH, GroundTruthFrame(i, t_ns, (truth, *still)).to_pb(), t_ns)
 
 
 def measure(code: str) -> tuple[str, int, float]:
@@ -213,17 +231,18 @@ def export_only(sizes: list[int], out: Path) -> int:
     return 0
 
 
-def eval_only(sizes: list[int], out: Path) -> int:
+def eval_only(sizes: list[int], out: Path, objects: int = 1) -> int:
     """`eval` alone: the scene's log and its flow track (``write_spill``) as T.parquet, scored in a fresh
     process by the chunked single-object path and by the whole table (``--per-frame`` takes it); the
-    same --json asked of both."""
+    same --json asked of both. ``objects`` > 1: the truth holds that many objects (no --gt-id: the one the
+    track lies on most often is found, a chunk at a time on the chunked path)."""
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
         for n in sizes:
             log, traj = Path(tmp) / f"long-{n}.mcap", Path(tmp) / f"t-{n}.parquet"
-            write_long_log(log, n)
+            write_long_log(log, n, objects)
             write_spill(traj, n)
-            entry: dict = {"frames": n}
+            entry: dict = {"frames": n, "truth_objects": objects}
             for name, extra in (("chunked", []), ("whole_table", ["--per-frame", str(Path(tmp) / f"pf-{n}.parquet")])):
                 argv = ["eval", str(traj), str(log), "--json", str(Path(tmp) / f"{name}-{n}.json"), *extra]
                 code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=argv))
@@ -233,7 +252,8 @@ def eval_only(sizes: list[int], out: Path) -> int:
             print(json.dumps(entry), flush=True)
     growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("chunked", "whole_table")}
     results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
-               "scene": "the long-log scene's log and its flow track (one row a frame, 3 % lost)", "runs": runs,
+               "scene": f"the long-log scene's log ({objects} truth object(s)) and its flow track (one row a frame, 3 % lost)",
+               "runs": runs,
                "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"eval peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
@@ -288,6 +308,118 @@ def csv_only(sizes: list[int], out: Path) -> int:
     return 0 if all(r["same_table"] for r in runs) else 1
 
 
+CSV_EXPORT = """
+import contextlib, io, sys, time
+sys.path.insert(0, {root!r})
+import cv2, pyarrow.parquet, trackreplay.replay.core.engine
+from trackreplay.replay.analysis import eval as evaluation
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.core import export
+if {whole!r}:
+    export.csv_as_parquet = lambda *args: False
+def hwm():
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:"))
+before = hwm()
+started = time.perf_counter()
+with contextlib.redirect_stdout(io.StringIO()):
+    code = main(["export", {csv!r}, {out!r}])
+print(code, before, hwm(), time.perf_counter() - started)
+"""
+
+
+def csv_export_only(sizes: list[int], out: Path) -> int:
+    """`trackreplay export T.csv OUT.parquet`: in pieces (through a temporary Parquet file) against the whole table."""
+    import polars as pl
+
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            spill, csv = Path(tmp) / f"spill-{n}.parquet", Path(tmp) / f"t-{n}.csv"
+            write_spill(spill, n)
+            pl.read_parquet(spill).write_csv(csv)
+            entry: dict = {"frames": n, "csv_bytes": csv.stat().st_size}
+            for name, whole in (("pieces", False), ("whole_table", True)):
+                target = Path(tmp) / f"{name}-{n}.parquet"
+                code = CSV_EXPORT.format(root=str(ROOT), whole=whole, csv=str(csv), out=str(target))
+                res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
+                entry[name] = {"exit": int(res[-4]), "base_rss_kib": int(res[-3]), "peak_rss_kib": int(res[-2]),
+                               "export_mb": round((int(res[-2]) - int(res[-3])) / 1024, 1), "seconds": round(float(res[-1]), 2)}
+            entry["same_rows"] = pl.read_parquet(Path(tmp) / f"pieces-{n}.parquet").equals(
+                pl.read_parquet(Path(tmp) / f"whole_table-{n}.parquet"), null_equal=True)
+            runs.append(entry)
+            print(json.dumps(entry), flush=True)
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("pieces", "whole_table")}
+    results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
+               "scene": "the flow track of the long-log scene as CSV, one row a frame, 3 % lost; --interpolate linear",
+               "runs": runs, "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"CSV export peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
+    return 0 if all(r["same_rows"] for r in runs) else 1
+
+
+SIDECAR = """
+import hashlib, sys, time
+sys.path.insert(0, {root!r})
+import polars as pl, pyarrow.parquet
+from trackreplay.replay.analysis.diff import read_sidecar
+from trackreplay.replay.core.digest import FrameDigests
+def hwm():
+    with open("/proc/self/status") as fh:
+        return next(int(line.split()[1]) for line in fh if line.startswith("VmHWM:"))
+before = hwm()
+started = time.perf_counter()
+frames = FrameDigests.from_table(pl.read_parquet({path!r})) if {whole!r} else read_sidecar(__import__("pathlib").Path({path!r}))
+h = hashlib.sha256()
+for i in range(len(frames)):
+    h.update(repr(sorted(frames.fields(i).items())).encode())
+    h.update(b"".join(v.tobytes() for _, v in sorted(frames.values(i).items())))
+print(h.hexdigest(), before, hwm(), time.perf_counter() - started)
+"""
+
+
+def write_sidecar(path: Path, frames: int) -> None:
+    """A sidecar of ``frames`` frames as a flow replay's spill writes it (row groups of 512 frames)."""
+    from trackreplay.replay.core.digest import FrameDigests
+
+    rng = np.random.default_rng(0)
+    digests = FrameDigests(spill_frames=512)
+    for i in range(frames):
+        x, y = rng.normal(size=2)
+        digests.add(i, [("states.len", bytes(8), [1.0]), ("states.0.x", rng.bytes(8), [x]), ("states.0.y", rng.bytes(8), [y]),
+                        ("states.0.status", rng.bytes(8), None), ("intermediates.flow.velocity", rng.bytes(8), [x, y]),
+                        ("intermediates.flow.covariance", rng.bytes(8), list(rng.normal(size=9))),
+                        ("intermediates.flow.mask", rng.bytes(8), None)])
+    with open(path, "wb") as out:
+        digests.write_table(out)
+
+
+def sidecar_only(sizes: list[int], out: Path) -> int:
+    runs = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            side = Path(tmp) / f"s-{n}.frames.parquet"
+            write_sidecar(side, n)
+            entry: dict = {"frames": n, "sidecar_bytes": side.stat().st_size}
+            digests = {}
+            for name, whole in (("blocks", False), ("whole_table", True)):
+                code = SIDECAR.format(root=str(ROOT), path=str(side), whole=whole)
+                res = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split()
+                digests[name] = res[-4]
+                entry[name] = {"base_rss_kib": int(res[-3]), "peak_rss_kib": int(res[-2]),
+                               "read_mb": round((int(res[-2]) - int(res[-3])) / 1024, 1), "seconds": round(float(res[-1]), 2)}
+            entry["same_fields_and_values"] = digests["blocks"] == digests["whole_table"]
+            runs.append(entry)
+            print(json.dumps(entry), flush=True)
+    growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("blocks", "whole_table")}
+    results = {"machine": describe(), "load_average": [round(x, 2) for x in __import__("os").getloadavg()],
+               "sidecar": "7 fields a frame (4 with kept values: 1, 1, 1, 2 and 9 numbers), row groups of 512 frames",
+               "runs": runs, "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"sidecar read peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
+    return 0 if all(r["same_fields_and_values"] for r in runs) else 1
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
@@ -295,12 +427,20 @@ def main() -> int:
     ap.add_argument("--export-only", action="store_true", help="the export step alone, on a spill file made directly")
     ap.add_argument("--eval-only", action="store_true", help="eval alone (chunked and whole table), on the flow track made directly")
     ap.add_argument("--csv-only", action="store_true", help="read_trajectory of a CSV input: in pieces and whole")
+    ap.add_argument("--csv-export-only", action="store_true", help="`export T.csv OUT.parquet`: in pieces and whole")
+    ap.add_argument("--sidecar-only", action="store_true", help="diff's read of a per-frame digest sidecar: blocks and whole")
+    ap.add_argument("--objects", type=int, default=1, help="--eval-only: truth objects in the log (several: no --gt-id)")
     args = ap.parse_args()
     sizes = [int(x) for x in args.frames.split(",")]
+    if args.csv_export_only:
+        return csv_export_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_csv_export.json")
+    if args.sidecar_only:
+        return sidecar_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_sidecar.json")
     if args.csv_only:
         return csv_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_csv.json")
     if args.eval_only:
-        return eval_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_eval.json")
+        name = "long_log_eval.json" if args.objects == 1 else "long_log_eval_objects.json"
+        return eval_only(sizes, args.out or ROOT / "benchmarks" / "results" / name, args.objects)
     if args.export_only:
         return export_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_export.json")
     args.out = args.out or ROOT / "benchmarks" / "results" / "long_log.json"

@@ -26,9 +26,18 @@ RSS (VmHWM) above the process's RSS with the table read, CPU and wall seconds; w
 the same for the earlier files, and the two outputs compared (identical to the bit). Writes
 benchmarks/results/smooth_long.json.
 
+``--command-sizes 1000,20000,200000`` (issue 33, the command): ``trackreplay smooth T.parquet LOG --out S.parquet``
+in a fresh process, T one track of each model and the same rows as tracks of ``--command-track-rows`` (2000) rows,
+LOG a log of that many tiny PNG frames at T's frame times: the command as it is (a checked Parquet trajectory
+read, smoothed and written a few whole tracks at a time, ``replay/cli/commands/smooth.py``) and the whole table
+(``smooth_in_pieces`` made to decline, so the table is read whole as before); its peak RSS (VmHWM) above the process's
+with the modules loaded, CPU and wall seconds; the two outputs and the printed fits compared. Writes
+benchmarks/results/smooth_command.json.
+
 Usage: python benchmarks/bench_smooth.py [--old-rows 600] [--repeats 2] [--before HEAD | --before-dir DIR] [--layout-rows 60000]
        python benchmarks/bench_smooth.py --long-sizes 1000,200000 [--before REV | --before-dir DIR]
-Writes benchmarks/results/smooth.json (``--long-sizes``: smooth_long.json).
+       python benchmarks/bench_smooth.py --command-sizes 1000,20000,200000 [--command-track-rows 2000]
+Writes benchmarks/results/smooth.json (``--long-sizes``: smooth_long.json, ``--command-sizes``: smooth_command.json).
 """
 
 from __future__ import annotations
@@ -413,6 +422,82 @@ def bench_long(sizes: list[int], before: str | None, before_is_rev: bool) -> dic
     return {"runs": result, "peak_rss_growth_mb": {"from_rows": sizes[0], "to_rows": sizes[-1], **growth}}
 
 
+COMMAND = """
+import contextlib, sys, time
+sys.path.insert(0, {root!r})
+sys.argv = ["bench_smooth"]
+from benchmarks import bench_smooth as b
+import pyarrow.parquet
+from trackreplay.replay.analysis import eval as evaluation, smooth
+from trackreplay.replay.cli.main import main
+from trackreplay.replay.log.reader import LogReader
+from trackreplay.replay.cli.commands import smooth as command
+if {whole!r}:
+    command.smooth_in_pieces = lambda *a, **k: None  # the whole table, as before
+base = b.high_water_kib()
+c0, w0 = time.process_time(), time.perf_counter()
+with open({printed!r}, "w") as fh, contextlib.redirect_stdout(fh):
+    code = main({argv!r})
+cpu, wall = time.process_time() - c0, time.perf_counter() - w0
+print(code, base, b.high_water_kib(), cpu, wall)
+"""
+
+
+def write_frames_log(path: Path, frames: int) -> None:
+    """A log of ``frames`` tiny PNG pictures at :func:`synthetic_trajectory`'s frame times (frame i at
+    i × 33 333 333 ns): what ``smooth`` reads of a log is each frame's time."""
+    import cv2
+    from trackreplay.recorder.image_codec import compressed_image
+    from trackreplay.recorder.writer import LogWriter
+    from trackreplay.schemas import topics as T
+
+    png = cv2.imencode(".png", np.zeros((8, 8), np.uint8))[1].tobytes()
+    with LogWriter(path, flush_every=1000) as log:
+        for i in range(frames):
+            t_ns = i * 33_333_333
+            log.write(T.CAMERA_IMAGE, compressed_image(png, "png", t_ns, "camera"), t_ns)
+
+
+def bench_command(sizes: list[int], track_rows: int, models: tuple[str, ...] = MODELS) -> dict:
+    """``trackreplay smooth`` in pieces and on the whole table, fresh processes (see the module docstring)."""
+    import subprocess
+    import tempfile
+
+    result: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        logs: dict[int, Path] = {}
+        for rows in sizes:
+            logs[rows] = Path(tmp) / f"log-{rows}.mcap"
+            write_frames_log(logs[rows], rows + 60)  # a track starts within its first 50 frames
+            for tracker in models:
+                for layout, tracks in (("one_track", 1), (f"tracks_of_{track_rows}", max(1, rows // track_rows))):
+                    table = Path(tmp) / f"{tracker}-{layout}-{rows}.parquet"
+                    synthetic_trajectory(rows, tracker, tracks=tracks, seed=2).write_parquet(table)
+                    entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item(), "tracks": tracks}
+                    for name, whole in (("pieces", False), ("whole_table", True)):
+                        out, printed = Path(tmp) / f"{name}.parquet", Path(tmp) / f"{name}.txt"
+                        argv = ["smooth", str(table), str(logs[rows]), "--out", str(out)]
+                        code = COMMAND.format(root=str(ROOT), whole=whole, printed=str(printed), argv=argv)
+                        got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
+                                             cwd=ROOT).stdout.split()
+                        status, base, peak, cpu, wall = int(got[-5]), int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
+                        entry[name] = {"exit": status, "base_rss_kib": base, "peak_rss_kib": peak,
+                                       "command_mb": round((peak - base) / 1024, 1), "cpu_seconds": round(cpu, 2),
+                                       "seconds": round(wall, 2), "rows_per_cpu_s": round(entry["rows"] / cpu)}
+                    entry["identical"] = pl.read_parquet(Path(tmp) / "pieces.parquet").equals(
+                        pl.read_parquet(Path(tmp) / "whole_table.parquet"), null_equal=True)
+                    entry["same_printed_fits"] = ((Path(tmp) / "pieces.txt").read_text().splitlines()[:-1]
+                                                  == (Path(tmp) / "whole_table.txt").read_text().splitlines()[:-1])
+                    result[f"{tracker}/{layout}/{rows}"] = entry
+                    print(tracker, layout, rows, json.dumps(entry), flush=True)
+    growth: dict = {}
+    for key in {k.rsplit("/", 1)[0] for k in result}:
+        lo, hi = result[f"{key}/{sizes[0]}"], result[f"{key}/{sizes[-1]}"]
+        growth[key] = {k: round((hi[k]["command_mb"] - lo[k]["command_mb"]), 1) for k in ("pieces", "whole_table")}
+    return {"runs": result, "command_mb_growth": {"from_rows": sizes[0], "to_rows": sizes[-1], "target": "<= 50",
+                                                  **dict(sorted(growth.items()))}}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--old-rows", type=int, default=600)
@@ -424,9 +509,19 @@ def main() -> int:
     ap.add_argument("--layout-rows", type=int, default=60_000)
     ap.add_argument("--skip-models", action="store_true", help="only the layouts")
     ap.add_argument("--long-sizes", help="one track per model at these row counts (comma-separated), fresh processes")
+    ap.add_argument("--command-sizes", help="`trackreplay smooth` at these row counts (comma-separated), fresh processes")
+    ap.add_argument("--command-track-rows", type=int, default=2000, help="rows of a track in the many-tracks layout")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
     load_before = os.getloadavg()
+    if args.command_sizes:
+        command = bench_command([int(x) for x in args.command_sizes.split(",")], args.command_track_rows, tuple(args.models))
+        out = {"machine": describe(), "load_average_before": load_before, "load_average_after": os.getloadavg(), **command}
+        path = args.out or ROOT / "benchmarks" / "results" / "smooth_command.json"
+        path.write_text(json.dumps(out, indent=2) + "\n")
+        print(json.dumps(command["command_mb_growth"]), f"wrote {path}")
+        ok = all(r["identical"] and r["same_printed_fits"] and r["pieces"]["exit"] == 0 for r in command["runs"].values())
+        return 0 if ok else 1
     if args.long_sizes:
         sizes = [int(x) for x in args.long_sizes.split(",")]
         before = args.before or (str(args.before_dir.resolve()) if args.before_dir else None)

@@ -96,17 +96,40 @@ def _object_rows(gt: pl.DataFrame, gt_id: int) -> pl.DataFrame:
 def object_followed(traj: pl.DataFrame, gt: pl.DataFrame, track_id: int) -> int | None:
     """The truth object ``track_id`` lies on most often: its centre inside the object's box (within
     ``NEAR_PX[1]`` of a point truth) on the most frames; None when it lies on none."""
-    track = traj.filter((pl.col("track_id") == track_id) & pl.col("x").is_not_null()).select(
+    return _most_often(_on_counts(_track_centres(traj, track_id), gt))
+
+
+def object_followed_parts(traj: pl.DataFrame, parts, track_id: int) -> int | None:
+    """:func:`object_followed` with the truth of every object as ``parts()`` gives it (:func:`truth_parts`
+    with no object: the log's truth a chunk at a time, a frame's objects once each): the frames each
+    object has the track on it, counted chunk by chunk and added."""
+    track = _track_centres(traj, track_id)
+    counts: dict[int, int] = {}
+    for part in parts():
+        for gt_id, n in _on_counts(track, part).iter_rows():
+            counts[gt_id] = counts.get(gt_id, 0) + n
+    return min(counts, key=lambda i: (-counts[i], i)) if counts else None
+
+
+def _track_centres(traj: pl.DataFrame, track_id: int) -> pl.DataFrame:
+    return traj.filter((pl.col("track_id") == track_id) & pl.col("x").is_not_null()).select(
         "frame", pl.col("x").alias("tx"), pl.col("y").alias("ty"))
+
+
+def _on_counts(track: pl.DataFrame, gt: pl.DataFrame) -> pl.DataFrame:
+    """Per truth object (``id, len``), the frames the track's centre lies on it."""
     obj = gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))
     j = obj.join(track, on="frame", how="inner")
     half_w = (pl.col("w") / 2).fill_null(NEAR_PX[1])
     half_h = (pl.col("h") / 2).fill_null(NEAR_PX[1])
     on = j.filter(((pl.col("tx") - pl.col("x")).abs() <= half_w) & ((pl.col("ty") - pl.col("y")).abs() <= half_h))
-    if on.is_empty():
+    return on.group_by("id").len()
+
+
+def _most_often(counts: pl.DataFrame) -> int | None:
+    if counts.is_empty():
         return None
-    counts = on.group_by("id").len().sort(["len", "id"], descending=[True, False])
-    return int(counts["id"][0])
+    return int(counts.sort(["len", "id"], descending=[True, False])["id"][0])
 
 
 def _same_frames(track: pl.DataFrame, obj: pl.DataFrame, names: tuple[str, str] = ("the trajectory", "the ground truth")) -> None:
@@ -139,6 +162,11 @@ def _mismatches(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False, rows
         near = b.filter(pl.col("frame").cast(a.schema["frame"]).is_between(lo, hi)) if lo is not None else b.clear()
         parts.append(frame_time_mismatches(part, near, missing=missing))
     return pl.concat(parts).sort("frame", maintain_order=True).unique("frame", keep="first", maintain_order=True)
+
+
+def mismatches_in_pieces(a: pl.DataFrame, b: pl.DataFrame, *, missing: bool = False) -> pl.DataFrame:
+    """:func:`~trackreplay.replay.core.trajectory.frame_time_mismatches`, :data:`MATCH_ROWS` rows of ``a`` at a time."""
+    return _mismatches(a, b, missing=missing)
 
 
 def check_frames(traj: pl.DataFrame, traj_name: str, log_times: dict[int, int] | pl.DataFrame, annotated: pl.DataFrame,
@@ -433,10 +461,11 @@ def _frame_table(frames, times) -> pl.DataFrame:
                         schema={"frame": pl.Int64, "t_ns": pl.Int64})
 
 
-def truth_parts(reader, topic: str, gt_id: int, chunk_frames: int | None = None):
+def truth_parts(reader, topic: str, gt_id: int | None, chunk_frames: int | None = None):
     """``parts()`` for :func:`evaluate_parts`: object ``gt_id``'s truth rows read from the log,
     ``chunk_frames`` rows at a time (the :data:`TRUTH_COLUMNS`; the messages in frame order:
-    :attr:`TruthIndex.in_order`)."""
+    :attr:`TruthIndex.in_order`); ``gt_id`` None: every object's rows, whole messages a part (at
+    least ``chunk_frames`` rows, :func:`object_followed_parts`)."""
     chunk_frames = chunk_frames or EVAL_CHUNK_FRAMES
 
     def parts():
@@ -444,9 +473,9 @@ def truth_parts(reader, topic: str, gt_id: int, chunk_frames: int | None = None)
         for item in reader.messages([topic]):
             pb = item.decode()
             for o in pb.objects:
-                if o.id == gt_id:  # GroundTruthObject.from_pb's values: None where a field is not set
+                if gt_id is None or o.id == gt_id:  # GroundTruthObject.from_pb's values: None where a field is not set
                     rows.append((pb.frame, pb.t_ns, o.id, *(getattr(o, n) if o.HasField(n) else None for n in _FIELDS)))
-            if len(rows) == chunk_frames:
+            if len(rows) >= chunk_frames:
                 yield pl.DataFrame(rows, schema=TRUTH_COLUMNS, orient="row")
                 rows = []
         if rows:

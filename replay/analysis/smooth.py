@@ -484,12 +484,15 @@ def _lines_of_sight(cols: dict[str, np.ndarray], frames: np.ndarray, smoothed: n
     return d[:, 0], d[:, 1], d[:, 2]
 
 
-def _logged_times(frame_times: Mapping[int, int], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def logged_times(frame_times: Mapping[int, int], frames: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The log's time of each of ``frames`` and whether the log has one."""
-    keys = np.fromiter(frame_times.keys(), dtype=np.int64, count=len(frame_times))
-    times = np.fromiter(frame_times.values(), dtype=np.int64, count=len(frame_times))
-    order = np.argsort(keys, kind="stable")
-    keys, times = keys[order], times[order]
+    if isinstance(frame_times, FrameTimes):
+        keys, times = frame_times.sorted_arrays()
+    else:
+        keys = np.fromiter(frame_times.keys(), dtype=np.int64, count=len(frame_times))
+        times = np.fromiter(frame_times.values(), dtype=np.int64, count=len(frame_times))
+        order = np.argsort(keys, kind="stable")
+        keys, times = keys[order], times[order]
     at = np.clip(np.searchsorted(keys, frames), 0, max(len(keys) - 1, 0))
     found = (keys[at] == frames) if len(keys) else np.zeros(len(frames), bool)
     return np.where(found, times[at] if len(keys) else 0, 0), found
@@ -503,7 +506,7 @@ def _finish(full: pl.DataFrame, starts: np.ndarray, frame_times: Mapping[int, in
     t = full["t_ns"].fill_null(0).to_numpy().astype(np.int64)
     if frame_times and not known.all():  # (ints: float64 would round epoch times off their frames)
         missing = np.flatnonzero(~known)
-        logged, found = _logged_times(frame_times, frames[missing])
+        logged, found = logged_times(frame_times, frames[missing])
         t[missing[found]], known[missing[found]] = logged[found], True
     t = segments.interpolated_times(frames, t, known, starts)
     full = full.with_columns(*(pl.lit(None, dtype=t).alias(c) for c, t in EXTRA_SCHEMA.items() if c not in full.columns))
@@ -756,7 +759,7 @@ def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: n
     frames = full["frame"].to_numpy().astype(np.int64)
     t = full["t_ns"].to_numpy().astype(float)
     if frame_times:
-        logged, found = _logged_times(frame_times, frames)
+        logged, found = logged_times(frame_times, frames)
         t = np.where(np.isfinite(t), t, np.where(found, logged.astype(float), np.nan))
     rate = np.full(len(starts) - 1, math.nan)
     for i, (a, b) in enumerate(zip(starts[:-1].tolist(), starts[1:].tolist())):
@@ -826,27 +829,86 @@ class FrameCameras(Mapping):
         return len(self._frames)
 
 
-def log_context(log) -> tuple[dict[int, int], Mapping[int, PtzCamera]]:
-    """Frame times and (where the log has PTZ encoders and a lens table) the posed camera of every
-    frame (:class:`FrameCameras`), read from ``log`` without decoding any image."""
+class FrameTimes(Mapping):
+    """Frame -> log time (ns) as two int64 arrays (16 bytes a frame, where a dict holds two Python ints and
+    its table entry). Iterates in the order the frames were read; ``values()`` in the same order."""
+
+    def __init__(self, frames, times) -> None:
+        self.frames = np.array(frames, dtype=np.int64)
+        self.times = np.array(times, dtype=np.int64)
+        order = np.argsort(self.frames, kind="stable")
+        self._order, self._sorted = order, self.frames[order]
+        # frames 0, 1, 2 ... in order (a log's images as read): a frame is its own row, no search
+        self._dense = bool(np.array_equal(self.frames, np.arange(len(self.frames))))
+
+    def _row(self, frame) -> int:
+        if not isinstance(frame, (int, np.integer)) or isinstance(frame, bool):
+            return -1
+        if self._dense:
+            return int(frame) if 0 <= frame < len(self.frames) else -1
+        i = int(np.searchsorted(self._sorted, frame))
+        return int(self._order[i]) if i < len(self._sorted) and self._sorted[i] == frame else -1
+
+    def __getitem__(self, frame) -> int:
+        row = self._row(frame)
+        if row < 0:
+            raise KeyError(frame)
+        return int(self.times[row])
+
+    def __contains__(self, frame) -> bool:
+        return self._row(frame) >= 0
+
+    def __iter__(self):
+        return iter(self.frames.tolist())
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+    def values(self) -> list[int]:  # (not one look-up a frame)
+        return self.times.tolist()
+
+    def items(self) -> list[tuple[int, int]]:
+        return list(zip(self.frames.tolist(), self.times.tolist()))
+
+    def sorted_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """Frames ascending and their times."""
+        return self._sorted, self.times[self._order]
+
+
+def log_context(log) -> tuple[Mapping[int, int], Mapping[int, PtzCamera]]:
+    """Frame times (:class:`FrameTimes`) and (where the log has PTZ encoders and a lens table) the posed
+    camera of every frame (:class:`FrameCameras`), read from ``log`` without decoding any image."""
     from trackreplay.replay.log.frames import FrameTopics, PtzInterpolator, _ptz_stream
     from trackreplay.replay.log.reader import LogReader
     from trackreplay.schemas.records import LensTable
 
     reader = log if isinstance(log, LogReader) else LogReader(log)
     topics = FrameTopics.detect(reader)
-    times: dict[int, int] = {}
+    indices, stamps = array("q"), array("q")
     for item in reader.messages([topics.image]):
         if item.lost is None:
-            times[item.index] = item.log_time
+            indices.append(item.index)
+            stamps.append(item.log_time)
+    index, stamp = np.frombuffer(indices, np.int64), np.frombuffer(stamps, np.int64)
+    times: Mapping[int, int]
+    if np.unique(index).size == index.size:
+        times = FrameTimes(index, stamp)
+    else:  # (an index read twice: the last time, as a dict keeps it)
+        times = dict(zip(indices, stamps))
+    del index, stamp, indices, stamps
     lens_pb = reader.first(topics.lens) if topics.lens else None
     if not (topics.ptz and lens_pb is not None):
         return times, {}
     lens = LensTable.from_pb(lens_pb)
     ptz = PtzInterpolator(_ptz_stream(reader, topics.ptz, None), 100_000_000)
     frames, poses = array("q"), array("d")  # 8 bytes a value, not a tuple of floats a frame
-    for index in sorted(times, key=times.__getitem__):
-        pose = ptz.at(times[index])
+    if isinstance(times, FrameTimes):  # the frames in time order (stable: as sorted() by time orders them)
+        order = np.argsort(times.times, kind="stable")
+        in_time = zip(times.frames[order].tolist(), times.times[order].tolist())
+    else:
+        in_time = ((index, times[index]) for index in sorted(times, key=times.__getitem__))
+    for index, t_ns in in_time:
+        pose = ptz.at(t_ns)
         if pose is not None:
             frames.append(index)
             poses.extend((pose.pan, pose.tilt, pose.zoom, pose.focus))

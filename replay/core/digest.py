@@ -19,6 +19,7 @@ import tempfile
 import weakref
 from array import array
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any, BinaryIO
 
 import numpy as np
@@ -270,6 +271,9 @@ def leaf_values(value: Any, path: str = "") -> Iterator[tuple[str, Any]]:
 SPILL_FRAMES = 512
 
 
+FILE_ROWS = 4096  # rows of a sidecar read at a time (FrameDigests.from_file; larger blocks peak higher)
+
+
 class FrameDigests:
     """Per-frame, per-field hashes of a replay, recorded beside the digest (which they leave unchanged).
 
@@ -295,9 +299,15 @@ class FrameDigests:
         self._writer = None
         self._path: str | None = None
         self._group: tuple[int, FrameDigests] | None = None  # the spilled row group read back last
+        self._file: str | None = None  # a sidecar read a block of frames at a time (:meth:`from_file`)
+        self._ends: np.ndarray | None = None  # its rows' end of each frame
+        self._blocks: Iterator[tuple[int, FrameDigests]] | None = None
+        self._rows = FILE_ROWS
 
     def add(self, index: int, leaves: list[tuple[str, bytes, Any]]) -> None:
         """One frame: (path, 8-byte hash, kept values — a flat list or array of numbers, or None) per field."""
+        if self._file is not None:
+            raise RuntimeError("per-frame digests read from a file take no frames")
         paths = tuple(p for p, _, _ in leaves)
         sizes = tuple(-1 if v is None else len(v) for _, _, v in leaves)
         flat: list = []
@@ -336,6 +346,8 @@ class FrameDigests:
     def _frame(self, i: int) -> tuple[FrameDigests, int]:
         """Where the i-th recorded frame is: (a FrameDigests holding it, its position there)."""
         i = range(len(self.frames))[i]  # (negative from the end; IndexError past it)
+        if self._file is not None:
+            return self._file_frame(i)
         if i >= self._spilled:
             return self, i - self._spilled
         import pyarrow.parquet as pq
@@ -373,6 +385,8 @@ class FrameDigests:
         from the stored blobs in a few vectorised steps, without a Python object per row. Spilled
         frames are read back: for a long replay, :meth:`write_table` writes it without holding it.
         """
+        if self._file is not None:
+            return pl.read_parquet(self._file)
         if not self._spilled:
             return self._memory_table()
         self._finish_spill()
@@ -381,11 +395,11 @@ class FrameDigests:
     def write_table(self, out: BinaryIO) -> None:
         """:meth:`table` to an open binary file as Parquet; once spilled, the spill file's bytes (its last
         row group the frames still in memory), copied without decoding."""
-        if not self._spilled:
+        if not self._spilled and self._file is None:
             self._memory_table().write_parquet(out)
             return
         self._finish_spill()
-        with open(self._path, "rb") as spill:
+        with open(self._file or self._path, "rb") as spill:
             shutil.copyfileobj(spill, out, 1 << 20)
 
     def _finish_spill(self) -> None:
@@ -421,6 +435,80 @@ class FrameDigests:
             "hash": hashes,
             "values": pl.from_arrow(values).cast(pl.List(pl.Float64)),
         })
+
+    @classmethod
+    def from_file(cls, path: str | Path, rows: int = FILE_ROWS) -> FrameDigests | None:
+        """A sidecar (:meth:`table` as Parquet) read a block of frames at a time: its frame indices now
+        (its ``frame`` column, a batch at a time: 16 bytes a frame), the fields, hashes and values of
+        about ``rows`` rows when a frame among them is asked for (one block kept; asked in order, as
+        ``diff`` asks, the file is read once; a frame before the block kept reads it again from the start).
+        The same frames, fields and values as :meth:`from_table` of the whole file. None when the file
+        does not read so, or a frame's rows are not together (then read it whole)."""
+        import pyarrow.parquet as pq
+        from pyarrow.lib import ArrowException
+
+        try:
+            reader = pq.ParquetFile(path, pre_buffer=False, buffer_size=1 << 16)
+            if not {"frame", "field", "hash"} <= set(reader.schema_arrow.names):
+                return None
+            values, lengths = [], []
+            for batch in reader.iter_batches(batch_size=rows, columns=["frame"], use_threads=False):
+                f = batch.column(0).to_numpy(zero_copy_only=False).astype(np.int64)
+                if not len(f):
+                    continue
+                cut = np.flatnonzero(np.diff(f)) + 1  # runs of one frame
+                v, n = f[np.concatenate([[0], cut])], np.diff(np.concatenate([[0], cut, [len(f)]]))
+                if values and values[-1][-1] == v[0]:  # a frame across two batches
+                    lengths[-1][-1] += n[0]
+                    v, n = v[1:], n[1:]
+                if len(v):
+                    values.append(v)
+                    lengths.append(n)
+            reader.close()
+        except (ArrowException, OSError, ValueError):
+            return None
+        frames = np.concatenate(values) if values else np.zeros(0, np.int64)
+        if np.unique(frames).size != frames.size:  # a frame's rows apart: from_table groups them
+            return None
+        out = cls()
+        out.frames = array("q", frames.tobytes())
+        out._file, out._ends = str(path), np.cumsum(np.concatenate(lengths) if lengths else np.zeros(0, np.int64))
+        out._rows = rows
+        return out
+
+    def _file_frame(self, i: int) -> tuple[FrameDigests, int]:
+        """:meth:`_frame` of a sidecar read in blocks (:meth:`from_file`)."""
+        if self._group is not None and self._group[0] <= i < self._group[0] + len(self._group[1]):
+            return self._group[1], i - self._group[0]
+        if self._blocks is None or self._group is None or i < self._group[0]:
+            self._blocks = self._read_blocks()
+        for start, block in self._blocks:
+            if i < start + len(block):
+                self._group = (start, block)
+                return block, i - start
+        raise IndexError(i)
+
+    def _read_blocks(self) -> Iterator[tuple[int, FrameDigests]]:
+        """The sidecar's whole frames as they come, ``self._rows`` rows at a time: (first frame's position, its block)."""
+        import pyarrow.parquet as pq
+
+        reader = pq.ParquetFile(self._file, pre_buffer=False, buffer_size=1 << 16)
+        pending: list[pl.DataFrame] = []
+        done = held = 0  # frames given, rows held
+        try:
+            for batch in reader.iter_batches(batch_size=self._rows, use_threads=False):
+                pending.append(pl.from_arrow(batch))
+                held += batch.num_rows
+                first_row = int(self._ends[done - 1]) if done else 0
+                whole = int(np.searchsorted(self._ends, first_row + held, side="right"))  # frames complete
+                if whole > done:
+                    rows = int(self._ends[whole - 1]) - first_row
+                    table = pl.concat(pending, rechunk=False)
+                    pending, held = [table.slice(rows)], held - rows
+                    yield done, FrameDigests.from_table(table.head(rows))
+                    done = whole
+        finally:
+            reader.close()
 
     @classmethod
     def from_table(cls, table: pl.DataFrame) -> FrameDigests:

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 import polars as pl
-from scipy.interpolate import CubicSpline
 
 from trackreplay.recorder.atomic import claim_partial
 from trackreplay.schemas.errors import OutputError, TrackreplayError
@@ -41,6 +40,9 @@ def _interpolate(known_f: np.ndarray, known_v: np.ndarray, at: np.ndarray, metho
     if known_f.size < 2:  # (a piece of a track holding one of its known values: numpy.interp holds it)
         return np.full(at.shape, known_v[0]), np.zeros(at.shape)
     if method == "cubic" and known_f.size >= 4:
+        # (imported when a cubic fill asks: scipy costs ~44 MB of RSS)
+        from scipy.interpolate import CubicSpline
+
         spline = CubicSpline(known_f, known_v, bc_type="natural")
         return spline(at), spline(at, 1)
     k = np.clip(np.searchsorted(known_f, at), 1, known_f.size - 1)
@@ -206,32 +208,13 @@ def _csv_in_pieces(path: Path, keep_fill: bool) -> pl.DataFrame | None:
     --csv-only``). None when any check fails, the file does not read, it holds no rows, or it has a quoted
     cell (a quoted line break would not split at a line): the whole read then names the defect in its own
     sentence."""
-    import io
-
+    parts, fills = [], []
     try:
-        parts, fills = [], []
-        with open(path, "rb") as fh:
-            header = fh.readline()
-            if not header.endswith(b"\n") or b'"' in header:
-                return None
-            rest = b""
-            while True:
-                block = fh.read(CSV_BYTES)
-                text = rest + block
-                cut = len(text) if not block else text.rfind(b"\n") + 1
-                piece, rest = text[:cut], text[cut:]
-                if b'"' in piece:
-                    return None
-                if piece.strip():
-                    part = pl.read_csv(io.BytesIO(header + piece), infer_schema=False)
-                    if "confidence" not in part.columns:  # tables written before the column existed
-                        part = part.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
-                    if keep_fill and "fill" in part.columns:
-                        fills.append(part.get_column("fill").cast(pl.String, strict=False))
-                    parts.append(conform(part, str(path)))
-                if not block:
-                    break
-    except (TrackreplayError, pl.exceptions.PolarsError, OSError):
+        for part, fill in _csv_parts(path, keep_fill):
+            parts.append(part)
+            if fill is not None:
+                fills.append(fill)
+    except _ReadWhole:
         return None
     if not parts:
         return None
@@ -243,6 +226,57 @@ def _csv_in_pieces(path: Path, keep_fill: bool) -> pl.DataFrame | None:
         df = df.with_columns(pl.concat(fills))
     extra = ("fill",) if fills else ()
     return df.select(*COLUMNS, *extra) if _in_canonical_order(df) else canonical_order(df, extra=extra)
+
+
+class _ReadWhole(Exception):
+    """A CSV file :func:`_csv_parts` cannot read in pieces: read it whole (which names its defect)."""
+
+
+def _csv_parts(path: Path, keep_fill: bool = False) -> Iterator[tuple[pl.DataFrame, pl.Series | None]]:
+    """A CSV trajectory ``CSV_BYTES`` at a time, each piece cast and checked (``conform``), with its ``fill``
+    column (``keep_fill``, where it has one), in the file's order; :class:`_ReadWhole` when a check fails, the
+    file does not read or it has a quoted cell. A track's frame in two pieces is not checked here."""
+    import io
+
+    try:
+        with open(path, "rb") as fh:
+            header = fh.readline()
+            if not header.endswith(b"\n") or b'"' in header:
+                raise _ReadWhole
+            rest = b""
+            while True:
+                block = fh.read(CSV_BYTES)
+                text = rest + block
+                cut = len(text) if not block else text.rfind(b"\n") + 1
+                piece, rest = text[:cut], text[cut:]
+                if b'"' in piece:
+                    raise _ReadWhole
+                if piece.strip():
+                    part = pl.read_csv(io.BytesIO(header + piece), infer_schema=False)
+                    if "confidence" not in part.columns:  # tables written before the column existed
+                        part = part.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
+                    fill = part.get_column("fill").cast(pl.String, strict=False) if keep_fill and "fill" in part.columns else None
+                    yield conform(part, str(path)), fill
+                if not block:
+                    break
+    except (TrackreplayError, pl.exceptions.PolarsError, OSError):
+        raise _ReadWhole from None
+
+
+def csv_as_parquet(path: str | Path, target: str | Path) -> bool:
+    """A CSV trajectory written to ``target`` as Parquet a piece at a time (:func:`_csv_parts`: each piece
+    cast and checked as :func:`read_trajectory` checks the whole table; a row group a piece), for the
+    tools that read a checked Parquet file in pieces (``export``). False when the file cannot be read so
+    (nothing usable is left in ``target``): then read it whole, which names the defect."""
+    written = False
+    try:
+        with PieceWriter(Path(target), "parquet") as out:
+            for part, _ in _csv_parts(Path(path)):
+                out.write(part)
+                written = written or part.height > 0
+    except (_ReadWhole, OSError, pl.exceptions.PolarsError):
+        return False
+    return written
 
 
 def _in_canonical_order(df: pl.DataFrame) -> bool:
@@ -359,6 +393,83 @@ def checked_tracks(path: str | Path, rows: int = EXPORT_ROWS) -> Iterator[pl.Dat
         yield part
 
 
+def parquet_batches(path: str | Path, rows: int) -> Iterator[pl.DataFrame]:
+    """A Parquet file's rows ``rows`` at a time, as read (``confidence`` added where the file predates it),
+    not cast: pyarrow decodes a batch of each column at a time, where a polars scan decodes a whole row
+    group (a file written at once is one row group of up to 2¹⁸ rows: ~35 MB of trajectory at 200k rows)."""
+    import pyarrow.parquet as pq
+
+    reader = pq.ParquetFile(path, pre_buffer=False, buffer_size=1 << 16)  # (a column chunk read in 64 KB pieces)
+    try:
+        for batch in reader.iter_batches(batch_size=rows, use_threads=False):
+            df = pl.from_arrow(batch)
+            if "confidence" not in df.columns:  # tables written before the column existed
+                df = df.with_columns(pl.lit(None, dtype=pl.Float64).alias("confidence"))
+            yield df
+    finally:
+        reader.close()
+
+
+class NotCanonical(Exception):
+    """A trajectory file whose rows are not in canonical order, or that repeats a track's frame."""
+
+
+def ordered_tracks(path: str | Path, rows: int = EXPORT_ROWS, batch: int = 4096) -> Iterator[pl.DataFrame]:
+    """The tracks of a Parquet trajectory file in canonical order, read once from the start ``batch`` rows
+    at a time (:func:`parquet_batches`), each batch cast and checked as :func:`read_trajectory` checks the
+    whole (``conform``; its :class:`TrackreplayError` raised as the batch's): whole tracks at a time, short ones
+    together up to ``rows`` rows (and the rest of the batch that reached them), a longer one alone (its
+    batches as the table's chunks, not copied together). :class:`NotCanonical` as soon as a row is not
+    after the one before it (tracker, track, frame): then read the file whole."""
+    done: list[pl.DataFrame] = []
+    size = 0
+    current: list[pl.DataFrame] = []  # the rows so far of the track the last batch ended in
+    last_key: pl.DataFrame | None = None
+    for df in parquet_batches(path, batch):
+        df = conform(df, str(path)).select(COLUMNS)
+        if not df.height:
+            continue
+        keys = df.select(KEYS)
+        if not _strictly_ordered(keys if last_key is None else pl.concat([last_key, keys])):
+            raise NotCanonical(str(path))
+        last_key = keys.tail(1)
+        tracker, track_id = df["tracker"][-1], df["track_id"][-1]
+        last = df.select(((pl.col("tracker") == tracker) & (pl.col("track_id") == track_id)).sum()).item()
+        cut = df.height - last  # (sorted: the last track's rows end the batch)
+        if cut or (current and (current[0]["tracker"][0], current[0]["track_id"][0]) != (tracker, track_id)):
+            done += [*current, df.head(cut)]
+            size += sum(c.height for c in current) + cut
+            current = []
+        current.append(df.slice(cut))
+        if size >= rows:
+            _release_arrow()
+            yield pl.concat(done, rechunk=False)
+            done, size = [], 0
+    done += current
+    _release_arrow()
+    if done:
+        yield pl.concat(done, rechunk=False)
+
+
+def _release_arrow() -> None:
+    """Pyarrow's pool gives back the pages its decoding left free (before the piece is smoothed)."""
+    import pyarrow as pa
+
+    pa.default_memory_pool().release_unused()
+
+
+KEYS = ("tracker", "track_id", "frame")
+
+
+def _strictly_ordered(keys: pl.DataFrame) -> bool:
+    """Whether every row of ``keys`` (:data:`KEYS`, no nulls) comes after the one before it."""
+    later, same = None, None
+    for c in KEYS:
+        gt, eq = pl.col(c) > pl.col(c).shift(1), pl.col(c) == pl.col(c).shift(1)
+        later, same = (gt, eq) if later is None else (later | (same & gt), same & eq)
+    return bool(keys.select(later.fill_null(True).all()).item())
+
+
 def _tracks(keys: list[tuple[str, int]]) -> pl.Expr:
     return pl.struct("tracker", "track_id").is_in(pl.Series([{"tracker": t, "track_id": i} for t, i in keys]).implode())
 
@@ -421,6 +532,9 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     return written, filled
 
 
+WRITE_ROWS = 1 << 15  # rows of a Parquet row group PieceWriter writes (at most)
+
+
 class PieceWriter:
     """Parquet (a row group per piece) or CSV (one header) written a piece at a time; with no piece at
     all, the header of ``schema`` alone."""
@@ -444,7 +558,7 @@ class PieceWriter:
         table = part.to_arrow()
         if self._writer is None:
             self._writer = pq.ParquetWriter(self.path, table.schema, compression="zstd")
-        self._writer.write_table(table)
+        self._writer.write_table(table, row_group_size=WRITE_ROWS)  # (a row group is encoded whole in memory)
 
     def __exit__(self, *exc) -> None:
         if self._fh is not None:

@@ -16,7 +16,8 @@ import polars as pl
 
 from trackreplay.replay.cli.commands.values import finite_json, positive_float
 from trackreplay.replay.analysis.eval import (check_frames, checked_scan, evaluate, evaluate_chunked, evaluate_parts,
-                                              format_summary, object_followed, truth_index, truth_parts)
+                                              format_summary, object_followed, object_followed_parts, truth_index,
+                                              truth_parts)
 from trackreplay.replay.core.export import read_trajectory
 from trackreplay.replay.log.frames import image_times
 from trackreplay.replay.log.groundtruth import groundtruth_with_frames
@@ -69,9 +70,10 @@ def run(args: argparse.Namespace) -> int:
     else:
         reader = LogReader(args.log)
         topic = args.gt_topic or GROUNDTRUTH
-        # one track scored alone against one truth object: the truth is read a chunk at a time too
+        # one track scored alone against one truth object: the truth is read a chunk at a time too (and,
+        # among several objects, the one the track lies on most often is counted a chunk at a time)
         index, times = truth_index(reader, topic, args.image_topic) if lazy else (None, None)
-        if index is not None and index.in_order and (args.gt_id is not None or len(index.seen) == 1):
+        if index is not None and index.in_order:
             gt, annotated = None, index.annotated
         else:
             index = None
@@ -86,7 +88,8 @@ def run(args: argparse.Namespace) -> int:
         check_frames(traj, str(args.trajectory), times, annotated, str(args.log))
         frames = annotated["frame"]
     objects = sorted(index.seen) if index is not None else None
-    if args.mot or _score_all(args, traj, gt, objects):
+    every_object = (lambda: truth_parts(reader, topic, None)) if index is not None else None
+    if args.mot or _score_all(args, traj, gt, objects, every_object):
         if gt is None:
             gt = groundtruth_with_frames(reader, topic)[0]
         return _run_mot(args, read_trajectory(args.trajectory) if lazy else traj, gt, frames)
@@ -105,9 +108,11 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame | None, objects: list[int] | None = None) -> bool:
+def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame | None, objects: list[int] | None = None,
+               every_object=None) -> bool:
     """Whether to score every track (several tracks and no ``--track``); says what is scored either way.
-    ``objects``: the truth objects placed and visible, when ``gt`` is not read (exactly one, or ``--gt-id``)."""
+    ``objects``: the truth objects placed and visible, when ``gt`` is not read; ``every_object()`` then
+    gives their rows a chunk at a time (:func:`truth_parts` of no one object)."""
     tracks = sorted(traj.filter(pl.col("x").is_not_null())["track_id"].unique().to_list())
     if objects is None:
         objects = sorted(gt.filter(pl.col("x").is_not_null() & pl.col("visible").fill_null(True))["id"].unique().to_list())
@@ -130,7 +135,9 @@ def _score_all(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame | 
     elif len(objects) == 1:
         against = f"truth object {objects[0]} (the truth's only one)"
     else:
-        followed = object_followed(traj, gt, args.track_id if args.track_id is not None else tracks[0]) if tracks else None
+        tid = args.track_id if args.track_id is not None else tracks[0] if tracks else None
+        followed = (None if tid is None else object_followed(traj, gt, tid) if gt is not None
+                    else object_followed_parts(traj, every_object(), tid))
         if followed is not None:
             args.gt_id = followed
             against = f"truth object {followed}, the one of {len(objects)} it lies on most often (--gt-id ID chooses)"

@@ -21,16 +21,23 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    if (args.trajectory.suffix.lower() == ".parquet" and args.trajectory.is_file()
-            and FORMATS.get(args.out.suffix.lower()) in ("parquet", "csv")):
-        # a Parquet table is checked and exported a piece at a time (issue 33: memory flat in its length);
-        # a file a check refuses is read whole, which names the defect
-        from trackreplay.replay.analysis.eval import checked_scan
+    suffix = args.trajectory.suffix.lower()
+    if suffix in (".parquet", ".csv") and args.trajectory.is_file() and FORMATS.get(args.out.suffix.lower()) in ("parquet", "csv"):
+        # a Parquet table is checked and exported a piece at a time (issue 33: memory flat in its length), a CSV
+        # one first cast and checked a piece at a time into a temporary Parquet file; a file a check refuses is
+        # read whole, which names the defect
+        if suffix == ".parquet":
+            if _exported_in_pieces(args, args.trajectory):
+                return 0
+        else:
+            import tempfile
 
-        if checked_scan(args.trajectory) is not None:
-            rows, filled = export_trajectory(CheckedParquet(args.trajectory), args.out, args.interpolate, args.max_gap)
-            print(f"wrote {args.out}: {rows} rows, {filled} interpolated")
-            return 0
+            from trackreplay.replay.core.export import csv_as_parquet
+
+            with tempfile.TemporaryDirectory(prefix="trackreplay-export-") as tmp:
+                typed = Path(tmp) / "trajectory.parquet"
+                if csv_as_parquet(args.trajectory, typed) and _exported_in_pieces(args, typed):
+                    return 0
     table = read_trajectory(args.trajectory)
     if args.interpolate != "none":
         table = fill_gaps(table, args.interpolate, args.max_gap)
@@ -38,3 +45,14 @@ def run(args: argparse.Namespace) -> int:
     filled = table.filter(table["status"] == "interpolated").height
     print(f"wrote {args.out}: {table.height} rows, {filled} interpolated")
     return 0
+
+
+def _exported_in_pieces(args: argparse.Namespace, parquet: Path) -> bool:
+    """Export ``parquet`` a piece at a time when every piece passes read_trajectory's checks."""
+    from trackreplay.replay.analysis.eval import checked_scan
+
+    if checked_scan(parquet) is None:
+        return False
+    rows, filled = export_trajectory(CheckedParquet(parquet), args.out, args.interpolate, args.max_gap)
+    print(f"wrote {args.out}: {rows} rows, {filled} interpolated")
+    return True

@@ -21,18 +21,29 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _replayed_from(table, times: dict[int, int], log: Path) -> None:
+def _replayed_from(table, times, log: Path) -> None:
     """Every row's frame is that frame of ``log`` (the same time): a trajectory of another log would
     be smoothed with this one's frame times and camera poses and look right."""
-    import polars as pl
-
-    from trackreplay.replay.core.trajectory import frame_time_mismatches
-    from trackreplay.schemas.errors import TrackreplayError
+    from trackreplay.replay.analysis.eval import mismatches_in_pieces
 
     if "t_ns" not in table.columns or table.is_empty():
         return
-    logged = pl.DataFrame({"frame": list(times), "t_ns": list(times.values())}, schema={"frame": pl.Int64, "t_ns": pl.Int64})
-    bad = frame_time_mismatches(table, logged, missing=True)
+    _refuse_mismatches(mismatches_in_pieces(table, _log_frames(times), missing=True), log)  # (a whole join: ~30 MB)
+
+
+def _log_frames(times):
+    """The log's ``frame, t_ns`` table."""
+    import polars as pl
+    from trackreplay.replay.analysis.smooth import FrameTimes
+
+    frames, stamps = (times.frames, times.times) if isinstance(times, FrameTimes) else (list(times), list(times.values()))
+    return pl.DataFrame({"frame": frames, "t_ns": stamps}, schema={"frame": pl.Int64, "t_ns": pl.Int64})
+
+
+def _refuse_mismatches(bad, log: Path) -> None:
+    """The frames that disagree with the log (``frame, t_ns, other_t_ns``, by frame), refused in one sentence."""
+    from trackreplay.schemas.errors import TrackreplayError
+
     if bad.height:
         f, t, lt = bad.row(0)
         where = f"at t={lt} ns" if lt is not None else "missing"
@@ -43,7 +54,11 @@ def _replayed_from(table, times: dict[int, int], log: Path) -> None:
 def smooth_and_report(table, log: Path, max_gap: int, observations=None, configs=None):
     """Smooth ``table`` with the log's frame times and cameras (and the trackers' raw measurements
     and configs as replayed, which only ``replay --smooth`` has); print one line per track."""
-    from trackreplay.replay.analysis.smooth import SmoothConfig, log_context, smooth_trajectory
+    from trackreplay.replay.analysis.smooth import (
+        SmoothConfig,
+        log_context,
+        smooth_trajectory,
+    )
 
     times, cameras = log_context(log)
     _replayed_from(table, times, log)
@@ -55,6 +70,11 @@ def smooth_and_report(table, log: Path, max_gap: int, observations=None, configs
     return out
 
 
+# Rows of short tracks smoothed together when the trajectory is read a few tracks at a time (a longer track
+# alone): smaller pieces peak lower, larger ones fill the smoother's lanes better (docs/memory.md)
+SMOOTH_ROWS = 8192
+
+
 def run(args: argparse.Namespace) -> int:
     from trackreplay.replay.core.export import read_trajectory, write_trajectory
 
@@ -63,8 +83,148 @@ def run(args: argparse.Namespace) -> int:
 
         raise TrackreplayError(f"{args.out}: a smoothed trajectory is written as {' or '.join(SUFFIXES)} "
                                "(it has std and fill columns, which MOTChallenge .txt cannot hold)")
+    if args.trajectory.suffix.lower() == ".parquet" and args.trajectory.is_file():
+        # issue 33: a Parquet table in canonical order (as a replay writes it) is read, checked, smoothed and
+        # written a few whole tracks at a time (memory bounded by the longest track, not the log); another
+        # file, or one a check refuses, is read whole, which names the defect
+        rows = smooth_in_pieces(args.trajectory, args.log, args.max_gap, args.out)
+        if rows is not None:
+            print(f"wrote {args.out}: {rows} rows")
+            return 0
     table = read_trajectory(args.trajectory)
     out = smooth_and_report(table, args.log, args.max_gap)
     write_trajectory(out, args.out)
     print(f"wrote {args.out}: {out.height} rows")
     return 0
+
+
+def piece_mismatches(part, times):
+    """:func:`~trackreplay.replay.core.trajectory.frame_time_mismatches` of the rows ``part`` against the log's
+    frame times (``missing``: a frame the log lacks is one), by a search in the log's sorted frames instead of
+    a join with the whole log's table, once a piece: rows ``frame, t_ns, other_t_ns``,
+    a frame's first disagreeing row, by frame."""
+    import numpy as np
+    import polars as pl
+
+    from trackreplay.replay.analysis.smooth import logged_times
+    from trackreplay.replay.core.trajectory import TIMED_STATUSES
+
+    frames = part["frame"].to_numpy().astype(np.int64)
+    logged, found = logged_times(times, frames)
+    t = part["t_ns"].cast(pl.Int64)
+    timed = part["status"].is_in(TIMED_STATUSES).fill_null(False).to_numpy()
+    known = t.is_not_null().to_numpy()
+    bad = ~found | (timed & known & (t.fill_null(0).to_numpy() != logged))
+    rows = pl.DataFrame({"frame": part["frame"].filter(bad), "t_ns": t.filter(bad), "_logged": logged[bad],
+                         "_found": found[bad]}).select("frame", "t_ns", pl.when("_found").then("_logged").alias("other_t_ns"))
+    return rows.sort("frame", maintain_order=True).unique("frame", keep="first", maintain_order=True)
+
+
+class _ReadWhole(Exception):
+    """The trajectory does not read a piece at a time (out of canonical order, or a check fails)."""
+
+
+def _pieces(trajectory: Path, rows: int):
+    """:func:`~trackreplay.replay.core.export.ordered_tracks`, a failure to read so as :class:`_ReadWhole`."""
+    import polars as pl
+    from pyarrow.lib import ArrowException
+    from trackreplay.replay.core import export
+    from trackreplay.schemas.errors import TrackreplayError
+
+    tracks = export.ordered_tracks(trajectory, rows)
+    while True:
+        try:
+            part = next(tracks)
+        except StopIteration:
+            return
+        except (export.NotCanonical, TrackreplayError, pl.exceptions.PolarsError, OSError, ArrowException):
+            raise _ReadWhole from None
+        yield part
+
+
+def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows: int | None = None) -> int | None:
+    """:func:`smooth_and_report` of a Parquet trajectory in canonical order, read once, a few whole tracks at a
+    time (:func:`~trackreplay.replay.core.export.ordered_tracks`), each piece's output written as it is done
+    (a Parquet row group, or CSV lines): every track is smoothed alone (its fit, gaps and times are its own),
+    so the rows are those of the whole table, in the same order. Each piece's frames are compared with the
+    log's before it is smoothed; after a disagreement the rest is only compared, and the whole table's
+    sentence (its first frame, how many) is raised. The fits are printed once every piece is done. Returns
+    the rows written; None, with nothing printed or written, when the file does not read so (out of order,
+    a check fails): the whole read then names any defect. The log is read first (its frame times): a log
+    that fails is reported after the trajectory's own defect, as the whole table's path reports them."""
+    import os
+
+    import polars as pl
+    from trackreplay.recorder.atomic import claim_partial
+    from trackreplay.replay.analysis.eval import mismatches_in_pieces
+    from trackreplay.replay.analysis.smooth import (
+        EXTRA_SCHEMA,
+        SmoothConfig,
+        log_context,
+        smooth_trajectory,
+    )
+    from trackreplay.replay.core.export import (
+        PieceWriter,
+        read_trajectory,
+        trajectory_format,
+    )
+    from trackreplay.replay.core.trajectory import SCHEMA
+    from trackreplay.schemas.errors import OutputError
+
+    try:
+        times, cameras = log_context(log)
+    except Exception:
+        read_trajectory(trajectory)  # the trajectory's defect first, as the whole table's path names it
+        raise
+    config = SmoothConfig(max_gap=max_gap)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = claim_partial(out)  # this process's own; the final name appears only for a complete file
+    written, writer, lines, bad = 0, None, [], []
+
+    def failed(err: Exception) -> OutputError:  # as write_trajectory words a failed write
+        return OutputError(f"cannot write {out} ({err})")
+
+    try:
+        try:
+            writer = PieceWriter(tmp, trajectory_format(out), {**SCHEMA, **EXTRA_SCHEMA}).__enter__()
+        except (OSError, pl.exceptions.PolarsError) as err:
+            raise failed(err) from None
+        for part in _pieces(trajectory, rows or SMOOTH_ROWS):
+            wrong = piece_mismatches(part, times)
+            if wrong.height:
+                bad.append(wrong)
+            if bad:  # (not smoothed: the trajectory is refused)
+                continue
+            smoothed, fits = smooth_trajectory(part, config, frame_times=times, cameras=cameras)
+            del part
+            lines += [f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
+                      f"{f.filled} frames filled; {f.noise}" for f in fits]
+            try:
+                writer.write(smoothed)
+            except (OSError, pl.exceptions.PolarsError) as err:
+                raise failed(err) from None
+            written += smoothed.height
+        if not written and not bad:
+            raise _ReadWhole  # no rows: the whole read names it
+        if bad:  # the whole table's comparison: a frame's first disagreeing row, frames in order
+            _refuse_mismatches(pl.concat(bad).sort("frame", maintain_order=True).unique("frame", keep="first",
+                                                                                    maintain_order=True), log)
+        try:
+            done, writer = writer, None
+            done.__exit__(None, None, None)
+            os.replace(tmp, out)
+        except (OSError, pl.exceptions.PolarsError) as err:
+            raise failed(err) from None
+    except BaseException as err:
+        if writer is not None:
+            try:
+                writer.__exit__(type(err), err, None)  # closed (not finished) before its file is removed
+            except (OSError, pl.exceptions.PolarsError):
+                pass
+        tmp.unlink(missing_ok=True)
+        if isinstance(err, _ReadWhole):
+            return None
+        raise
+    for line in lines:
+        print(line)
+    return written

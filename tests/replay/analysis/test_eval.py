@@ -356,3 +356,65 @@ def test_eval_of_one_track_when_the_truth_has_no_single_object(tmp_path, capsys,
         assert code == 2 and "places no object" in first.err
     else:
         assert code == 0 and (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
+
+
+def test_eval_of_one_track_among_several_objects_reads_the_truth_a_chunk_at_a_time(tmp_path, monkeypatch, capsys,
+                                                                                     benchmark_module) -> None:
+    """Issue 33: one track against a truth of several objects (no --gt-id) finds the object it lies on most
+    often from the log's truth a chunk at a time, then scores it a chunk at a time: the whole truth table is
+    never read, and the printed choice and --json are the whole table's (--per-frame takes that path)."""
+    from trackreplay.recorder.image_codec import compressed_image
+    from trackreplay.recorder.writer import LogWriter
+    from trackreplay.replay.analysis import eval as ev
+    from trackreplay.replay.cli.commands import eval_cmd
+    from trackreplay.replay.cli.main import main
+    from trackreplay.schemas import topics as T
+    from trackreplay.schemas.records import GroundTruthFrame, GroundTruthObject
+
+    bench = benchmark_module("bench_long_log")
+    log, traj = tmp_path / "t.mcap", tmp_path / "t.parquet"
+    bench.write_spill(traj, 300)  # the track circles (15.5, 15.5) at radius 6
+    picture = bench.cv2.imencode(".png", np.zeros((8, 8), np.uint8))[1].tobytes()
+    with LogWriter(log) as out:
+        for i in range(300):
+            t_ns = i * 1_000_000_000 // 30
+            out.write(T.CAMERA_IMAGE, compressed_image(picture, "png", t_ns, "camera"), t_ns)
+            here = [GroundTruthObject(id=7, x=15.5, y=15.5, w=30.0, h=30.0, visible=True)]  # under it everywhere
+            if i % 4:  # placed on more frames, under the track on fewer of them
+                here.append(GroundTruthObject(id=3, x=21.5, y=15.5, w=3.0, h=3.0, visible=i % 5 != 0))
+            if i < 200:
+                here.append(GroundTruthObject(id=5, x=15.5, y=15.5, w=40.0, h=40.0, visible=True))
+            out.write(T.GROUNDTRUTH, GroundTruthFrame(i, t_ns, tuple(here)).to_pb(), t_ns)
+    monkeypatch.setattr(ev, "EVAL_CHUNK_FRAMES", 32)
+    whole_reads: list = []
+    real = eval_cmd.groundtruth_with_frames
+    monkeypatch.setattr(eval_cmd, "groundtruth_with_frames", lambda *a, **k: whole_reads.append(1) or real(*a, **k))
+    capsys.readouterr()
+    assert main(["eval", str(traj), str(log), "--json", str(tmp_path / "a.json")]) == 0
+    chunked = capsys.readouterr().out
+    assert not whole_reads
+    assert main(["eval", str(traj), str(log), "--json", str(tmp_path / "b.json"), "--per-frame", str(tmp_path / "p.csv")]) == 0
+    assert whole_reads and chunked == capsys.readouterr().out
+    assert chunked.splitlines()[0] == ("scoring track 1 (the trajectory's only one) against truth object 7, the one of 3 it "
+                                       "lies on most often (--gt-id ID chooses)")
+    assert (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
+
+
+@pytest.mark.parametrize("chunk", [1, 5, 64])
+def test_the_object_followed_counted_a_chunk_at_a_time_is_the_whole_tables(chunk: int) -> None:
+    from trackreplay.replay.analysis.eval import object_followed, object_followed_parts
+
+    rng = np.random.default_rng(3)
+    n = 120
+    traj = pl.DataFrame({"track_id": rng.integers(1, 3, n), "frame": np.arange(n), "x": rng.uniform(0, 20, n),
+                         "y": rng.uniform(0, 20, n)}).with_columns(pl.when(pl.col("frame") % 9 == 0).then(None)
+                                                                   .otherwise(pl.col("x")).alias("x"))
+    rows = [(f, f * 10, o, float(rng.uniform(0, 20)), float(rng.uniform(0, 20)), w, w, None, None, v)
+            for f in range(n) for o, w, v in ((1, 8.0, True), (2, None, None), (3, 12.0, f % 3 != 0)) if rng.random() < 0.8]
+    from trackreplay.replay.analysis.eval import TRUTH_COLUMNS
+
+    gt = pl.DataFrame(rows, schema=TRUTH_COLUMNS, orient="row")
+    for track_id in (1, 2):
+        def parts(): return (gt.slice(a, chunk) for a in range(0, gt.height, chunk))
+        assert object_followed_parts(traj, parts, track_id) == object_followed(traj, gt, track_id)
+    assert object_followed_parts(traj, lambda: iter(()), 1) is None

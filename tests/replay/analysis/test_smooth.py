@@ -11,7 +11,7 @@ import pytest
 from trackreplay.replay.cli.main import main
 from trackreplay.replay.core.export import fill_gaps, read_trajectory, write_trajectory
 from trackreplay.replay.analysis.smooth import SMOOTH_COLUMNS, smooth_trajectory
-from trackreplay.replay.core.trajectory import state_row, trajectory_table
+from trackreplay.replay.core.trajectory import FLOAT_COLUMNS, state_row, trajectory_table
 from trackreplay.trackers.base import TrackState
 
 
@@ -404,3 +404,120 @@ def test_log_context_builds_each_frames_camera_when_asked() -> None:
     assert cameras.get(10_000) is None and 10_000 not in cameras and "0" not in cameras
     with pytest.raises(KeyError):
         cameras[-1]
+
+
+def _many_flow_tracks() -> pl.DataFrame:
+    """Eight tracks on the golden flow log's frames (its frame times): shifted copies of its track, some
+    with lost runs and absent frames, one only predicted (nothing to smooth)."""
+    base = read_trajectory(GOLDEN / "flow.trajectory.parquet")
+    tracks = []
+    for k in range(8):
+        t = base.with_columns(pl.lit(k + 1, dtype=pl.Int64).alias("track_id"), pl.col("x") + 7.0 * k, pl.col("y") - 3.0 * k)
+        if k % 3 == 1:  # a lost run (no position)
+            lost = pl.col("frame").is_between(8, 12)
+            t = t.with_columns(pl.when(lost).then(pl.lit("lost")).otherwise(pl.col("status")).alias("status"),
+                               *(pl.when(lost).then(None).otherwise(pl.col(c)).alias(c) for c in FLOAT_COLUMNS))
+        if k % 3 == 2:
+            t = t.filter(pl.col("frame") != 5)
+        if k == 7:
+            t = t.with_columns(pl.lit("predicted").alias("status"))
+        tracks.append(t)
+    return pl.concat(tracks)
+
+
+@pytest.mark.parametrize("order", ["canonical", "shuffled"])
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+@pytest.mark.parametrize("case", ["flow", "groups"])
+def test_smooth_command_in_pieces_writes_the_whole_tables_output(tmp_path: Path, monkeypatch, capsys, case: str,
+                                                                  suffix: str, order: str) -> None:
+    """Issue 33: `smooth` on a Parquet trajectory in canonical order reads it once from its start, a few rows
+    at a time (a track across several reads), and smooths and writes a few whole tracks at a time; the printed
+    fits and the written table are the whole table's (compared with the path that reads it whole). A file in
+    another order is read whole."""
+    import functools
+
+    from trackreplay.replay.cli.commands import smooth as command
+    from trackreplay.replay.core import export
+
+    log = GOLDEN / ("flow-sim1-24f.mcap" if case == "flow" else "groups-crossing-320x240.mcap")
+    traj = tmp_path / "t.parquet"
+    table = _many_flow_tracks() if case == "flow" else read_trajectory(GOLDEN / "groups.trajectory.parquet")
+    if order == "shuffled":
+        table = table.sample(fraction=1.0, shuffle=True, seed=4)
+    table.write_parquet(traj)
+    pieces: list[int] = []
+    ordered = export.ordered_tracks
+    monkeypatch.setattr(export, "ordered_tracks", lambda *a: (pieces.append(p.height) or p
+                                                              for p in functools.partial(ordered, batch=7)(*a)))
+    monkeypatch.setattr(command, "SMOOTH_ROWS", 30 if case == "flow" else 1)  # a track or two a piece
+    capsys.readouterr()
+    assert main(["smooth", str(traj), str(log), "--out", str(tmp_path / f"a{suffix}")]) == 0
+    streamed = capsys.readouterr().out
+    if order == "canonical":
+        assert len(pieces) >= 2 and sum(pieces) == table.height
+    else:
+        assert len(pieces) <= 1  # refused at its first rows out of order: read whole
+    monkeypatch.setattr(command, "smooth_in_pieces", lambda *a, **k: None)  # the whole table
+    assert main(["smooth", str(traj), str(log), "--out", str(tmp_path / f"b{suffix}")]) == 0
+    whole = capsys.readouterr().out
+    assert streamed.replace(f"a{suffix}", f"b{suffix}") == whole and whole.count("smooth ") >= 2
+    a, b = tmp_path / f"a{suffix}", tmp_path / f"b{suffix}"
+    if suffix == ".csv":
+        assert a.read_bytes() == b.read_bytes()
+    else:
+        assert pl.read_parquet(a).equals(pl.read_parquet(b), null_equal=True)
+        assert pl.read_parquet(a).schema == pl.read_parquet(b).schema
+    assert not list(tmp_path.glob("*.partial*"))
+
+
+def test_smooth_in_pieces_refuses_another_logs_trajectory_in_the_same_words(tmp_path: Path, monkeypatch, capsys) -> None:
+    """Each piece's frames are compared with the log's before it is smoothed: the whole table's sentence (its
+    first frame, how many disagree), nothing printed, no output file; a trajectory defect is named before a
+    log's, as reading the whole table names them."""
+    from trackreplay.replay.cli.commands import smooth as command
+
+    monkeypatch.setattr(command, "SMOOTH_ROWS", 30)
+    log = GOLDEN / "flow-sim1-24f.mcap"
+    other, broken = tmp_path / "other.parquet", tmp_path / "broken.parquet"
+    tracks = _many_flow_tracks()
+    # tracks 3 on: 1 ms later (another log); a few frames of track 5 2 ms later still
+    shifted = tracks.with_columns(pl.when(pl.col("track_id") >= 3).then(pl.col("t_ns") + 1_000_000)
+                                  .otherwise(pl.col("t_ns")).alias("t_ns"))
+    shifted = shifted.with_columns(pl.when((pl.col("track_id") == 5) & (pl.col("frame") < 4)).then(pl.col("t_ns") + 1_000_000)
+                                   .otherwise(pl.col("t_ns")).alias("t_ns"))
+    write_trajectory(shifted, other)
+    write_trajectory(tracks.with_columns(pl.when(pl.col("track_id") == 6).then(pl.lit("gone")).otherwise(pl.col("status"))
+                                         .alias("status")), broken)
+    real = command.smooth_in_pieces
+    said = []
+    for whole in (False, True):
+        monkeypatch.setattr(command, "smooth_in_pieces", (lambda *a, **k: None) if whole else real)
+        capsys.readouterr()
+        assert main(["smooth", str(other), str(log), "--out", str(tmp_path / "s.parquet")]) == 2
+        said.append(capsys.readouterr())
+        assert not list(tmp_path.glob("s.parquet*"))
+        assert main(["smooth", str(broken), str(tmp_path / "missing.mcap"), "--out", str(tmp_path / "s.parquet")]) == 2
+        said.append(capsys.readouterr())
+    assert said[0] == said[2] and said[0].out == "" and "it was not replayed from this log" in said[0].err
+    assert said[1] == said[3] and "'gone'" in said[1].err
+
+
+@pytest.mark.parametrize("as_dict", [False, True])
+def test_a_pieces_frame_mismatches_by_search_are_the_joins(as_dict: bool) -> None:
+    """`smooth` compares each piece with the log's frame times by a search in the log's sorted frames: the
+    rows frame_time_mismatches finds by a join (missing frames, other times, untimed statuses, null times)."""
+    from trackreplay.replay.analysis.smooth import FrameTimes
+    from trackreplay.replay.cli.commands.smooth import piece_mismatches
+    from trackreplay.replay.core.trajectory import frame_time_mismatches
+
+    rng = np.random.default_rng(6)
+    n = 400
+    frames = rng.integers(0, 120, n)
+    table = pl.DataFrame({"frame": frames, "t_ns": frames * 10 + (rng.random(n) < 0.1),
+                          "status": rng.choice(["measured", "lost", "predicted", "interpolated"], n)})
+    table = table.with_columns(pl.when(pl.Series(rng.random(n) < 0.05)).then(None).otherwise(pl.col("t_ns")).alias("t_ns"))
+    logged = rng.permutation(np.arange(0, 110))  # some frames missing, in no order
+    times = dict(zip(logged.tolist(), (logged * 10).tolist())) if as_dict else FrameTimes(logged, logged * 10)
+    want = frame_time_mismatches(table, pl.DataFrame({"frame": logged, "t_ns": logged * 10}), missing=True)
+    got = piece_mismatches(table, times)
+    assert want.height > 10 and got.equals(want, null_equal=True)

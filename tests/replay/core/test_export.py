@@ -363,3 +363,81 @@ def test_a_csv_trajectory_read_in_pieces_is_the_whole_read(tmp_path: Path, monke
             messages.append(str(err.value))
         assert messages[0] == messages[1]
     assert "not a number" in messages[0] or "second row" in messages[0]
+
+
+@pytest.mark.parametrize("batch", [1, 3, 7, 64, 1000])
+def test_ordered_tracks_are_whole_tracks_of_the_read_table(tmp_path: Path, batch: int) -> None:
+    """Issue 33 (`smooth`): a file in canonical order read once from its start, ``batch`` rows at a time,
+    gives whole tracks (short ones together up to ``rows``), the rows and types of read_trajectory's table."""
+    from trackreplay.replay.core.export import ordered_tracks
+
+    rng = np.random.default_rng(1)
+    parts = []
+    for tracker in ("colorpf", "flow"):
+        for tid in range(1, 6):
+            n = int(rng.integers(1, 40))
+            parts.append(pl.DataFrame({"tracker": tracker, "track_id": tid, "frame": np.arange(n) + int(rng.integers(0, 5)),
+                                       "t_ns": None, "x": rng.uniform(0, 9, n), "y": rng.uniform(0, 9, n),
+                                       "status": "measured"}))
+    from trackreplay.replay.core.trajectory import SCHEMA
+
+    path = tmp_path / "t.parquet"
+    table = pl.concat(parts, how="diagonal_relaxed")
+    table.with_columns(pl.lit(None, dtype=t).alias(c) for c, t in SCHEMA.items() if c not in table.columns).write_parquet(path)
+    whole = read_trajectory(path)
+    pieces = list(ordered_tracks(path, rows=30, batch=batch))
+    assert pl.concat(pieces).equals(whole, null_equal=True)
+    keys = [set(p.select("tracker", "track_id").unique().iter_rows()) for p in pieces]
+    assert all(not (a & b) for i, a in enumerate(keys) for b in keys[i + 1:])  # no track in two pieces
+    assert all(p.height < 30 + 40 + batch for p in pieces) and (len(pieces) >= 3 or batch >= whole.height)
+
+
+@pytest.mark.parametrize("method", ["linear", "none"])
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_export_of_a_csv_file_streams_its_checks_and_pieces(tmp_path: Path, monkeypatch, capsys, method: str,
+                                                             suffix: str) -> None:
+    """Issue 33: `trackreplay export TRAJ.csv OUT` casts and checks the CSV a piece at a time into a temporary
+    Parquet file and exports that a piece at a time: the same file and counts as the whole-table path; a
+    defect is named in the whole read's sentence (a bad cell, a frame twice across pieces)."""
+    from trackreplay.replay.cli.commands import export as export_cmd
+    from trackreplay.replay.cli.main import main
+    from trackreplay.replay.core import export as ex
+
+    src = tmp_path / "in.csv"
+    _csv_table().write_csv(src)
+    monkeypatch.setattr(ex, "CSV_BYTES", 4000)  # ~40 lines a piece
+    streamed: list = []
+    real = ex.export_trajectory
+    monkeypatch.setattr(export_cmd, "export_trajectory",
+                        lambda t, *a, **k: streamed.append(t) or real(t, *a, **{**k, "rows": 100}))
+    a, b = tmp_path / f"a{suffix}", tmp_path / f"b{suffix}"
+    capsys.readouterr()
+    assert main(["export", str(src), str(a), "--interpolate", method]) == 0
+    said = capsys.readouterr().out
+    assert len(streamed) == 1 and isinstance(streamed[0], ex.CheckedParquet)
+    real_csv = ex.csv_as_parquet
+    monkeypatch.setattr(ex, "csv_as_parquet", lambda *a: False)  # the whole table
+    assert main(["export", str(src), str(b), "--interpolate", method]) == 0
+    assert len(streamed) == 1 and said.replace(str(a), str(b)) == capsys.readouterr().out
+    if suffix == ".csv":
+        assert a.read_bytes() == b.read_bytes()
+    else:
+        assert pl.read_parquet(a).equals(pl.read_parquet(b), null_equal=True)
+    assert not list(tmp_path.glob("*.partial"))
+
+    lines = src.read_text().splitlines()
+    x = lines[0].split(",").index("x")
+    bad_cell = lines[:]
+    cells = bad_cell[800].split(",")
+    cells[x] = "abc"
+    bad_cell[800] = ",".join(cells)
+    for i, broken in enumerate((bad_cell, lines + [lines[700]])):
+        bad = tmp_path / f"bad{i}.csv"
+        bad.write_text("\n".join(broken) + "\n")
+        errors = []
+        for pieces in (real_csv, lambda *a: False):
+            monkeypatch.setattr(ex, "csv_as_parquet", pieces)
+            assert main(["export", str(bad), str(a)]) == 2
+            errors.append(capsys.readouterr().err)
+        assert errors[0] == errors[1] and ("not a number" in errors[0] or "second row" in errors[0])
+    assert len(streamed) == 1

@@ -135,3 +135,42 @@ def test_bookkeeping_memory_does_not_grow_with_the_log() -> None:
     assert large[0] < small[0] + 8 * 9_000 + 50_000, (small, large)
     # the digest's final pass holds the canonical order and one column: under 100 bytes a row
     assert large[1] < small[1] + 100 * 9_000, (small, large)
+
+
+def _digests(frames: int = 40) -> FrameDigests:
+    """Frames of different layouts (a track appearing, a large field without values, a frame index skipped)."""
+    rng = np.random.default_rng(2)
+    out = FrameDigests()
+    for i in range(frames):
+        leaves = [("states.len", bytes(8), [float(i % 3)]),
+                  ("intermediates.image", rng.bytes(8), None)]
+        leaves += [(f"states.{k}.x", rng.bytes(8), list(rng.normal(size=2))) for k in range(i % 3)]
+        out.add(2 * i + (i > 20), leaves)
+    return out
+
+
+@pytest.mark.parametrize("rows", [1, 3, 8, 1000])
+def test_a_sidecar_read_a_block_at_a_time_gives_the_whole_reads_frames(tmp_path: Path, rows: int) -> None:
+    """Issue 33 (`diff`): a sidecar read ``rows`` rows at a time (row groups cutting frames, a frame across
+    reads) gives every frame's fields and values as the whole table does, asked in order or not."""
+    import pyarrow.parquet as pq
+    from trackreplay.replay.analysis.diff import read_sidecar
+
+    table = _digests().table()
+    path = tmp_path / "s.frames.parquet"
+    pq.write_table(table.to_arrow(), path, row_group_size=7)
+    whole = FrameDigests.from_table(table)
+    part = FrameDigests.from_file(path, rows=rows)
+    assert part is not None and part.frames == whole.frames and len(part) == len(whole)
+    for i in [*range(len(whole)), 5, -1, 0, 30, 2]:
+        assert part.fields(i) == whole.fields(i)
+        assert part.values(i).keys() == whole.values(i).keys()
+        assert all(np.array_equal(v, whole.values(i)[k]) for k, v in part.values(i).items())
+    assert part.table().equals(table)
+    assert read_sidecar(path)._file is not None
+    apart = tmp_path / "apart.frames.parquet"  # a frame's rows not together: read whole, as from_table groups them
+    pl.concat([table, table.head(2)]).write_parquet(apart)
+    assert FrameDigests.from_file(apart) is None
+    assert read_sidecar(apart).frames == FrameDigests.from_table(pl.read_parquet(apart)).frames
+    with pytest.raises(IndexError):
+        part.fields(len(whole))
