@@ -14,9 +14,6 @@ from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.smoothing import DEFAULT_SMOOTHING, SmoothingModel
 
 Marked = Iterable[tuple[np.ndarray, Sequence[InitRegion]]]  # (image, regions marked on it) per marked frame
-Ahead = Iterable[tuple[int, int, np.ndarray]]  # (frame index, t_ns, image) per frame read ahead, in frame order
-# The most frames a tracker may read ahead (TrackerSpec.read_ahead): each is decoded, handed over, dropped.
-READ_AHEAD_MAX = 100
 
 STATUSES = ("measured", "predicted", "interpolated", "lost")
 POSITION_FIELDS = ("x", "y", "X", "Y", "Z", "dx", "dy", "dz")
@@ -58,10 +55,9 @@ class Tracker(Protocol):
     """A tracker is built from ``(config, rng)``, prepared once, then stepped once per frame.
 
     ``prepare`` receives every frame the log's init annotations mark, before the first step
-    (the engine always calls it); ``read_ahead``, frames spread evenly over the replayed window,
-    when the tracker's spec asks for them (``TrackerSpec.read_ahead``). After each ``step`` its
-    ``intermediates`` hold that frame's inner results as plain numpy data (a frozen dataclass); the
-    engine hashes them into the digest and, when a Rerun recording is on, hands them to the tracker's view.
+    (the engine always calls it). After each ``step`` its ``intermediates`` hold that frame's
+    inner results as plain numpy data (a frozen dataclass); the engine hashes them into the
+    digest and, when a Rerun recording is on, hands them to the tracker's view.
     """
 
     name: ClassVar[str]
@@ -70,8 +66,6 @@ class Tracker(Protocol):
     def __init__(self, config: Any, rng: np.random.Generator) -> None: ...
 
     def prepare(self, marked: Marked) -> None: ...
-
-    def read_ahead(self, frames: Ahead) -> None: ...
 
     def step(self, frame: Frame) -> list[TrackState]: ...
 
@@ -87,13 +81,6 @@ class TrackerBase(ABC):
 
         Does nothing by design: most trackers start from the hints a frame carries when it
         arrives; one that must see every mark up front (the golf tracker's LUTs) overrides this.
-        """
-
-    def read_ahead(self, frames: Ahead) -> None:  # noqa: B027 (a default, not an abstract method)
-        """Learn from frames spread over the replayed window before the first step (after ``prepare``).
-
-        Called only when the spec's ``read_ahead`` asks for frames; a tracker that asks overrides this.
-        ``frames`` is an iterator: each image is decoded as it is taken, and is the tracker's to drop.
         """
 
     @abstractmethod
@@ -143,11 +130,6 @@ class TrackerSpec:
     # single-object ones pair one track with one ground-truth object.
     multi_object: bool = False
     ball_flight: bool = False  # its tracks are a ball in flight: ``trackreplay flight`` fits them in 3-D
-    # Frames it reads ahead: ``(config as replayed, stereo) -> n`` (``stereo``: the replay reads a calibrated
-    # stereo pair), 0 to n <= READ_AHEAD_MAX. The engine hands ``Tracker.read_ahead`` n images spread evenly
-    # over the replayed window (--start/--end) before the first step, the same for the same log and window:
-    # an after-the-event tool may look at the whole recording (a background learnt from all of it). None: none.
-    read_ahead: Callable[[Any, bool], int] | None = None
 
     def __post_init__(self) -> None:
         if not self.name or not self.name.isidentifier():

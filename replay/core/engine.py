@@ -35,13 +35,13 @@ from trackreplay.replay.core.config_toml import config_toml
 from trackreplay.replay.core.digest import SPILL_FRAMES, FrameDigests, ReplayDigest
 from trackreplay.replay.core.observations import observation_rows, observations_table
 from trackreplay.replay.log.frames import (BundleReport, FrameTopics, iter_frames, marked_images, marks_in_window, read_hints,
-                                       read_ground_plane, read_stereo_rig, spread_images)
+                                       read_ground_plane, read_stereo_rig)
 from trackreplay.replay.log.marks import check_can_track, check_labels, check_one_start_per_frame
 from trackreplay.replay.log.groundtruth import read_groundtruth
 from trackreplay.replay.log.prefetch import prefetch
 from trackreplay.replay.log.reader import LogReader
 from trackreplay.replay.core.trajectory import SPILL_ROWS, SpilledTrajectory, TrajectoryRows, state_row
-from trackreplay.trackers.base import READ_AHEAD_MAX, Tracker, TrackState
+from trackreplay.trackers.base import Tracker, TrackState
 from trackreplay.trackers.frame import Frame
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import TrackreplayError
@@ -215,23 +215,10 @@ class ReplaySteps(Iterator[ReplayStep]):
                        "used (a track starts only from a mark on a frame it replays)") if outside else ""
         # a no-op for trackers that need no look ahead
         self.tracker.prepare(marked_images(reader, topics, start_ns=start_ns, end_ns=end_ns))
-        self._read_ahead(reader, topics, start_ns, end_ns)
         self.report = BundleReport()
         self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)
         self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report,
                                             strict=req.strict), req.prefetch)
-
-    def _read_ahead(self, reader: LogReader, topics: FrameTopics, start_ns: int | None, end_ns: int | None) -> None:
-        """Frames spread over the window for a tracker whose spec asks for them (TrackerSpec.read_ahead)."""
-        if self.spec.read_ahead is None:
-            return
-        stereo = topics.right is not None and read_stereo_rig(reader, topics) is not None
-        count = self.spec.read_ahead(self.config, stereo)
-        if isinstance(count, bool) or not isinstance(count, int) or not 0 <= count <= READ_AHEAD_MAX:
-            raise TrackreplayError(f"tracker {self.spec.name} asks to read {count!r} frames ahead: "
-                                   f"a whole number from 0 to {READ_AHEAD_MAX}")
-        if count:
-            self.tracker.read_ahead(spread_images(reader, topics, count, start_ns, end_ns))
 
     def __next__(self) -> ReplayStep:
         frame = next(self._frames)

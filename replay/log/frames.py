@@ -5,8 +5,6 @@ from __future__ import annotations
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from trackreplay.schemas import topics as T
 from trackreplay.schemas.errors import LogError
 from trackreplay.schemas.messages import CALIBRATION_SCHEMAS, IMAGE_SCHEMAS
@@ -277,51 +275,6 @@ def marked_images(reader: LogReader, topics: FrameTopics, start_ns: int | None =
         if item.index >= last:
             break
     return out
-
-
-def spread_indices(candidates: list[int], count: int) -> list[int]:
-    """``count`` of ``candidates`` spread evenly: the middle one of each of ``count`` equal runs
-    (all of them when there are no more than ``count``)."""
-    m = len(candidates)
-    if count <= 0 or m == 0:
-        return []
-    if m <= count:
-        return list(candidates)
-    return [candidates[(2 * k + 1) * m // (2 * count)] for k in range(count)]
-
-
-def spread_images(reader: LogReader, topics: FrameTopics, count: int, start_ns: int | None = None,
-                  end_ns: int | None = None) -> Iterator[tuple[int, int, np.ndarray]]:
-    """``(frame index, t_ns, image)`` of ``count`` images of ``topics.image`` spread evenly over the
-    replay's window (:func:`spread_indices` of its images, in frame order), decoded one at a time.
-
-    A lost image is not a candidate; one that does not decode, or whose size differs from the first's,
-    is left out (the replay itself reports it). Only the chosen images are decoded: the window is
-    listed without decoding, then read straight from their chunks when the message indexes allow.
-    """
-    candidates = [item.index for item in reader.messages([topics.image], start_ns=start_ns, end_ns=end_ns)
-                  if item.lost is None]
-    chosen = spread_indices(candidates, count)
-    if not chosen:
-        return
-    wanted = set(chosen)
-    items = reader.messages_at(topics.image, chosen)
-    if items is None:
-        items = (item for item in reader.messages([topics.image], start_ns=start_ns, end_ns=end_ns)
-                 if item.index in wanted)
-    shape = None
-    for item in items:
-        if item.index not in wanted or item.lost is not None:
-            continue
-        try:
-            image = decode_image(item.decode(), item.schema, f"{reader.path}: topic {item.topic} message {item.index}")[0]
-        except (LogError, ValueError):
-            continue
-        if shape is None:
-            shape = image.shape
-        if image.shape != shape:
-            continue
-        yield item.index, item.log_time, image
 
 
 def _lens_table(reader: LogReader, topic: str) -> LensTable | None:

@@ -15,16 +15,11 @@ def position_frame(tracker: GroupTracker) -> str:
     return tracker.position_frame
 
 
-def read_ahead(config: GroupsConfig, stereo: bool) -> int:
-    """Frames read ahead: ``ground.read_ahead`` with one camera (stereo keeps its first frames' median)."""
-    return 0 if stereo else config.ground.read_ahead
-
-
 SPEC = TrackerSpec(
     "groups", GroupsConfig, GroupTracker, "trackreplay.replay.views.groups",
     needs="depth", position_frame=position_frame, observations=raw_observations,
     extra_rows=GroupsIntermediates.extra_rows, notice=attrgetter("notice"), smoothing=smoothing_model,
-    multi_object=True, read_ahead=read_ahead,
+    multi_object=True,
 )
 
 __all__ = ["SPEC", "GroupTracker", "GroupsConfig", "GroupsIntermediates"]

@@ -29,7 +29,6 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from trackreplay.trackers.base import READ_AHEAD_MAX
 from trackreplay.trackers.geometry.subtraction_stereo import SgbmConfig
 from trackreplay.trackers.lifecycle import LifecycleConfig
 
@@ -222,31 +221,6 @@ class GroundConfig:
     # 0.6 is better on PETS09, but fitted on that one clip (the only labelled one here, none to leave
     # out): the default stays OpenCV's until another clip confirms it (docs/groups_pets.md).
     shadow_threshold: float = 0.5
-    # Ours (issue 34): MOG2 does not learn the pixels inside the image box (the last frame's) of a
-    # confirmed group (measured on merge.frames frames) that has moved more than grouping.radius_m from
-    # where it started: it is shown its own background there, so a tracked person who stops stays
-    # foreground while the group lives instead of fading after background_ratio's time (7 s). A group
-    # that never moved is not held: a ghost (where someone stood while the background was learnt) would
-    # be kept for ever (Cucchiara et al.'s stopped object vs ghost). Causal. PETS09: person coverage
-    # 0.863 -> 0.885, least person 0.605 -> 0.632, people >= 80 % 14 -> 15, but wrong measured rows
-    # 3.1 % -> 6.3 % (over issue 34's 5 %), group MOTA 0.789 -> 0.755: off (docs/groups_pets.md)
-    hold_tracked: bool = False
-    # Reads ahead (ours, issue 34; not causal: an after-the-event reconstruction reads the recording it
-    # replays). read_ahead frames spread evenly over the replayed window (TrackerSpec.read_ahead; 0: off)
-    # are taught to MOG2 before the first frame, each with the pixels further than read_ahead_threshold
-    # grey levels (largest channel) from the frames' per-pixel median replaced by the median (the plaza
-    # behind anyone who stands anywhere for less than half of the window); tracking then starts on the
-    # first frame (no background.frames to wait for; the rate is the read frames' numbers over time).
-    # read_ahead_fresh: MOG2's learning rate 1/min(2n, history) counts n from the first replayed frame,
-    # not from the frames read ahead. read_ahead_hold: MOG2 never learns a pixel further than the
-    # threshold from that median (a person standing for less than half of the window stays foreground).
-    # PETS09 (docs/groups_pets.md, "Reading ahead"): with 40 frames, person coverage / wrong measured rows
-    # 0.554 / 13.4 % (a standing pair merged with passers-by into a group that took the plaza), fresh
-    # 0.841 / 3.7 %, hold 0.555 / 13.7 %, fresh + hold 0.818 / 5.3 %; without 0.863 / 3.1 %: off.
-    read_ahead: int = 0
-    read_ahead_threshold: float = 22.0  # the stereo background's threshold (background.threshold)
-    read_ahead_fresh: bool = False
-    read_ahead_hold: bool = False
     open_px: int = 3  # opening that drops isolated noisy pixels
     close_px: int = 5  # closing that joins a person's parts (legs, torso) into one region
     min_area_px: int = 60  # regions smaller than this are noise, not a person (before any depth)
@@ -280,8 +254,6 @@ class GroundConfig:
             raise ValueError("ground.background_ratio must be in (0, 1]")
         if self.foot not in ("box", "column") or not self.column_m >= 0:
             raise ValueError("ground.foot must be \"box\" or \"column\" and ground.column_m >= 0")
-        if not 0 <= self.read_ahead <= READ_AHEAD_MAX or self.read_ahead_threshold <= 0:
-            raise ValueError(f"ground.read_ahead must be 0 to {READ_AHEAD_MAX} frames and ground.read_ahead_threshold > 0")
         if self.open_px < 0 or self.close_px < 0 or self.min_area_px < 1 or self.min_points < 1:
             raise ValueError("ground.open_px and ground.close_px must be >= 0, ground.min_area_px and ground.min_points >= 1")
 

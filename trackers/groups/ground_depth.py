@@ -130,30 +130,6 @@ class GroundDepth:
         self.mog: cv2.BackgroundSubtractorMOG2 | None = None
         self.rig: StereoRig | None = None
         self.rays: np.ndarray | None = None  # (H, W, 3) world ray of each pixel (camera z = 1)
-        self.history = 500  # MOG2's history (frames), set by :meth:`start`
-        self.applied = 0  # frames MOG2 has been given (its own frame count, for its learning rate)
-        self.taught = 0  # frames read ahead that MOG2's learning rate does not count (ground.read_ahead_fresh)
-        self.median: np.ndarray | None = None  # the per-pixel median of the frames read ahead
-        self.ahead: list[np.ndarray] = []  # frames read ahead (ground.read_ahead), taught first by :meth:`start`
-
-    def away(self, image: np.ndarray) -> np.ndarray:
-        """(H, W) bool: the pixels of ``image`` further than ``read_ahead_threshold`` grey levels (largest
-        channel) from the median of the frames read ahead."""
-        assert self.median is not None
-        diff = np.abs(image.astype(np.int16) - self.median)
-        return (diff.max(axis=-1) if diff.ndim == 3 else diff) > self.cfg.read_ahead_threshold
-
-    def read_ahead(self, images: list[np.ndarray]) -> None:
-        """Frames spread over the replayed window (``ground.read_ahead``), as MOG2 is taught them first:
-        each pixel :meth:`away` from their per-pixel median is the median's (what stands anywhere for
-        less than half of the window is not the plaza)."""
-        self.ahead, self.median = [], None
-        if not images:
-            return
-        self.median = np.median(np.stack(images), axis=0).astype(images[0].dtype)
-        for image in images:  # one frame at a time: a frame-sized int16 difference, not N of them
-            away = self.away(image)
-            self.ahead.append(np.where(away[..., None] if image.ndim == 3 else away, self.median, image))
 
     def add(self, image: np.ndarray) -> None:
         """One of the first ``frames`` frames, kept until the log's rate is known (:meth:`start`)."""
@@ -163,15 +139,12 @@ class GroundDepth:
         """MOG2 with a history of ``history_s`` at ``fps`` (500 frames when the rate is unknown), taught
         the kept frames in order."""
         history = max(2, int(round(self.cfg.history_s * fps))) if np.isfinite(fps) and fps > 0 else 500
-        self.history = history
         self.mog = cv2.createBackgroundSubtractorMOG2(history, self.cfg.var_threshold, self.cfg.shadows)
         self.mog.setBackgroundRatio(self.cfg.background_ratio)
         self.mog.setShadowThreshold(self.cfg.shadow_threshold)
-        for image in self.ahead + self.buffer:
+        for image in self.buffer:
             self.mog.apply(image)
-        self.applied = len(self.ahead) + len(self.buffer)
-        self.taught = len(self.ahead) if self.cfg.read_ahead_fresh else 0
-        self.ahead, self.buffer = [], []
+        self.buffer = []
 
     @property
     def full(self) -> bool:
@@ -189,26 +162,10 @@ class GroundDepth:
             self.rays = cam @ self.rig.pose.R.T
         return self.rig
 
-    def foreground(self, image: np.ndarray, held: np.ndarray | None = None) -> np.ndarray:
-        """MOG2's foreground (shadows left out), opened then closed (bool). ``held`` (H, W bool, with
-        ``ground.hold_tracked``): pixels MOG2 does not learn this frame — it is shown its own background
-        there — so a tracked person who stops is not absorbed."""
+    def foreground(self, image: np.ndarray) -> np.ndarray:
+        """MOG2's foreground (shadows left out), opened then closed (bool)."""
         assert self.mog is not None
-        self.applied += 1
-        age = self.applied - self.taught
-        if held is None and not self.taught:
-            raw = self.mog.apply(image)
-        elif held is None:
-            raw = self.mog.apply(image, learningRate=1.0 / min(2 * age, self.history))
-        else:  # classify without learning, then learn at MOG2's own rate (1 / min(2 n, history)) off the held pixels
-            raw = self.mog.apply(image, learningRate=0.0)
-            if held.any():
-                shown = image.copy()
-                shown[held] = self.mog.getBackgroundImage()[held]
-            else:
-                shown = image
-            self.mog.apply(shown, learningRate=1.0 / min(2 * age, self.history))
-        mask = (raw == 255).astype(np.uint8)
+        mask = (self.mog.apply(image) == 255).astype(np.uint8)
         if self.cfg.open_px > 1:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((self.cfg.open_px, self.cfg.open_px), np.uint8))
         if self.cfg.close_px > 1:
@@ -235,30 +192,11 @@ class GroundDepth:
         half = np.floor(self.rig.f * self.cfg.column_m / np.where(keep & np.isfinite(dist), dist, np.inf) / 2.0)
         return np.clip(half, 0, width).astype(np.int64)
 
-    def held_pixels(self, shape: tuple[int, int], boxes: np.ndarray) -> np.ndarray | None:
-        """(H, W) bool: the pixels inside ``boxes`` (x0 y0 x1 y1 px; NaN rows skipped), or None when
-        ``ground.hold_tracked`` is off."""
-        if not self.cfg.hold_tracked:
-            return None
-        held = np.zeros(shape, bool)
-        boxes = np.asarray(boxes, np.float64).reshape(-1, 4)
-        boxes = boxes[np.isfinite(boxes).all(axis=1)]
-        lo = np.maximum(np.floor(boxes[:, :2]), 0).astype(np.int64)  # x0 y0
-        hi = np.minimum(np.ceil(boxes[:, 2:]), [shape[1], shape[0]]).astype(np.int64)  # x1 y1
-        for (x0, y0), (x1, y1) in zip(lo.tolist(), hi.tolist()):
-            held[y0:y1, x0:x1] = True
-        return held
-
-    def observe(self, image: np.ndarray, plane: GroundPlane, tracked: np.ndarray | None = None) -> DepthView:
-        """This frame's foreground and the virtual disparity of each region large enough to be a person;
-        ``tracked`` (K, 4): the image boxes of the confirmed groups on the last frame (``ground.hold_tracked``)."""
+    def observe(self, image: np.ndarray, plane: GroundPlane) -> DepthView:
+        """This frame's foreground and the virtual disparity of each region large enough to be a person."""
         rig = self.camera(plane, image.shape[:2])
         assert self.rays is not None
-        held = self.held_pixels(image.shape[:2], np.zeros((0, 4)) if tracked is None else tracked)
-        if self.cfg.read_ahead_hold and self.median is not None:  # MOG2 never learns what is not the window's median
-            away = self.away(image)
-            held = away if held is None else held | away
-        fg = self.foreground(image, held)
+        fg = self.foreground(image)
         n, labels, stats, _ = cv2.connectedComponentsWithStats(fg.astype(np.uint8), connectivity=8)
         big = np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= self.cfg.min_area_px) + 1
         big = big[self.placeable(plane, region_feet(stats[big]))]

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from trackreplay.trackers.appearance.color import to_grey
-from trackreplay.trackers.base import Ahead, TrackerBase, TrackState
+from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.filters.gaussians import merge_gaussians
 from trackreplay.trackers.filters.gating import mahalanobis_sq
 from trackreplay.trackers.frame import Frame
@@ -72,8 +72,6 @@ class Group:
     merged_from: str = ""
     hits: int = 0  # frames it was measured on (confirmed from merge.frames on: grouping.near_gate)
     box: np.ndarray = field(default_factory=lambda: np.full(4, np.nan))
-    origin: np.ndarray = field(default_factory=lambda: np.full(3, np.nan))  # its position when it started
-    moved: bool = False  # it has been more than grouping.radius_m from its origin (ground.hold_tracked)
 
     @property
     def position(self) -> np.ndarray:
@@ -108,7 +106,6 @@ class GroupTracker(TrackerBase):
         self.rng = rng  # handed in by the engine; nothing here is random
         self.stereo = StereoDepth(config)
         self.ground = GroundDepth(config.ground, config.background.frames)
-        self.ahead_fps = float("nan")  # the log's rate from the frames read ahead (ground.read_ahead)
         self.source = ""  # "stereo" or "ground": the depth source, chosen on the first frame with one
         self.learnt = False
         self.klt = KltFeatures(config.klt, config.stereo.disparity_window)
@@ -119,23 +116,6 @@ class GroupTracker(TrackerBase):
         self.held_out = np.zeros(0, bool)  # this frame's points that may not start a group (grouping.near_gate)
         self.prev_t: int | None = None
         self.intermediates = GroupsIntermediates.idle("idle", (1, 1))
-
-    def read_ahead(self, frames: Ahead) -> None:
-        """Frames spread over the replayed window (``ground.read_ahead``; one camera only): the ground
-        source's MOG2 is taught their background before the first frame (:meth:`GroundDepth.read_ahead`),
-        so it tracks from the first frame; the log's rate is their frame numbers' slope in time."""
-        first = None
-        images, index, times = [], [], []
-        for i, t, image in frames:
-            first = image.shape if first is None else first
-            if image.shape == first:
-                images.append(image)
-                index.append(i)
-                times.append(t)
-        self.ground.read_ahead(images)
-        di, dt = np.diff(np.asarray(index, np.int64)), np.diff(np.asarray(times, np.int64))
-        ok = (di > 0) & (dt > 0)
-        self.ahead_fps = float(1e9 / np.median(dt[ok] / di[ok])) if ok.any() else float("nan")
 
     # --- the pipeline -------------------------------------------------------------------------
 
@@ -151,10 +131,6 @@ class GroupTracker(TrackerBase):
         self.pose = rig.pose
         dt_s = (frame.t_ns - self.prev_t) / 1e9 if self.prev_t is not None else float("nan")
         self.prev_t = frame.t_ns
-        if not self.learnt and self.source == "ground" and self.ground.ahead:  # read ahead: no frames to wait for
-            self._set_rate(self.ahead_fps)
-            self.ground.start(self.fps)
-            self.learnt = True
         if not self.learnt:  # §2: learn the background (of both views)
             window = self.config.klt.window  # (the window before the rate is known, on the last such frame too)
             self._learn(frame)
@@ -223,32 +199,20 @@ class GroupTracker(TrackerBase):
             view = self.stereo.observe(frame.image, frame.right, self.config)
         else:
             assert frame.ground_plane is not None
-            view = self.ground.observe(frame.image, frame.ground_plane, self._confirmed_boxes())
+            view = self.ground.observe(frame.image, frame.ground_plane)
         self.klt.step(to_grey(frame.image), view.fg_left, view.disparity)
         return view
-
-    def _confirmed_boxes(self) -> np.ndarray:
-        """(K, 4) the image boxes, as of the last frame, of the groups measured on ``merge.frames`` frames
-        that have moved (``ground.hold_tracked``): people who walked and stopped, not ghosts — a region
-        left where someone stood when the background was learnt never moves (Cucchiara et al.'s stopped
-        moving object vs ghost)."""
-        radius = self.config.grouping.radius_m
-        for g in self.groups:
-            g.moved = g.moved or bool(np.linalg.norm(g.position - g.origin) > radius)
-        boxes = [g.box for g in self.groups if g.hits >= self.config.merge.frames and g.moved]
-        return np.array(boxes, np.float64).reshape(-1, 4)
 
     def _ekf_config(self) -> EkfConfig:
         """The EKF's noises; with the ground's depth, σ_d is the foot row's jitter (``ground.sigma_foot_px``)."""
         ekf = self.config.ekf
         return ekf if self.source == "stereo" else replace(ekf, sigma_d=self.config.ground.sigma_foot_px)
 
-    def _set_rate(self, fps: float | None = None) -> None:
-        """The log's frame rate (``fps``, else from the background frames' times); the per-frame
-        parameters rescaled to it."""
+    def _set_rate(self) -> None:
+        """The log's frame rate from the background frames' times; the per-frame parameters rescaled to it."""
         steps = np.diff(np.asarray(self.learn_t, np.int64))
         steps = steps[steps > 0]
-        self.fps = fps if fps is not None else float(1e9 / np.median(steps)) if len(steps) else float("nan")
+        self.fps = float(1e9 / np.median(steps)) if len(steps) else float("nan")
         self.config = self.user_config.at_rate(self.fps)
         self.klt = KltFeatures(self.config.klt, self.config.stereo.disparity_window)
 
@@ -363,7 +327,7 @@ class GroupTracker(TrackerBase):
             P0[np.ix_(POS, POS)] = extent / len(idx) + np.eye(3) * 0.05**2
             P0[np.ix_(VEL, VEL)] = np.eye(3) * ecfg.init_velocity_sigma**2
             g = Group(self.next_id, GroupEkf(self._ekf_config(), rig, state_from(pos, vel), P0), extent, _cov(points.velocity[idx]), len(idx),
-                      TrackLife(self.config.tracks.lifecycle), origin=pos.copy())
+                      TrackLife(self.config.tracks.lifecycle))
             self.next_id += 1
             labels[idx] = len(self.groups)
             self.groups.append(g)
@@ -437,8 +401,7 @@ class GroupTracker(TrackerBase):
         g = Group(gid, parts[big].ekf, extent, vspread, int(sum(p.members for p in parts)),
                   TrackLife.merged(p.life for p in parts),
                   status="measured" if any(p.status == "measured" for p in parts) else "predicted",
-                  merged_from=",".join(str(p.gid) for p in parts), hits=max(p.hits for p in parts),
-                  origin=parts[big].origin, moved=any(p.moved for p in parts))
+                  merged_from=",".join(str(p.gid) for p in parts), hits=max(p.hits for p in parts))
         g.ekf.set(x, P)
         if not absorbed:
             self.next_id += 1

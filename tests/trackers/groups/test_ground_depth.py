@@ -115,23 +115,3 @@ def test_two_people_side_by_side_in_one_region(foot) -> None:
         depths[name] = float(np.median(pts[:, 1]))
     assert depths["near"] == pytest.approx(near[1], abs=0.15)
     assert depths["far"] == pytest.approx(far[1] if foot == "column" else near[1], abs=0.15)
-
-
-@pytest.mark.parametrize("hold", [True, False])
-def test_a_held_person_who_stops_is_not_learnt_as_background(hold) -> None:
-    """A person who stands still in front of a learnt background fades into MOG2's background (history
-    20 frames); with ground.hold_tracked and their box handed in as a tracked group's, they stay foreground
-    and the background outside the box keeps learning (a change there fades as before)."""
-    background = np.full((H_IMG, W, 3), 90, np.uint8)
-    depth = GroundDepth(GroundConfig(open_px=0, close_px=0, min_area_px=10, history_s=2.0, hold_tracked=hold), frames=10)
-    for _ in range(10):
-        depth.add(background)
-    depth.start(10.0)
-    box = np.array([[60.0, 50.0, 80.0, 100.0]])  # x0 y0 x1 y1: the person, standing still
-    scene = background.copy()
-    scene[50:100, 60:80] = 220
-    scene[10:30, 10:30] = 160  # a change of the scenery, outside every box
-    for _ in range(60):  # 3 histories
-        fg = depth.foreground(scene, depth.held_pixels((H_IMG, W), box))
-    assert fg[50:100, 60:80].all() == hold
-    assert not fg[10:30, 10:30].any()
