@@ -53,6 +53,14 @@ def _points(xyz: np.ndarray, rig: StereoRig = RIG) -> ObservationPoints:
     return ObservationPoints(np.arange(n), rig.to_uvd(xyz), xyz, np.zeros((n, 3)), np.zeros((n, 2, 2)))
 
 
+def _one_frame(tracker: GroupTracker, points: ObservationPoints) -> tuple[np.ndarray, list[str]]:
+    """The group's predict, association, deletion and group starts on ``points``: the labels and events."""
+    tracker.groups[0].ekf.predict()
+    labels = tracker._associate_and_update(points, RIG)
+    labels, _, events = tracker._delete(labels)
+    return tracker._start_groups(points, labels, RIG, events), events
+
+
 @pytest.mark.parametrize("mode", ["join", "leave", "start"])
 def test_a_splinter_beside_a_confirmed_group_joins_it_is_left_or_starts_one(mode):
     """12 points on an arc 1.25 m around a group (each outside its eq. 8 gate, 1.09 m, but the set's
@@ -116,10 +124,7 @@ def test_a_set_seen_through_a_confirmed_group_s_box_at_another_depth_waits(insid
     body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
     behind = np.array([0.0, -0.3, 8.0]) + rng.normal(0.0, 0.1, (12, 3))
     points = _points(np.concatenate([body, behind]))
-    tracker.groups[0].ekf.predict()
-    labels = tracker._associate_and_update(points, RIG)
-    labels, _, events = tracker._delete(labels)
-    labels = tracker._start_groups(points, labels, RIG, events)
+    labels, events = _one_frame(tracker, points)
     assert (labels[:12] == 0).all()
     if inside_box:
         assert (labels[12:] == -1).all() and not any("started" in e for e in events)
@@ -184,10 +189,7 @@ def test_a_set_at_another_depth_overlapping_a_confirmed_group_s_box_waits(box_ov
     tracker.groups = [g]
     body = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
     points = _points(np.concatenate([body, behind]))
-    tracker.groups[0].ekf.predict()
-    labels = tracker._associate_and_update(points, RIG)
-    labels, _, events = tracker._delete(labels)
-    labels = tracker._start_groups(points, labels, RIG, events)
+    labels, events = _one_frame(tracker, points)
     assert (labels[:12] == 0).all()
     if box_overlap:
         assert (labels[12:] == -1).all() and not any("started" in e for e in events)
