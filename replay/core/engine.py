@@ -96,7 +96,9 @@ class ReplayRequest:
     spill_frames: int = SPILL_FRAMES  # the same for per-frame digests (frame_digests), in frames
 
     def __post_init__(self) -> None:
-        """The checks the CLI's argument parser makes, for callers of the Python API too."""
+        """The checks the CLI's argument parser makes, for callers of the Python API too; an alias of a
+        tracker (``ball``) becomes its name."""
+        object.__setattr__(self, "tracker", registry.canonical(self.tracker))
         check_seed(self.seed)
         for name in ("spill_rows", "spill_frames"):
             value = getattr(self, name)

@@ -229,9 +229,9 @@ def _truth_options(table: dict, where: str) -> dict[str, Any]:
         _check(_int(table["object"]), where, f"object must be the truth's integer id, not {table['object']!r}")
         out["object"] = table["object"]
     trackers = table.get("trackers", DEFAULT_TRACKERS[target])
-    _check(isinstance(trackers, list | tuple) and trackers and all(t in registry.NAMES for t in trackers), where,
-           f"trackers must be a list of {', '.join(registry.NAMES)}, not {trackers!r}")
-    out["trackers"] = tuple(dict.fromkeys(trackers))
+    _check(isinstance(trackers, list | tuple) and trackers and all(isinstance(t, str) and registry.known(t) for t in trackers),
+           where, f"trackers must be a list of {', '.join(registry.NAMES)} ({registry.aliases_text()}), not {trackers!r}")
+    out["trackers"] = tuple(dict.fromkeys(registry.canonical(t) for t in trackers))
     for key, kind in (("label", str), ("notes", str), ("baseline", bool)):
         if key in table:
             _check(isinstance(table[key], kind), where, f"{key} must be a {kind.__name__}, not {table[key]!r}")

@@ -30,7 +30,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                    help="with --from-truth: the truth object to mark (repeatable; default every visible one)")
     p.add_argument("--label", default="target", help="label of the marks (e.g. ball; default target)")
     p.add_argument("--image-topic", help="image topic the frames count on (default: as replay chooses it)")
-    p.add_argument("--tracker", choices=registry.NAMES,
+    p.add_argument("--tracker", type=registry.canonical, choices=registry.NAMES,
                    help="refuse labels this tracker would ignore (flow reads only 'target'; golf any)")
     dest = p.add_mutually_exclusive_group(required=True)
     dest.add_argument("--out", type=Path, help="write the annotated log here")

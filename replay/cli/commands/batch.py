@@ -30,7 +30,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "Exit 0 when every task succeeded, 1 when some failed or lost frames to damage, 130 on Ctrl-C (the finished "
                     "tasks and a summary marking the rest not_run are kept). See docs/batch.md for clusters.")
     p.add_argument("logs", nargs="+", type=Path, metavar="LOG")
-    p.add_argument("--tracker", default="flow", choices=registry.NAMES, help="tracker to run (default flow)")
+    p.add_argument("--tracker", default="flow", type=registry.canonical, choices=registry.NAMES, help="tracker to run (default flow)")
     p.add_argument("--seeds", default="0", help="seeds: N, N-M or a comma list (default 0)")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=V1[,V2…]",
                    help="config values to sweep, e.g. golf.particles.n=500,1000 (repeat for a cross product)")

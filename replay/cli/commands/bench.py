@@ -15,7 +15,7 @@ from trackreplay.schemas.errors import OutputError
 def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="time a replay against read+decode of the same log, with and without --rrd")
     p.add_argument("log", type=Path)
-    p.add_argument("--tracker", default="flow", choices=registry.NAMES)
+    p.add_argument("--tracker", default="flow", type=registry.canonical, choices=registry.NAMES)
     p.add_argument("--config", type=Path)
     p.add_argument("--repeats", type=positive_int, default=3, help="timed runs of each kind (default 3)")
     p.add_argument("--json", type=Path, help="also write the timings as JSON")

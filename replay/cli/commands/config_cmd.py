@@ -14,7 +14,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     p = sub.add_parser("config", help="print a tracker's default config as commented TOML",
                        description="Print TRACKER's config as TOML with each field's meaning: the defaults, or "
                                    "--config FILE resolved over them. Save it, edit it, pass it to replay --config.")
-    p.add_argument("tracker", choices=registry.NAMES)
+    p.add_argument("tracker", type=registry.canonical, choices=registry.NAMES)
     p.add_argument("--config", type=Path, help="a TOML file to resolve over the defaults")
     p.set_defaults(func=run)
     return p

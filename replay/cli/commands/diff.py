@@ -23,7 +23,7 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
                     "(--a seed=1, --b golf.particles.n=500, --b config=other.toml).")
     p.add_argument("a", help="summary .json or log .mcap")
     p.add_argument("b", help="summary .json or log .mcap")
-    p.add_argument("--tracker", choices=registry.NAMES, help="tracker for .mcap operands (default flow)")
+    p.add_argument("--tracker", type=registry.canonical, choices=registry.NAMES, help="tracker for .mcap operands (default flow)")
     p.add_argument("--seed", type=seed_int, help="seed for .mcap operands (default 0)")
     p.add_argument("--config", type=Path, help="tracker config TOML for .mcap operands")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",

@@ -64,7 +64,7 @@ def scale_range(text: str) -> tuple[float, float]:
 def parse_trackers(text: str | None) -> tuple[str, ...] | None:
     if text is None:
         return None
-    names = tuple(dict.fromkeys(t.strip() for t in text.split(",") if t.strip()))
+    names = tuple(dict.fromkeys(registry.canonical(t.strip()) for t in text.split(",") if t.strip()))
     unknown = [n for n in names if n not in registry.NAMES]
     if not names or unknown:
         raise TrackreplayError(f"--trackers {text!r}: give tracker names from {', '.join(registry.NAMES)}, comma-separated")

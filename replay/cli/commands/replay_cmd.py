@@ -39,8 +39,9 @@ class DigestMismatch(TrackreplayError):
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--tracker", choices=registry.NAMES, help="tracker to run (default: the one the log's marks are "
-                   "labelled for, e.g. flow for `target` marks; else it must be given)")
+    p.add_argument("--tracker", type=registry.canonical, choices=registry.NAMES, help="tracker to run (default: the one the log's marks are "
+                   "labelled for, e.g. flow for `target` marks; else it must be given; `ball` is another name for golf, "
+                   "the small-ball tracker)")
     p.add_argument("--config", type=Path, help="tracker config TOML (keys of the tracker's config dataclass)")
     p.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
                    help="a config value, over --config's (e.g. golf.particles.n=500); repeatable")
