@@ -51,6 +51,8 @@ def blueprint(name: str) -> rrb.Blueprint:
             ),
             rrb.Vertical(
                 rrb.TimeSeriesView(name="gating targets", origin=f"{root}/blobs/targets"),
+                rrb.TimeSeriesView(name="confidence: validation / reported", origin=f"{root}/validation",
+                                   contents=[f"{root}/validation/confidence", f"{root}/validation/reported"]),
                 rrb.TimeSeriesView(name="particle spread (px)", origin=f"{root}/search/spread"),
                 rrb.TimeSeriesView(name="EKF height / time to landing", origin=f"{root}/ekf",
                                    contents=[f"{root}/ekf/state/Z", f"{root}/ekf/sigma/Z", f"{root}/ekf/nis",
@@ -84,6 +86,9 @@ def log(rec: FrameLogger, name: str, frame: Frame, inter, states: Sequence[Track
     check = inter.validation  # issue 10: the confidence and why a frame is (not) measured
     parts.scalar(rec, f"{root}/validation/confidence", check.confidence)
     parts.scalar(rec, f"{root}/validation/gate_px", check.gate_px)
+    for state in states:  # the row's reported confidence (P(within 10 px) when calibrated), beside the validation's
+        if state.status != "lost" and state.confidence is not None:
+            parts.scalar(rec, f"{root}/validation/reported", state.confidence)
     if check.verdict not in ("", "measured", "confirmed"):
         parts.draw(rec, f"{root}/events", rr.TextLog,
                    text=[f"frame {frame.index}: not measured: {check.verdict} (confidence {check.confidence:.2f}, "

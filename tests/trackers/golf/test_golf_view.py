@@ -29,3 +29,26 @@ def test_view_logs_a_replay(tmp_path, image_sequence, ptz_sequence, monkeypatch)
         assert path.stat().st_size > 10_000
         if name == "ptz":
             assert "ekf_landing" in seen
+
+
+def test_view_plots_the_reported_confidence_beside_the_validation_s(image_sequence, monkeypatch):
+    """The confidence a row reports (P(within 10 px)) is a time series next to the validation's own."""
+    _, frames = image_sequence(n=12)
+    plotted: dict[str, list[float]] = {}
+    monkeypatch.setattr(view.parts, "scalar", lambda rec, path, value: plotted.setdefault(path, []).append(float(value)))
+    monkeypatch.setattr(view.parts, "draw", lambda *a, **k: None)
+    tracker = GolfTracker(GolfConfig(), np.random.default_rng(0))
+    reported = []
+    for f in frames:
+        states = tracker.step(f)
+        view.log(_NoLogger(), "golf", f, tracker.intermediates, states)
+        reported += [s.confidence for s in states if s.status != "lost"]
+    assert reported and plotted["trackers/golf/validation/reported"] == reported
+    assert len(plotted["trackers/golf/validation/confidence"]) >= len(reported)
+
+
+class _NoLogger:
+    """Takes whatever the view logs besides scalars (boxes, images, particles) and drops it."""
+
+    def __getattr__(self, name):
+        return lambda *a, **k: None
