@@ -16,6 +16,9 @@ spend within 1.5 m of another person (a group the truth may or may not call one)
 their truth box's median height and foot row on the missed frames, and the missed frames' span.
 ``--foreground ID ...`` adds, per such person and 40 frames, the share of their truth box that the
 tracker's foreground covers (from a second replay, stepped) and the share of their frames under 10 %.
+``--causes`` adds, from a second replay (stepped), every person's missed frames split by the first
+cause that applies (:data:`CAUSES`); ``--frames ID ...`` with it, one row per missed frame of those
+people (what the frame showed: :func:`missed_causes`).
 """
 
 from __future__ import annotations
@@ -113,6 +116,84 @@ def foreground_in_boxes(log: Path, cfg: dict, gt: pl.DataFrame, ids: list[int], 
     return out
 
 
+CAUSES = ("learning", "no foreground", "placed too far", "placed too near", "coasting", "points unassigned", "other")
+
+
+def missed_causes(log: Path, cfg: dict, gt: pl.DataFrame, radius_m: float = 1.5,
+                  detail: tuple[int, ...] = ()) -> tuple[pl.DataFrame, list[dict]]:
+    """Per person and cause (:data:`CAUSES`), their frames with no ``measured`` row within ``radius_m``, each
+    given the first cause that applies: the tracker was still learning its background; under 10 % of the
+    truth box is foreground; the median ground point of the box's foreground pixels is over 1 m farther
+    from the camera than the truth, or over 1 m nearer; a ``predicted`` row (a group coasting) is within
+    ``radius_m``; observation points in the box were left unassigned; else other. Also ``frames``: theirs.
+    Second, for the people in ``detail``, one row per missed frame: the cause, the share of the box in the
+    foreground, the foreground's rows in the box's columns and the truth box's, the placement's offset
+    from the camera (m, + farther), the points in the box and their group ids (-1 none), and the nearest
+    measured and any row (group id, metres, status)."""
+    truth = {f: g for (f,), g in gt.filter(pl.col("X").is_not_null()).group_by(["frame"])}
+    counts: dict[tuple[int, str], int] = {}
+    frames: dict[int, int] = {}
+    rows_out: list[dict] = []
+    for step in iter_steps(ReplayRequest(log=log, tracker="groups", seed=0, config=cfg or None)):
+        people = truth.get(step.frame.index)
+        if people is None:
+            continue
+        it = step.intermediates
+        rows, camera = np.zeros((0, 2)), None
+        if it.mode == "tracking":
+            g = it.groups
+            rows = it.world.to_world(g.x[:, [0, 2, 4]])[:, :2] if len(g.ids) else rows
+            camera = it.rig.pose.t[:2]
+        for pid, x, y, w, h, X, Y in people.select("id", "x", "y", "w", "h", "X", "Y").iter_rows():
+            frames[pid] = frames.get(pid, 0) + 1
+            xy = np.array([X, Y])
+            d = np.linalg.norm(rows - xy, axis=1)
+            status = np.array(it.groups.status if it.mode == "tracking" else (), dtype=object)
+            if ((status == "measured") & (d <= radius_m)).any():
+                continue
+            cause = "learning" if it.mode != "tracking" else "other"
+            box, inside, v, off = np.zeros((0, 0), bool), np.zeros(0, bool), np.zeros(0), 0.0
+            x0, y0, x1, y1 = int(max(x - w / 2, 0)), int(max(y - h / 2, 0)), int(x + w / 2), int(y + h / 2)
+            if it.mode == "tracking":
+                box = it.fg_left[y0:y1, x0:x1]
+                v, u = np.nonzero(box & np.isfinite(it.disparity[y0:y1, x0:x1]))
+                off = 0.0
+                if len(v):
+                    uvd = np.stack([u + x0, v + y0, it.disparity[v + y0, u + x0]], axis=1).astype(np.float64)
+                    placed = np.median(it.rig.pose.to_world(it.rig.to_points(uvd))[:, :2], axis=0)
+                    off = float(np.linalg.norm(placed - camera) - np.linalg.norm(xy - camera))
+                uv = it.points.uvd[:, :2]
+                inside = (uv[:, 0] >= x0) & (uv[:, 0] < x1) & (uv[:, 1] >= y0) & (uv[:, 1] < y1)
+                if not box.size or box.mean() < 0.1:
+                    cause = "no foreground"
+                elif off > 1.0:
+                    cause = "placed too far"
+                elif off < -1.0:
+                    cause = "placed too near"
+                elif ((status == "predicted") & (d <= radius_m)).any():
+                    cause = "coasting"
+                elif (it.labels[inside] < 0).any():
+                    cause = "points unassigned"
+            counts[(pid, cause)] = counts.get((pid, cause), 0) + 1
+            if pid in detail and it.mode == "tracking":
+                ids = it.groups.ids
+                fg_rows = np.flatnonzero(it.fg_left[:, x0:x1].any(axis=1))
+                fg_rows = fg_rows[(fg_rows >= y0 - 0.5 * h) & (fg_rows <= y1 + 0.5 * h)]
+                meas = np.flatnonzero(status == "measured")
+                m = meas[np.argmin(d[meas])] if len(meas) else None
+                a = int(np.argmin(d)) if len(d) else None
+                rows_out.append({
+                    "id": pid, "frame": step.frame.index, "cause": cause, "foreground": round(float(box.mean()), 2),
+                    "fg_rows": f"{fg_rows.min()}-{fg_rows.max()}" if len(fg_rows) else "-", "box_rows": f"{y0}-{y1}",
+                    "placed_m": round(off, 2) if len(v) else None, "points": int(inside.sum()),
+                    "labels": sorted(set(it.labels[inside].tolist())),
+                    "measured": f"{ids[m]} at {d[m]:.2f} m" if m is not None else "-",
+                    "nearest": f"{ids[a]} at {d[a]:.2f} m, {status[a]}" if a is not None else "-"})
+    out = pl.DataFrame([{"id": pid, "frames": n, **{c: counts.get((pid, c), 0) for c in CAUSES}}
+                        for pid, n in sorted(frames.items())])
+    return out.with_columns(missed=pl.sum_horizontal(*CAUSES)), rows_out
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("log", type=Path)
@@ -120,6 +201,9 @@ def main() -> int:
     ap.add_argument("--people", action="store_true")
     ap.add_argument("--foreground", type=int, nargs="+", default=None, metavar="ID",
                     help="per person ID and 40 frames, the share of their truth box in the foreground (a second replay)")
+    ap.add_argument("--causes", action="store_true", help="every person's missed frames by cause (a second replay)")
+    ap.add_argument("--frames", type=int, nargs="+", default=(), metavar="ID",
+                    help="with --causes: each missed frame of these people, one row each")
     ap.add_argument("--save", type=Path, default=None, help="write each replay's trajectory here (config_<k>.parquet)")
     args = ap.parse_args()
     reader = LogReader(args.log)
@@ -144,6 +228,17 @@ def main() -> int:
         if args.foreground:
             for r in foreground_in_boxes(args.log, cfg, gt, args.foreground):
                 print("    foreground", r)
+        if args.causes:
+            table, detail = missed_causes(args.log, cfg, gt, detail=tuple(args.frames))
+            print("    | id | frames | missed | covered | " + " | ".join(CAUSES) + " |\n    |" + "---|" * (len(CAUSES) + 4))
+            for r in table.iter_rows(named=True):
+                print(f"    | {r['id']} | {r['frames']} | {r['missed']} | {1 - r['missed'] / r['frames']:.3f} | "
+                      + " | ".join(str(r[c]) for c in CAUSES) + " |")
+            total = table.select(*CAUSES, "missed").sum().row(0, named=True)
+            print("    | all | " + str(table["frames"].sum()) + f" | {total['missed']} | | "
+                  + " | ".join(str(total[c]) for c in CAUSES) + " |")
+            for r in detail:
+                print("    frame", r)
     return 0
 
 

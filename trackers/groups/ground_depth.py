@@ -17,9 +17,14 @@ the image centre unless the log gives it, or the log's ``focal_px``), then posed
 ``solvePnP`` on a grid of image points and their ground points; its pose maps the camera frame to
 the ground frame (X Y on the ground, Z up), as a stereo rig's ``/stereo/pose`` does.
 
-What one camera cannot know (docs/groups_pets.md): heights (everyone stands on the ground), and
-depth along a column — two people one behind the other that the foreground joins get the nearer
-one's foot.
+Each column is then checked against a standing person (``ground.stature_check``,
+:meth:`GroundDepth.standing_check`): a column too short for one whose feet the picture shows missing
+(MOG2's shadow where the legs would be, or the picture's bottom edge), and the part of a column too
+tall for one standing at its foot (someone behind), stand where their top, a head ``stature_m`` up, puts them.
+
+What one camera cannot know (docs/groups_pets.md): heights (everyone stands on the ground, of a mean
+stature where the head places them), and depth along a column — two people one behind the other that
+the foreground joins get the nearer one's foot, but for what shows above the nearer one's head.
 """
 
 from __future__ import annotations
@@ -92,18 +97,48 @@ def region_feet(stats: np.ndarray) -> np.ndarray:
     return np.stack([x + (w - 1.0) / 2.0, y + h - 0.5], axis=1)
 
 
-def column_feet(lab: np.ndarray, u: np.ndarray, v: np.ndarray, half: np.ndarray, width: int) -> np.ndarray:
-    """Per foreground pixel (region ``lab``, column ``u``, row ``v``), the foot row of its column: the
-    region's lowest pixel within ``half[lab]`` columns of it (the bottom edge of that row), so people
-    side by side in one region stand at their own distances and a gap between legs does not lift a foot."""
+def _column_reach(lab: np.ndarray, u: np.ndarray, v: np.ndarray, half: np.ndarray, width: int) -> np.ndarray:
+    """Per foreground pixel, the largest ``v`` of its region within ``half[lab]`` columns of it."""
     r = int(half.max()) if len(half) else 0
-    bottom = np.full((len(half), width + 2 * r), -1, np.int64)
+    lowest = np.iinfo(np.int64).min
+    bottom = np.full((len(half), width + 2 * r), lowest, np.int64)
     np.maximum.at(bottom, (lab, u + r), v)
     wide = bottom[:, r:r + width].copy()
     for shift in range(-r, r + 1):
         reach = (abs(shift) <= half)[:, None]
-        np.maximum(wide, np.where(reach, bottom[:, r + shift:r + shift + width], -1), out=wide)
-    return wide[lab, u] + 0.5
+        np.maximum(wide, np.where(reach, bottom[:, r + shift:r + shift + width], lowest), out=wide)
+    return wide[lab, u]
+
+
+def column_feet(lab: np.ndarray, u: np.ndarray, v: np.ndarray, half: np.ndarray, width: int) -> np.ndarray:
+    """Per foreground pixel (region ``lab``, column ``u``, row ``v``), the foot row of its column: the
+    region's lowest pixel within ``half[lab]`` columns of it (the bottom edge of that row), so people
+    side by side in one region stand at their own distances and a gap between legs does not lift a foot."""
+    return _column_reach(lab, u, v, half, width) + 0.5
+
+
+def column_tops(lab: np.ndarray, u: np.ndarray, v: np.ndarray, half: np.ndarray, width: int) -> np.ndarray:
+    """Per foreground pixel, the top row of its column as :func:`column_feet` finds the foot: the region's
+    highest pixel within ``half[lab]`` columns of it (the top edge of that row)."""
+    return -_column_reach(lab, u, -v, half, width) - 0.5
+
+
+def heights_on(rig: StereoRig, rays: np.ndarray, ground: np.ndarray) -> np.ndarray:
+    """Height above the ground (m) where each pixel's world ray (``rays``, N × 3, camera z = 1) meets the
+    vertical plane through its ground point ``ground`` (N × 2) facing the camera (NaN: it does not)."""
+    assert rig.pose is not None
+    return rig.pose.t[2] + standing_depth(rig, rays, ground) * rays[:, 2]
+
+
+def head_ground(rig: StereoRig, rays: np.ndarray, stature_m: float) -> np.ndarray:
+    """(N, 2) where a person ``stature_m`` tall stands whose head is on each world ray (N × 3): the ray
+    meets the horizontal plane at that height (NaN where it does not, ahead of the camera)."""
+    assert rig.pose is not None
+    C = rig.pose.t
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = (stature_m - C[2]) / rays[:, 2]
+    s = np.where((rays[:, 2] < 0) & (s > 0), s, np.nan)
+    return C[:2] + s[:, None] * rays[:, :2]
 
 
 def standing_depth(rig: StereoRig, rays: np.ndarray, ground: np.ndarray) -> np.ndarray:
@@ -130,6 +165,7 @@ class GroundDepth:
         self.mog: cv2.BackgroundSubtractorMOG2 | None = None
         self.rig: StereoRig | None = None
         self.rays: np.ndarray | None = None  # (H, W, 3) world ray of each pixel (camera z = 1)
+        self.shadow: np.ndarray | None = None  # (H, W) bool: this frame's pixels MOG2 called shadow
 
     def add(self, image: np.ndarray) -> None:
         """One of the first ``frames`` frames, kept until the log's rate is known (:meth:`start`)."""
@@ -163,9 +199,12 @@ class GroundDepth:
         return self.rig
 
     def foreground(self, image: np.ndarray) -> np.ndarray:
-        """MOG2's foreground (shadows left out), opened then closed (bool)."""
+        """MOG2's foreground (shadows left out), opened then closed (bool); the pixels MOG2 called shadow
+        are kept in ``self.shadow``."""
         assert self.mog is not None
-        mask = (self.mog.apply(image) == 255).astype(np.uint8)
+        raw = self.mog.apply(image)
+        self.shadow = raw == 127
+        mask = (raw == 255).astype(np.uint8)
         if self.cfg.open_px > 1:
             mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((self.cfg.open_px, self.cfg.open_px), np.uint8))
         if self.cfg.close_px > 1:
@@ -192,6 +231,48 @@ class GroundDepth:
         half = np.floor(self.rig.f * self.cfg.column_m / np.where(keep & np.isfinite(dist), dist, np.inf) / 2.0)
         return np.clip(half, 0, width).astype(np.int64)
 
+    def standing_check(self, rig: StereoRig, plane: GroundPlane, lab: np.ndarray, u: np.ndarray, v: np.ndarray,
+                       half: np.ndarray, width: int, feet: np.ndarray) -> np.ndarray:
+        """The column feet ``feet`` (N × 2, ground) checked against a standing person (``ground.stature_check``): a
+        column whose top stands lower than ``min_stature_m`` over its foot has no feet in the foreground
+        (cut by the shadow test, hidden, or below the picture), so its pixels stand where a person
+        ``stature_m`` tall has their head at that top; the pixels of a column higher than
+        ``max_stature_m`` over its foot are someone behind the person whose foot it is, placed the same way."""
+        assert self.rays is not None and rig.pose is not None
+        cfg = self.cfg
+        if not rig.pose.t[2] > cfg.stature_m:  # the head rule needs a camera above the heads
+            return feet
+        top = column_tops(lab, u, v, 2 * half, width)  # the top edge of the highest pixel within column_m
+        row = (top + 0.5).astype(np.int64)
+        top_ray = self.rays[row, u] - 0.5 * rig.pose.R[:, 1] / rig.f  # (a ray is linear in the row)
+        top_h = heights_on(rig, top_ray, feet)
+        own_h = heights_on(rig, self.rays[v, u], feet)
+        head = head_ground(rig, top_ray, cfg.stature_m)
+        short = (top_h < cfg.min_stature_m) & (row > 0) & np.isfinite(head).all(axis=1)  # (top row: the head may be cut)
+        if short.any():  # which end is missing: the feet only where the picture shows why
+            short &= self._feet_missing(lab, u, v, half, width, plane.to_image(np.nan_to_num(head))[:, 1]) > 0
+        behind = (top_h > cfg.max_stature_m) & (own_h > cfg.stature_m) & np.isfinite(head).all(axis=1)
+        return np.where((short | behind)[:, None], head, feet)
+
+    def _feet_missing(self, lab: np.ndarray, u: np.ndarray, v: np.ndarray, half: np.ndarray, width: int,
+                      below: np.ndarray) -> np.ndarray:
+        """Per pixel of a short column, 1 where its feet are missing from the foreground for a reason the
+        picture shows (else 0), within ``half`` columns as the foot is found: the column ends at the
+        picture's bottom edge, or most of the rows between its foot and ``below`` (the row where the head
+        rule puts the feet) are pixels MOG2 called shadow (legs as dark as a shadow on the ground). A column cut at the top
+        instead (a head and torso learnt into the background while the legs still move) has neither."""
+        assert self.shadow is not None
+        h = self.shadow.shape[0]
+        bottom = column_feet(lab, u, v, half, width) - 0.5  # the column's lowest row
+        lo = np.clip(bottom + 1, 0, h).astype(np.int64)
+        hi = np.clip(np.ceil(below), 0, h).astype(np.int64)
+        rows = np.cumsum(np.concatenate([np.zeros((1, self.shadow.shape[1]), np.int64),
+                                         self.shadow.astype(np.int64)]), axis=0)
+        n_shadow = rows[hi, u] - rows[np.minimum(lo, hi), u]
+        dark = 2 * n_shadow >= np.maximum(hi - lo, 1)
+        cut = bottom >= h - 1
+        return _column_reach(lab, u, (dark | cut).astype(np.int64), half, width)
+
     def observe(self, image: np.ndarray, plane: GroundPlane) -> DepthView:
         """This frame's foreground and the virtual disparity of each region large enough to be a person."""
         rig = self.camera(plane, image.shape[:2])
@@ -210,6 +291,8 @@ class GroundDepth:
             if self.cfg.foot == "column":
                 half = self.column_half_widths(plane, stats, keep, fg.shape[1])
                 ground_px = plane.to_ground(np.stack([u, column_feet(lab, u, v, half, fg.shape[1])], axis=1))
+                if self.cfg.stature_check:
+                    ground_px = self.standing_check(rig, plane, lab, u, v, half, fg.shape[1], ground_px)
             else:
                 ground = np.full((n, 2), np.nan)
                 ground[big] = plane.to_ground(region_feet(stats[big]))

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from trackreplay.trackers.groups.config import BackgroundConfig, GroupingConfig, GroupsConfig, MergeConfig
+from trackreplay.trackers.groups.config import (BackgroundConfig, GroundConfig, GroupingConfig, GroupsConfig, MergeConfig,
+                                                TrackConfig)
 
 
 @pytest.mark.parametrize("kwargs, message", [
@@ -24,3 +25,15 @@ def test_out_of_range_values_are_refused(kwargs, message):
 def test_an_unknown_near_gate_mode_is_refused():
     with pytest.raises(ValueError, match='grouping.near_gate must be "join", "leave" or "start"'):
         GroupingConfig(near_gate="absorb")
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda: GroundConfig(min_stature_m=1.8), "0 < min_stature_m <= stature_m <= max_stature_m"),
+    (lambda: GroundConfig(max_stature_m=1.5), "0 < min_stature_m <= stature_m <= max_stature_m"),
+    (lambda: GroundConfig(min_stature_m=0.0), "0 < min_stature_m <= stature_m <= max_stature_m"),
+    (lambda: TrackConfig(ground_coast_sigma_m=-0.5), "tracks.ground_coast_sigma_m must be >= 0"),
+    (lambda: GroupingConfig(connected="stereo"), 'grouping.connected must be "ground", "all" or "off"'),
+])
+def test_the_one_camera_rules_refuse_out_of_range_values(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()

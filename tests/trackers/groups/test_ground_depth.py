@@ -115,3 +115,105 @@ def test_two_people_side_by_side_in_one_region(foot) -> None:
         depths[name] = float(np.median(pts[:, 1]))
     assert depths["near"] == pytest.approx(near[1], abs=0.15)
     assert depths["far"] == pytest.approx(far[1] if foot == "column" else near[1], abs=0.15)
+
+
+def _learnt(cfg: GroundConfig, background: np.ndarray) -> GroundDepth:
+    depth = GroundDepth(cfg, frames=10)
+    for _ in range(10):  # (MOG2 calls a change after 3 frames a shadow: its weights are not settled)
+        depth.add(background)
+    depth.start(10.0)
+    return depth
+
+
+def _rows(foot: np.ndarray, low: float, high: float) -> tuple[int, int, int, int]:
+    """The pixel box x0 y0 x1 y1 of a 0.5 m wide person at ``foot`` from ``low`` to ``high`` metres up."""
+    c = _project(np.array([foot + [-0.25, 0, high], foot + [0.25, 0, low]]))
+    x0, y0 = np.floor(c[0]).astype(int)
+    x1, y1 = np.floor(c[1]).astype(int)
+    return x0, y0, x1, y1
+
+
+def _ground_y(depth: GroundDepth, view, box: tuple[int, int, int, int]) -> np.ndarray:
+    """World Y (m, along the view) of every foreground pixel in ``box`` (x0 y0 x1 y1, inclusive)."""
+    x0, y0, x1, y1 = box
+    sub = view.disparity[y0:y1 + 1, x0:x1 + 1]
+    v, u = np.nonzero(np.isfinite(sub))
+    rig = depth.rig
+    return rig.pose.to_world(rig.to_points(np.stack([u + x0, v + y0, sub[v, u]], axis=1)))[:, 1]
+
+
+CLEAN = {"open_px": 0, "close_px": 0, "min_area_px": 10}
+
+
+@pytest.mark.parametrize("check", [True, False])
+def test_legs_taken_for_shadow_stand_the_person_where_their_head_is(check) -> None:
+    """A person 1.7 m tall (the standing stature) whose legs are as dark as a shadow on the ground (MOG2
+    leaves them out): the region ends at the knees. Checked against a standing person it is too short,
+    the rows under it are shadow, so it stands where its head puts it; unchecked, at its knees' ground
+    point (metres too far)."""
+    foot = np.array([1.0, 7.0, 0.0])
+    background = np.full((H_IMG, W, 3), 90, np.uint8)
+    image = background.copy()
+    x0, y0, x1, y1 = _rows(foot, 0.0, 1.7)
+    _, yk, _, _ = _rows(foot, 0.0, 0.8)
+    image[y0:yk, x0:x1 + 1] = 220
+    image[yk:y1 + 1, x0:x1 + 1] = 63  # 0.7 x the background, same colour: MOG2's shadow
+    depth = _learnt(GroundConfig(**CLEAN, stature_check=check), background)
+    view = depth.observe(image, _plane())
+    assert depth.shadow[yk:y1 + 1, x0:x1 + 1].mean() > 0.9 and not view.fg_left[yk + 1:y1 + 1].any()
+    y = _ground_y(depth, view, (x0, y0, x1, y1))
+    if check:
+        assert np.median(y) == pytest.approx(foot[1], abs=0.25)
+    else:
+        assert np.median(y) > foot[1] + 1.5
+
+
+def test_a_person_whose_head_and_torso_faded_keeps_their_feet() -> None:
+    """Only the legs are foreground (a person who stands still fades into MOG2's background from the top):
+    as short, but nothing under the feet says they are missing, so the foot stays where it is."""
+    foot = np.array([1.0, 7.0, 0.0])
+    background = np.full((H_IMG, W, 3), 90, np.uint8)
+    image = background.copy()
+    x0, y0, x1, y1 = _rows(foot, 0.0, 0.8)
+    image[y0:y1 + 1, x0:x1 + 1] = 220
+    depth = _learnt(GroundConfig(**CLEAN), background)
+    view = depth.observe(image, _plane())
+    assert np.median(_ground_y(depth, view, (x0, y0, x1, y1))) == pytest.approx(foot[1], abs=0.15)
+
+
+def test_a_person_cut_by_the_picture_s_bottom_edge_stands_where_their_head_is() -> None:
+    """Feet below the picture: the lowest visible row would put the person metres too far; the region
+    ends at the bottom edge, so the head rule places them."""
+    background = np.full((H_IMG, W, 3), 90, np.uint8)
+    bottom = _plane().to_ground(np.array([[W / 2, H_IMG - 0.5]]))[0]
+    foot = np.array([bottom[0], bottom[1] - 0.6, 0.0])  # 0.6 m nearer than the picture's bottom edge
+    x0, y0, x1, y1 = _rows(foot, 0.0, 1.7)
+    assert y1 > H_IMG and y0 > 0
+    image = background.copy()
+    image[y0:, x0:x1 + 1] = 220
+    depth = _learnt(GroundConfig(**CLEAN), background)
+    view = depth.observe(image, _plane())
+    assert np.median(_ground_y(depth, view, (x0, y0, x1, H_IMG - 1))) == pytest.approx(foot[1], abs=0.25)
+    off = _learnt(GroundConfig(**CLEAN, stature_check=False), background)
+    assert np.median(_ground_y(off, off.observe(image, _plane()), (x0, y0, x1, H_IMG - 1))) > foot[1] + 0.5
+
+
+@pytest.mark.parametrize("check", [True, False])
+def test_someone_behind_a_person_in_one_region_stands_behind(check) -> None:
+    """Two people of the standing stature, one 4 m behind the other, joined into one region: the column is
+    taller than anyone standing at the near foot, so its pixels above the near person's head stand where
+    the column's top (the far one's head) puts them; unchecked, everyone stands at the near foot."""
+    near, far = np.array([1.0, 6.0, 0.0]), np.array([1.0, 10.0, 0.0])
+    background = np.full((H_IMG, W, 3), 90, np.uint8)
+    image = background.copy()
+    nx0, ny0, nx1, ny1 = _rows(near, 0.0, 1.7)
+    fx0, fy0, fx1, fy1 = _rows(far, 0.0, 1.7)
+    assert fy1 >= ny0 and fy0 < ny0 - 3  # the far one's feet meet the near one's head in the picture
+    image[ny0:ny1 + 1, nx0:nx1 + 1] = 220
+    image[fy0:fy1 + 1, fx0:fx1 + 1] = 220
+    depth = _learnt(GroundConfig(**CLEAN, stature_check=check), background)
+    view = depth.observe(image, _plane())
+    above = _ground_y(depth, view, (fx0, fy0, fx1, ny0 - 2))  # the far person above the near one's head
+    assert np.median(_ground_y(depth, view, (nx0, ny0 + 2, nx1, ny1))) == pytest.approx(near[1], abs=0.15)
+    # (the head's row is whole pixels: at 10 m one row of this 160 x 120 camera is 0.3 m along the ground)
+    assert np.median(above) == pytest.approx(far[1] if check else near[1], abs=0.45)

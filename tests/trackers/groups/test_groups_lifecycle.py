@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from trackreplay.trackers.geometry.rig_pose import RigPose
 from trackreplay.trackers.geometry.stereo import StereoRig
 from trackreplay.trackers.groups.config import GroupsConfig, TrackConfig
 from trackreplay.trackers.groups.ekf import GroupEkf, state_from
@@ -195,3 +196,62 @@ def test_a_set_at_another_depth_overlapping_a_confirmed_group_s_box_waits(box_ov
         assert (labels[12:] == -1).all() and not any("started" in e for e in events)
     else:
         assert (labels[12:] == 1).all() and sum("started" in e for e in events) == 1
+
+
+# one camera over a ground plane: the camera looks along the ground's Y (camera x -> X, z -> Y, y -> -Z)
+ALONG_Y = RigPose((1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0), (0.0, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("source", ["ground", "stereo"])
+def test_a_passer_by_in_a_wide_gate_is_not_the_group_s(source):
+    """A group whose extent grew wide (σ 1 m: its gate reaches 4 m) gates 12 points of its own and 8 of a
+    passer-by 2.5 m away, not within the grouping radius of any of them. With one camera
+    (``grouping.connected = "ground"``) the group keeps the connected set with the most points and the
+    passer-by's points start a group of their own; with stereo (as the paper) the group takes all 20."""
+    tracker = GroupTracker(GroupsConfig(), np.random.default_rng(0))
+    tracker.source, tracker.pose = source, ALONG_Y
+    g = _group(tracker, 1, [0.0, 0.0, 5.0], 12)
+    g.extent = np.eye(3) * 1.0
+    tracker.groups = [g]
+    rng = np.random.default_rng(2)
+    own = np.array([0.0, 0.0, 5.0]) + rng.normal(0.0, 0.1, (12, 3))
+    other = np.array([2.5, 0.0, 5.0]) + rng.normal(0.0, 0.1, (8, 3))
+    labels, events = _one_frame(tracker, _points(np.concatenate([own, other])))
+    assert (labels[:12] == 0).all()
+    if source == "ground":
+        assert tracker.groups[0].members == 12 and (labels[12:] == 1).all()
+        assert [e.split(" ", 2)[2] for e in events] == ["started with 8 points"]
+    else:
+        assert tracker.groups[0].members == 20 and (labels[12:] == 0).all() and events == []
+
+
+def _ground_sigma(g: Group) -> float:
+    P = ALONG_Y.rotate_cov(g.ekf.P[np.ix_([0, 2, 4], [0, 2, 4])][None])[0][:2, :2]
+    return float(np.sqrt(np.linalg.eigvalsh(P)[-1]))
+
+
+@pytest.mark.parametrize("source", ["ground", "stereo"])
+def test_with_one_camera_a_group_coasts_while_the_ekf_places_it_within_the_coasting_sigma(source):
+    """Without points, a group is deleted after ``tracks.max_empty_frames`` with stereo; with one camera it
+    coasts while its predicted position's standard deviation on the ground is within
+    ``tracks.ground_coast_sigma_m`` (0.5 m) and is deleted on the first frame it is not."""
+    tracker = GroupTracker(GroupsConfig(), np.random.default_rng(0))
+    tracker.source, tracker.pose = source, ALONG_Y
+    g = _group(tracker, 1, [0.0, 0.0, 5.0])
+    g.ekf.set(g.ekf.x, np.diag([0.01, 1e-4, 0.01, 1e-4, 0.01, 1e-4]))  # σ 0.1 m, 0.01 m/frame
+    tracker.groups = [g]
+    none = ObservationPoints.empty(tracker.config.klt.window)
+    sigmas = []
+    for frame in range(1, 200):
+        g.ekf.predict()
+        sigmas.append(_ground_sigma(g))
+        labels = tracker._associate_and_update(none, RIG)
+        _, ended, events = tracker._delete(labels)
+        if ended:
+            break
+    assert ended == [1] and events == [f"group 1 deleted: no update for {frame} frames"]
+    if source == "stereo":
+        assert frame == tracker.config.tracks.max_empty_frames + 1
+    else:
+        assert frame > tracker.config.tracks.max_empty_frames + 1
+        assert sigmas[-1] > 0.5 >= sigmas[-2]
