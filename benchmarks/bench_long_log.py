@@ -45,11 +45,19 @@ block of frames at a time (``FrameDigests.from_file``) against the whole table (
 fresh process; a sidecar of the scene's shape (a track's state and a few filter fields a frame, one large field
 without values) written by ``FrameDigests`` spilling as a replay does; the two passes' hashes compared.
 
+``--smooth-only``: `trackreplay smooth T.parquet LOG --out S.parquet` on ONE track of each smoothing model (flow,
+colorpf: image; groups: 3-D) of that many rows (``bench_smooth.synthetic_trajectory``: gaps, absent frames, outliers;
+written by polars as bench_smooth writes it), LOG a log of tiny PNG frames at its frame times, in a fresh process: the
+command as it is (an image track longer than ``smooth_long.LONG_ROWS`` smoothed in two passes, its RTS pass in pieces
+with the filtered states in a temporary file, its rows written a piece at a time) against the whole table
+(``smooth_in_pieces`` made to decline); peak RSS (VmHWM) above the process with its modules loaded, CPU seconds,
+rows per CPU-second; the two outputs and printed fits compared.
+
 Usage: python benchmarks/bench_long_log.py [--frames 1000,20000,200000] [--export-only | --eval-only | --csv-only |
-       --csv-export-only | --sidecar-only]
+       --csv-export-only | --sidecar-only | --smooth-only]
 Writes benchmarks/results/long_log.json (``--export-only``: long_log_export.json, ``--eval-only``:
 long_log_eval.json, ``--csv-only``: long_log_csv.json, ``--csv-export-only``: long_log_csv_export.json,
-``--sidecar-only``: long_log_sidecar.json) and prints a table.
+``--sidecar-only``: long_log_sidecar.json, ``--smooth-only``: long_log_smooth.json) and prints a table.
 """
 
 from __future__ import annotations
@@ -420,6 +428,56 @@ def sidecar_only(sizes: list[int], out: Path) -> int:
     return 0 if all(r["same_fields_and_values"] for r in runs) else 1
 
 
+def smooth_only(sizes: list[int], out: Path, models: tuple[str, ...] = ("flow", "colorpf", "groups")) -> int:
+    """`trackreplay smooth` of one long track of each model: as it is against the whole table (fresh processes)."""
+    import os
+
+    import polars as pl
+
+    from benchmarks import bench_smooth
+
+    load_before = [round(x, 2) for x in os.getloadavg()]
+    runs: dict = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in sizes:
+            log = Path(tmp) / f"log-{n}.mcap"
+            bench_smooth.write_frames_log(log, n + 60)  # the track starts within the log's first 50 frames
+            for tracker in models:
+                table = Path(tmp) / f"{tracker}-{n}.parquet"
+                bench_smooth.synthetic_trajectory(n, tracker, tracks=1, seed=2).write_parquet(table)
+                entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item()}
+                for name, whole in (("pieces", False), ("whole_table", True)):
+                    target, printed = Path(tmp) / f"{name}.parquet", Path(tmp) / f"{name}.txt"
+                    argv = ["smooth", str(table), str(log), "--out", str(target)]
+                    code = bench_smooth.COMMAND.format(root=str(ROOT), whole=whole, printed=str(printed), argv=argv)
+                    got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
+                                         cwd=ROOT).stdout.split()
+                    status, base, peak, cpu, wall = int(got[-5]), int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
+                    entry[name] = {"exit": status, "base_rss_kib": base, "peak_rss_kib": peak,
+                                   "command_mb": round((peak - base) / 1024, 1), "cpu_seconds": round(cpu, 2),
+                                   "seconds": round(wall, 2), "rows_per_cpu_s": round(entry["rows"] / cpu)}
+                entry["identical"] = pl.read_parquet(Path(tmp) / "pieces.parquet").equals(
+                    pl.read_parquet(Path(tmp) / "whole_table.parquet"), null_equal=True)
+                entry["same_printed_fits"] = ((Path(tmp) / "pieces.txt").read_text().splitlines()[:-1]
+                                              == (Path(tmp) / "whole_table.txt").read_text().splitlines()[:-1])
+                runs[f"{tracker}/{n}"] = entry
+                print(tracker, n, json.dumps(entry), flush=True)
+    growth = {t: {k: round(runs[f"{t}/{sizes[-1]}"][k]["command_mb"] - runs[f"{t}/{sizes[0]}"][k]["command_mb"], 1)
+                  for k in ("pieces", "whole_table")} for t in models}
+    results = {"machine": describe(), "load_average_before": load_before,
+               "load_average_after": [round(x, 2) for x in os.getloadavg()],
+               "scene": "one track of each model (benchmarks/bench_smooth.py synthetic_trajectory, seed 2), written by "
+                        "polars; a log of 8x8 PNG frames at its frame times",
+               "runs": runs, "command_mb_growth": {"from_rows": sizes[0], "to_rows": sizes[-1], **growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    for t in models:
+        hi = runs[f"{t}/{sizes[-1]}"]
+        print(f"{t}: peak above the process {sizes[0]} -> {sizes[-1]} rows +{growth[t]['pieces']} MB "
+              f"(whole table +{growth[t]['whole_table']}); {hi['pieces']['rows_per_cpu_s']} rows per CPU-second at "
+              f"{sizes[-1]} rows (whole table {hi['whole_table']['rows_per_cpu_s']})")
+    return 0 if all(r["identical"] and r["same_printed_fits"] and r["pieces"]["exit"] == 0 for r in runs.values()) else 1
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", default="1000,20000,200000", help="log lengths, comma-separated")
@@ -429,9 +487,12 @@ def main() -> int:
     ap.add_argument("--csv-only", action="store_true", help="read_trajectory of a CSV input: in pieces and whole")
     ap.add_argument("--csv-export-only", action="store_true", help="`export T.csv OUT.parquet`: in pieces and whole")
     ap.add_argument("--sidecar-only", action="store_true", help="diff's read of a per-frame digest sidecar: blocks and whole")
+    ap.add_argument("--smooth-only", action="store_true", help="`smooth` of one long track per model: as is and whole")
     ap.add_argument("--objects", type=int, default=1, help="--eval-only: truth objects in the log (several: no --gt-id)")
     args = ap.parse_args()
     sizes = [int(x) for x in args.frames.split(",")]
+    if args.smooth_only:
+        return smooth_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_smooth.json")
     if args.csv_export_only:
         return csv_export_only(sizes, args.out or ROOT / "benchmarks" / "results" / "long_log_csv_export.json")
     if args.sidecar_only:

@@ -9,7 +9,9 @@ all tracks and grid points as numpy elementwise operations on ``(grid, axis, tra
 frames in a Python loop; the update by a position and a velocity of independent noise is two
 scalar updates (the same posterior; the log-likelihood is the joint density by the chain rule).
 The backward pass is a parallel prefix scan of each frame's affine step (log₂ N rounds, each composed
-in place a block of frames at a time: its memory is the maps themselves). The grid
+in place a block of frames at a time: its memory is the maps themselves), over pieces of
+:data:`SCAN_FRAMES` frames, the last first, each piece's maps applied to the smoothed state after it; a
+long lane's filtered states wait for it in a temporary file (:func:`smooth_pieces`). The grid
 search's likelihood of a long track is computed by pieces filtered side by side, each started a
 little early from a guess and checked to join its predecessor (:func:`_pieces_loglik`).
 
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 import math
 from array import array
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -120,55 +123,56 @@ def filter_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
     ``σ₀²``, ``σ_v²`` (arrays broadcast against ``(…, 1, B)``): per frame the prediction ``x ← F x``,
     ``P ← F P Fᵀ + Q`` (``F = [[1, 1], [0, 1]]``), then scalar updates by the position and the velocity
     (``a - a²/s`` written ``a r / s``: no cancellation; an unobserved frame has variance
-    :data:`UNSEEN`). Returns ``-2 ×`` the log-likelihood without
-    its ``2π`` terms (…, B) and, with ``keep``, the filtered ``(p, v, a, b, c)`` of every frame."""
+    :data:`UNSEEN`). Returns ``-2 ×`` the log-likelihood without its ``2π`` terms (…, B) (without
+    ``keep``: :func:`_filter_loglik`) or, with ``keep``, ``((), filtered (p, v, a, b, c) of every frame)``."""
     if not keep:
         return _filter_loglik(cols, Q, s2, sv2, prior), ()
+    return (), next(filter_chunks(cols, Q, s2, sv2, prior, cols.zp.shape[0]))[1]
+
+
+def filter_chunks(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
+                  frames: int) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
+    """:func:`filter_columns` with ``keep``, ``frames`` frames at a time: ``(lo, (p, v, a, b, c))`` of
+    frames ``lo ..``, the state carried from one piece to the next (the same operations in the same
+    order: the pieces are the whole pass's rows to the bit)."""
     q3, q2, q = Q
     axes = cols.rv.shape[1]
     pv, cov = _prior(cols, s2, axes, prior)
     p, v, a, b, c = pv[0], pv[1], cov[0], cov[1], cov[2]  # views: updated in place
-    quad, logs = np.zeros(p.shape), np.zeros(a.shape)
     n = cols.zp.shape[0]
-    kept = (np.empty((n, *pv.shape)), np.empty((n, *cov.shape))) if keep else None
-    for k, (zp, rp, counted, zv, rv, counted_v) in enumerate(zip(cols.zp, cols.rp, cols.counted, cols.zv, cols.rv,
-                                                                 cols.counted_v)):
-        p += v  # predict
-        t = b + c
-        a += b
-        a += t
-        a += q3
-        np.add(t, q2, out=b)
-        c += q
-        r = s2 * rp  # position update: gains K = (a, b) / s
-        s = a + r
-        w = np.reciprocal(s)
-        K = cov[:2] * w
-        y = zp - p
-        pv += K * y
-        c -= K[1] * b
-        b -= K[0] * b
-        np.multiply(K[0], r, out=a)
-        if not keep:
-            quad += y * y * w  # 0 on the first observation: the prior's mean
-            logs += np.log(s) * counted
-        if cols.velocity:
-            r = sv2 * rv  # velocity update: K = (b, c) / s
-            s = c + r
+    for lo in range(0, n, frames):
+        hi = min(n, lo + frames)
+        means, covs = np.empty((hi - lo, *pv.shape)), np.empty((hi - lo, *cov.shape))
+        for k in range(lo, hi):
+            zp, rp, zv, rv = cols.zp[k], cols.rp[k], cols.zv[k], cols.rv[k]
+            p += v  # predict
+            t = b + c
+            a += b
+            a += t
+            a += q3
+            np.add(t, q2, out=b)
+            c += q
+            r = s2 * rp  # position update: gains K = (a, b) / s
+            s = a + r
             w = np.reciprocal(s)
-            K = cov[1:] * w
-            y = zv - v
+            K = cov[:2] * w
+            y = zp - p
             pv += K * y
-            a -= K[0] * b
-            b -= K[1] * b
-            np.multiply(K[1], r, out=c)
-            if not keep:
-                quad += y * y * (counted_v * w)
-                logs += np.log(s) * counted_v
-        if keep:
-            kept[0][k], kept[1][k] = pv, cov
-    filtered = (kept[0][:, 0], kept[0][:, 1], kept[1][:, 0], kept[1][:, 1], kept[1][:, 2]) if keep else ()
-    return quad.sum(axis=-2) + logs.sum(axis=-2) * (cols.zp.shape[1] // axes), filtered
+            c -= K[1] * b
+            b -= K[0] * b
+            np.multiply(K[0], r, out=a)
+            if cols.velocity:
+                r = sv2 * rv  # velocity update: K = (b, c) / s
+                s = c + r
+                w = np.reciprocal(s)
+                K = cov[1:] * w
+                y = zv - v
+                pv += K * y
+                a -= K[0] * b
+                b -= K[1] * b
+                np.multiply(K[1], r, out=c)
+            means[k - lo], covs[k - lo] = pv, cov
+        yield lo, (means[:, 0], means[:, 1], covs[:, 0], covs[:, 1], covs[:, 2])
 
 
 BLOCK = 256  # frames whose likelihood terms are summed at once (at most)
@@ -285,59 +289,164 @@ def _step_maps(p, v, a, b, c, Q, lo: int, last: np.ndarray) -> list[np.ndarray]:
     return [np.where(end, 0.0, x) for x in g] + [np.where(end, x, y) for x, y in zip((p, v, a, b, c), (*u, *U))]
 
 
+SCAN_FRAMES = 8192  # frames of one backward scan: a longer lane's pass is these pieces, the last first
+
+
+def _backward_piece(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], lo: int, last: np.ndarray,
+                    after: tuple[np.ndarray, ...] | None) -> tuple[np.ndarray, ...]:
+    """The smoothed ``(p, v, a, b, c)`` of frames ``lo ..`` from their filtered states: each frame's
+    backward map (:func:`_step_maps`) composed by a prefix scan to the piece's end, then applied to
+    ``after``, the smoothed state of the frame after the piece (None: the piece ends the lane)."""
+    p, a = filtered[0], filtered[2]
+    n = len(p)
+    rows = max(1, SCAN_ELEMENTS // max(p[0].size, a[0].size))
+    maps = [np.empty(a.shape) for _ in range(4)] + [np.empty(x.shape) for x in filtered]
+    for k in range(0, n, rows):  # the maps a block of frames at a time (the temporaries stay small)
+        for x, y in zip(maps, _step_maps(*(x[k:k + rows] for x in filtered), Q, lo + k, last)):
+            x[k:k + rows] = y
+    d = 1
+    while d < n:  # each map becomes itself ∘ the one d frames later (all from the previous round's maps)
+        for k in range(0, n - d, rows):  # in place by blocks: a block reads only frames not yet written
+            hi = min(n - d, k + rows)
+            head = _compose(tuple(x[k:hi] for x in maps), tuple(x[k + d:hi + d] for x in maps))
+            for x, y in zip(maps, head):
+                x[k:hi] = y
+        d *= 2
+    if after is not None:  # x ↦ G x + u, P ↦ G P Gᵀ + U at the next piece's first smoothed state
+        state = (0.0, 0.0, 0.0, 0.0, *after)
+        for k in range(0, n, rows):
+            for x, y in zip(maps[4:], _compose(tuple(x[k:k + rows] for x in maps), state)[4:]):
+                x[k:k + rows] = y
+    return tuple(maps[4:])
+
+
 def rts_columns(filtered: tuple[np.ndarray, ...], Q: tuple[np.ndarray, ...], last: np.ndarray) -> tuple[np.ndarray, ...]:
     """The RTS pass over filtered ``(p, v, a, b, c)`` (N, …, B) at process noise ``Q``, each track
     ending at frame ``last`` (B,). Each frame's step back, ``x ↦ x_k + G (x - F x_k)`` and
     ``P ↦ P_k + G (P - P⁻_{k+1}) Gᵀ`` with ``G = P_k Fᵀ (P⁻_{k+1})⁻¹``, is an affine map; the maps are
     composed by a parallel prefix scan (log₂ N vectorised rounds instead of N Python steps), the
-    last frame's map the constant filtered state. Returns the smoothed ``(p, v, a, b, c)``."""
-    p, v, a, b, c = filtered
-    n = len(p)
-    rows = max(1, SCAN_ELEMENTS // max(p[0].size, a[0].size))
-    maps = [np.empty(a.shape) for _ in range(4)] + [np.empty(x.shape) for x in (p, v, a, b, c)]
-    for lo in range(0, n, rows):  # the maps a block of frames at a time (the temporaries stay small)
-        for x, y in zip(maps, _step_maps(*(x[lo:lo + rows] for x in filtered), Q, lo, last)):
-            x[lo:lo + rows] = y
-    d = 1
-    while d < n:  # each map becomes itself ∘ the one d frames later (all from the previous round's maps)
-        for lo in range(0, n - d, rows):  # in place by blocks: a block reads only frames not yet written
-            hi = min(n - d, lo + rows)
-            head = _compose(tuple(x[lo:hi] for x in maps), tuple(x[lo + d:hi + d] for x in maps))
-            for x, y in zip(maps, head):
-                x[lo:hi] = y
-        d *= 2
-    return tuple(maps[4:])
+    last frame's map the constant filtered state. A lane longer than :data:`SCAN_FRAMES` is scanned a
+    piece of that many frames at a time, the last first, each piece's maps applied to the smoothed
+    state after it (:func:`_backward_piece`: the same pieces, and so the same numbers, as
+    :func:`smooth_pieces`). Returns the smoothed ``(p, v, a, b, c)``."""
+    n = len(filtered[0])
+    out = tuple(np.empty(x.shape) for x in filtered)
+    after = None
+    for lo in reversed(range(0, n, SCAN_FRAMES)):
+        piece = _backward_piece(tuple(x[lo:lo + SCAN_FRAMES] for x in filtered), Q, lo, last, after)
+        for x, y in zip(out, piece):
+            x[lo:lo + SCAN_FRAMES] = y
+        after = tuple(x[:1] for x in piece)
+    return out
 
 
-def grid_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, lane_elements: int,
-                prior: Prior = IMAGE_PRIOR) -> np.ndarray:
+SPILL_FRAMES = 2 * SCAN_FRAMES  # a lane at least this long keeps its filtered states in a temporary file
+
+
+class _Spill:
+    """Pieces of arrays (each piece the same shapes but its frames) written one after another to an
+    unnamed temporary file and read back in any order: the filtered states of a long lane, between
+    the forward pass and the backward one, in the page cache rather than the process's memory."""
+
+    def __init__(self) -> None:
+        import tempfile
+
+        self._file = tempfile.TemporaryFile()  # noqa: SIM115 (kept open across calls; removed when closed or at exit)
+        self._where: dict[int, tuple[int, list[tuple[int, ...]]]] = {}
+
+    def put(self, key: int, arrays: tuple[np.ndarray, ...]) -> None:
+        self._file.seek(0, 2)
+        self._where[key] = (self._file.tell(), [x.shape for x in arrays])
+        for x in arrays:
+            self._file.write(np.ascontiguousarray(x, dtype=np.float64).data)
+
+    def get(self, key: int) -> tuple[np.ndarray, ...]:
+        at, shapes = self._where.pop(key)
+        self._file.seek(at)
+        return tuple(np.fromfile(self._file, dtype=np.float64, count=math.prod(s)).reshape(s) for s in shapes)
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def smooth_pieces(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray,
+                  prior: Prior = IMAGE_PRIOR, spill: bool | None = None) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
+    """:func:`smooth_columns` a piece of :data:`SCAN_FRAMES` frames at a time, the last piece first:
+    ``(lo, (p, v, a, b, c))`` of frames ``lo ..`` (each piece's arrays its own). The forward pass keeps
+    each piece's filtered states, in memory or (``spill``; None: a lane of :data:`SPILL_FRAMES` frames or
+    more) in a temporary file, and the backward pass reads them back the last first (issue 33: a long
+    track's pass then holds a piece's states, not the track's). The numbers are :func:`smooth_columns`'
+    to the bit: the same filter (its state carried across pieces) and the same backward pieces."""
+    n = cols.zp.shape[0]
+    noise = tuple(x[None] for x in Q)
+    one = cols.zp.shape[-1] == 1 and cols.rv.shape[1] == 1
+    if one:
+        forward = filter_one_chunks(cols, tuple(float(x[0]) for x in Q), float(s2[0]), float(sv2[0]), prior, SCAN_FRAMES)
+    else:
+        forward = filter_chunks(cols, noise, s2[None], sv2[None], prior, SCAN_FRAMES)
+    store = _Spill() if (n >= SPILL_FRAMES if spill is None else spill) else None
+    kept: dict[int, tuple[np.ndarray, ...]] = {}
+    try:
+        for lo, filtered in forward:
+            if store is None:
+                kept[lo] = filtered
+            else:
+                store.put(lo, filtered)
+        last = cols.last
+        del cols, forward  # (the backward pass needs only the filtered states: a caller's temporary columns go)
+        after = None
+        for lo in reversed(range(0, n, SCAN_FRAMES)):
+            filtered = kept.pop(lo) if store is None else store.get(lo)
+            piece = _backward_piece(filtered, noise, lo, last, after)
+            del filtered
+            after = tuple(x[:1].copy() for x in piece)
+            yield lo, piece
+    finally:
+        if store is not None:
+            store.close()
+
+
+def grid_loglik(cols: Columns | Callable[[], Columns], Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray,
+                lane_elements: int, prior: Prior = IMAGE_PRIOR) -> np.ndarray:
     """Log-likelihood (G, B) of every track at every grid point ``(Q, σ₀², σ_v²)`` (each (G,)),
-    at most ``lane_elements`` grid points × tracks at a time (the working set)."""
-    g, b, n = len(s2), cols.zp.shape[-1], cols.zp.shape[0]
+    at most ``lane_elements`` grid points × tracks at a time (the working set). ``cols`` may be a
+    function that packs them: a long lane's columns are then not kept while its pieces (their copy
+    cut by :func:`_window`, made once) are filtered, and are packed again only for the fall-back."""
+    pack = cols if callable(cols) else (lambda: cols)
+    lane: Columns | None = pack()
+    g, b, n = len(s2), lane.zp.shape[-1], lane.zp.shape[0]
+    components = lane.components
     pieces = n >= PIECES_FROM
+    window = _window(lane, PIECE, WARM) if pieces else None
+    if pieces and callable(cols):
+        lane = None  # (issue 33: the window holds the lane's observations)
     step = max(1, lane_elements // b // (1 if not pieces else max(1, n // PIECE // 2)))
     out = np.empty((g, b))
     for lo in range(0, g, step):
         sl = slice(lo, lo + step)
         noise = tuple(x[sl, None, None] for x in Q)
-        got = _pieces_loglik(cols, noise, s2[sl, None, None], sv2[sl, None, None], prior) if pieces else None
+        got = _pieces_loglik(lane, noise, s2[sl, None, None], sv2[sl, None, None], prior, window=window) if pieces else None
         if got is None:
-            got = filter_columns(cols, noise, s2[sl, None, None], sv2[sl, None, None], False, prior)[0]
+            lane = pack() if lane is None else lane
+            got = filter_columns(lane, noise, s2[sl, None, None], sv2[sl, None, None], False, prior)[0]
         out[sl] = got
-    return -0.5 * (out + cols.components * LOG_2PI)
+    return -0.5 * (out + components * LOG_2PI)
 
 
 def smooth_columns(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray,
                    prior: Prior = IMAGE_PRIOR) -> tuple[np.ndarray, ...]:
     """Filter and RTS at one noise per track (each (B,)): the smoothed ``(p, v)`` (N, D, B) and
     ``(a, b, c)`` (N, A, B). One track alone (a long one) is filtered in scalar floats
-    (:func:`filter_one`): the same arithmetic without numpy's cost per call on 1-element arrays."""
-    noise = tuple(x[None] for x in Q)
-    if cols.zp.shape[-1] == 1 and cols.rv.shape[1] == 1:
-        kept = filter_one(cols, tuple(float(x[0]) for x in Q), float(s2[0]), float(sv2[0]), prior)
-    else:
-        kept = filter_columns(cols, noise, s2[None], sv2[None], True, prior)[1]
-    return rts_columns(kept, noise, cols.last)
+    (:func:`filter_one`): the same arithmetic without numpy's cost per call on 1-element arrays.
+    The pieces of :func:`smooth_pieces` put together (kept in memory)."""
+    out: tuple[np.ndarray, ...] = ()
+    for lo, piece in smooth_pieces(cols, Q, s2, sv2, prior, spill=False):
+        if not out:
+            n = cols.zp.shape[0]
+            out = tuple(np.empty((n, *x.shape[1:])) for x in piece)
+        for x, y in zip(out, piece):
+            x[lo:lo + len(y)] = y
+    return out
 
 
 def filter_one(cols: Columns, Q: tuple[float, float, float], s2: float, sv2: float,
@@ -346,51 +455,61 @@ def filter_one(cols: Columns, Q: tuple[float, float, float], s2: float, sv2: flo
     (``B = A = 1``), in Python floats: every operation is the one :func:`filter_columns` does, in
     the same order (IEEE double either way), so the results are the same to the bit
     (``tests/replay/analysis/test_rts.py``). Returns the filtered ``(p, v, a, b, c)``."""
+    return next(filter_one_chunks(cols, Q, s2, sv2, prior, cols.zp.shape[0]))[1]
+
+
+def filter_one_chunks(cols: Columns, Q: tuple[float, float, float], s2: float, sv2: float, prior: Prior,
+                      frames: int) -> Iterator[tuple[int, tuple[np.ndarray, ...]]]:
+    """:func:`filter_one` ``frames`` frames at a time: ``(lo, (p, v, a, b, c))`` of frames ``lo ..``
+    (the state carried across pieces: the same numbers)."""
     q3, q2, q = Q
     n, d = cols.zp.shape[0], cols.zp.shape[1]
     p, v = cols.p0[:, 0].tolist(), [0.0] * d
     a, b, c = s2 * float(cols.r0[0, 0]) + prior.position, 0.0, prior.velocity
-    means, covs = array("d"), array("d")  # 8 bytes a value, as numpy's
     axes = range(d)
-    for lo in range(0, n, 4096):  # the observations as floats a block at a time
-        zp, zv = cols.zp[lo:lo + 4096, :, 0].tolist(), cols.zv[lo:lo + 4096, :, 0].tolist()
-        rp, rv = cols.rp[lo:lo + 4096, 0, 0].tolist(), cols.rv[lo:lo + 4096, 0, 0].tolist()
-        for k in range(len(zp)):
-            for i in axes:  # predict
-                p[i] += v[i]
-            t = b + c
-            a = a + b + t + q3
-            b = t + q2
-            c += q
-            r = s2 * rp[k]  # position update
-            w = 1.0 / (a + r)
-            k0, k1 = a * w, b * w
-            z = zp[k]
-            for i in axes:
-                y = z[i] - p[i]
-                p[i] += k0 * y
-                v[i] += k1 * y
-            c -= k1 * b
-            b -= k0 * b
-            a = k0 * r
-            if cols.velocity:
-                r = sv2 * rv[k]  # velocity update
-                w = 1.0 / (c + r)
-                k0, k1 = b * w, c * w
-                z = zv[k]
+    for lo in range(0, n, frames):
+        means, covs = array("d"), array("d")  # 8 bytes a value, as numpy's
+        hi = min(n, lo + frames)
+        for at in range(lo, hi, 4096):  # the observations as floats a block at a time
+            end = min(hi, at + 4096)
+            zp, zv = cols.zp[at:end, :, 0].tolist(), cols.zv[at:end, :, 0].tolist()
+            rp, rv = cols.rp[at:end, 0, 0].tolist(), cols.rv[at:end, 0, 0].tolist()
+            for k in range(len(zp)):
+                for i in axes:  # predict
+                    p[i] += v[i]
+                t = b + c
+                a = a + b + t + q3
+                b = t + q2
+                c += q
+                r = s2 * rp[k]  # position update
+                w = 1.0 / (a + r)
+                k0, k1 = a * w, b * w
+                z = zp[k]
                 for i in axes:
-                    y = z[i] - v[i]
+                    y = z[i] - p[i]
                     p[i] += k0 * y
                     v[i] += k1 * y
-                a -= k0 * b
-                b -= k1 * b
-                c = k1 * r
-            means.extend(p)
-            means.extend(v)
-            covs.extend((a, b, c))
-    m = np.frombuffer(means, dtype=np.float64).reshape(n, 2, d, 1)
-    C = np.frombuffer(covs, dtype=np.float64).reshape(n, 3, 1, 1)
-    return m[:, 0], m[:, 1], C[:, 0], C[:, 1], C[:, 2]
+                c -= k1 * b
+                b -= k0 * b
+                a = k0 * r
+                if cols.velocity:
+                    r = sv2 * rv[k]  # velocity update
+                    w = 1.0 / (c + r)
+                    k0, k1 = b * w, c * w
+                    z = zv[k]
+                    for i in axes:
+                        y = z[i] - v[i]
+                        p[i] += k0 * y
+                        v[i] += k1 * y
+                    a -= k0 * b
+                    b -= k1 * b
+                    c = k1 * r
+                means.extend(p)
+                means.extend(v)
+                covs.extend((a, b, c))
+        m = np.frombuffer(means, dtype=np.float64).reshape(hi - lo, 2, d, 1)
+        C = np.frombuffer(covs, dtype=np.float64).reshape(hi - lo, 3, 1, 1)
+        yield lo, (m[:, 0], m[:, 1], C[:, 0], C[:, 1], C[:, 2])
 
 
 PIECE = 2048  # frames a piece of a long track owns in :func:`_pieces_loglik`
@@ -459,9 +578,9 @@ def _put(x: np.ndarray, g: np.ndarray, c: np.ndarray, y: np.ndarray) -> None:
     x[:, g, :, c] = np.moveaxis(y[:, 0], -1, 0)
 
 
-def _pieces_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
+def _pieces_loglik(cols: Columns | None, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2: np.ndarray, prior: Prior,
                    piece: int | None = None, warm: int | None = None, tol: float | None = None,
-                   stats: list | None = None) -> np.ndarray | None:
+                   stats: list | None = None, window: tuple | None = None) -> np.ndarray | None:
     """:func:`_filter_loglik` of a long lane cut in pieces filtered side by side (issue 33): one
     Python step a frame costs ~24 numpy calls whatever the arrays' size, so a long track's 140 grid
     points paid that on every frame; its pieces, as columns, pay it once per piece length.
@@ -478,9 +597,10 @@ def _pieces_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
     tolerance; a piece's terms are summed in frame order, and the pieces' sums in order, so the
     likelihood differs from the sequential sum by rounding only (relative ~1e-14; the tests allow
     1e-12). ``piece``, ``warm``, ``tol``: :data:`PIECE`, :data:`WARM`, :data:`TOL` by default;
-    ``stats`` (a list) receives the number of unmatched seams of each round."""
+    ``stats`` (a list) receives the number of unmatched seams of each round; ``window``: ``_window(cols,
+    piece, warm)`` already cut (``cols`` is then not read)."""
     piece, warm, tol = piece or PIECE, warm or WARM, TOL if tol is None else tol
-    win, own, count = _window(cols, piece, warm)
+    win, own, count = window or _window(cols, piece, warm)
     snaps = {warm - 1, piece - 1, piece + warm - 1}
     quad, logs, kept = _filter_loglik(win, Q, s2, sv2, prior, own=own, snaps=snaps, sums=True)
     noise = [np.broadcast_to(np.reshape(x, -1), quad.shape[:1]) for x in (*Q, s2, sv2)]  # (G,) each
@@ -501,9 +621,9 @@ def _pieces_loglik(cols: Columns, Q: tuple[np.ndarray, ...], s2: np.ndarray, sv2
                 _put(x, g, c, y)
     else:
         return None
-    b = cols.zp.shape[-1]
+    b = win.zp.shape[-1] // count
     quad, logs = quad.reshape(*quad.shape[:-1], b, count), logs.reshape(*logs.shape[:-1], b, count)
     tq, tl = quad[..., 0], logs[..., 0]
     for j in range(1, count):
         tq, tl = tq + quad[..., j], tl + logs[..., j]
-    return tq.sum(axis=-2) + tl.sum(axis=-2) * (cols.zp.shape[1] // cols.rv.shape[1])
+    return tq.sum(axis=-2) + tl.sum(axis=-2) * (win.zp.shape[1] // win.rv.shape[1])

@@ -159,8 +159,9 @@ def _select(zs: list[np.ndarray], rs: list[np.ndarray], cfg: SmoothConfig) -> li
         q, s, sv = _noise_grid(cfg, with_velocity)
         for lane in _lanes([len(zs[i]) for i in part], max(1, LANE_ELEMENTS // len(q))):
             tracks = [part[j] for j in lane]
-            cols = rts.Columns.pack([zs[i] for i in tracks], [rs[i] for i in tracks])
-            ll = rts.grid_loglik(cols, rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv, LANE_ELEMENTS)
+            # (packed inside: a long lane's columns are not kept while its pieces are filtered)
+            ll = rts.grid_loglik(lambda lane=tracks: rts.Columns.pack([zs[i] for i in lane], [rs[i] for i in lane]),
+                                 rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv, LANE_ELEMENTS)
             ll = np.where(np.isnan(ll), -math.inf, ll)
             for j, i in enumerate(tracks):
                 g = int(np.argmax(ll[:, j]))
@@ -172,27 +173,36 @@ def _smooth_at(zs: list[np.ndarray], rs: list[np.ndarray], fits: list) -> list[t
     """Per track, the smoothed state ``(x, vx, y, vy)`` (n, 4) and its variances (n, 4) at its noise."""
     out: list = [None] * len(zs)
     for lane in _lanes([len(z) for z in zs], LANE_ELEMENTS):
-        cols = rts.Columns.pack([zs[i] for i in lane], [rs[i] for i in lane])
         q, s, sv = (np.array([fits[i][k] for i in lane]) for k in range(3))
-        p, v, a, _, c = rts.smooth_columns(cols, rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv)
-        last = a.shape[1] - 1  # the y axis' covariance: its own, or shared with x
-        for j, i in enumerate(lane):
-            n = len(zs[i])
-            out[i] = (np.stack([p[:n, 0, j], v[:n, 0, j], p[:n, 1, j], v[:n, 1, j]], axis=1),
-                      np.stack([a[:n, 0, j], c[:n, 0, j], a[:n, last, j], c[:n, last, j]], axis=1))
+        for i in lane:
+            out[i] = (np.empty((len(zs[i]), 4)), np.empty((len(zs[i]), 4)))
+        # a piece of frames at a time, the last first, straight into each track's rows (issue 33: a long track's
+        # filtered states wait in a temporary file, its columns go after the forward pass, and its whole-track
+        # arrays are only these two)
+        pieces = rts.smooth_pieces(rts.Columns.pack([zs[i] for i in lane], [rs[i] for i in lane]),
+                                   rts.axis_noise(DEFAULT_SMOOTHING.Q, q), s * s, sv * sv)
+        for lo, (p, v, a, _, c) in pieces:
+            last = a.shape[1] - 1  # the y axis' covariance: its own, or shared with x
+            for j, i in enumerate(lane):
+                m = min(len(zs[i]) - lo, len(p))
+                if m > 0:
+                    out[i][0][lo:lo + m] = np.stack([p[:m, 0, j], v[:m, 0, j], p[:m, 1, j], v[:m, 1, j]], axis=1)
+                    out[i][1][lo:lo + m] = np.stack([a[:m, 0, j], c[:m, 0, j], a[:m, last, j], c[:m, last, j]], axis=1)
     return out
 
 
-def smooth_tracks(zs: list[np.ndarray], confidences: list[np.ndarray], cfg: SmoothConfig = SmoothConfig()) -> list[tuple]:
+def smooth_tracks(zs: list[np.ndarray], confidences: list[np.ndarray], cfg: SmoothConfig = SmoothConfig(),
+                  copy: bool = True) -> list[tuple]:
     """Smooth image tracks over consecutive frames, all at once (:mod:`.rts`).
 
     ``zs[i]`` (n, 2) or (n, 4): observed image positions (and velocities), NaN where a frame or a
     component is not an observation; ``confidences[i]`` (n,): the tracker's confidence (NaN: none).
     Per track ``(x, var, outliers, fit)``: ``x`` (n, 4) = (x, vx, y, vy), their variances (n, 4),
-    ``outliers`` (n,) bool and ``fit = (q, σ₀, σ_v, log-likelihood)``.
+    ``outliers`` (n,) bool and ``fit = (q, σ₀, σ_v, log-likelihood)``. Without ``copy``, a float64
+    ``zs[i]`` of 4 columns is used as it is (its outliers set to NaN: the caller's array changes).
     """
     rs, obs = [], []
-    zs = [np.array(z, dtype=np.float64) for z in zs]
+    zs = [np.array(z, dtype=np.float64) if copy else np.asarray(z, dtype=np.float64) for z in zs]
     for i, (z, confidence) in enumerate(zip(zs, confidences)):
         conf = np.where(np.isfinite(confidence), np.maximum(confidence, cfg.min_confidence), 1.0)
         rs.append(1.0 / conf)
@@ -212,6 +222,7 @@ def smooth_tracks(zs: list[np.ndarray], confidences: list[np.ndarray], cfg: Smoo
             if bad.any() and (ok & ~bad).sum() >= 2:
                 outliers[i], z[bad] = bad, np.nan
                 again.append(i)
+                smoothed[i] = None  # (smoothed again below: not held through the second grid search)
     if again:
         refits = _select([zs[i] for i in again], [rs[i] for i in again], cfg)
         for i, fit, sm in zip(again, refits, _smooth_at([zs[i] for i in again], [rs[i] for i in again], refits)):
@@ -357,10 +368,11 @@ def _raw_rows(full: pl.DataFrame, raw: pl.DataFrame) -> pl.DataFrame:
 
 
 def _smooth_image(table: pl.DataFrame, models: Mapping[str, SmoothingModel], cfg: SmoothConfig, raw: pl.DataFrame | None,
-                  frame_times: Mapping[int, int] | None,
-                  cameras: Mapping[int, PtzCamera] | None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
+                  frame_times: Mapping[int, int] | None, cameras: Mapping[int, PtzCamera] | None,
+                  given=None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
     """Every image track's rows and fit: all tracks' columns at once (:mod:`.segments`), the
-    smoother over all of them (:func:`smooth_tracks`)."""
+    smoother over all of them (:func:`smooth_tracks`; ``given(full, starts)``: its results, already
+    computed: :func:`smooth_track_piece`)."""
     sp = _spans(table, pl.col("x").is_not_null() & pl.col("y").is_not_null() & (pl.col("status") != "lost"))
     parts = [_no_extra(sp.bare), _no_extra(sp.outside)]
     full, starts = sp.full, sp.starts
@@ -374,23 +386,24 @@ def _smooth_image(table: pl.DataFrame, models: Mapping[str, SmoothingModel], cfg
         parts.append(_finish(_no_extra(idle), idle_starts, frame_times))
     fits: list[TrackFit] = []
     if rows.size and rows.all():  # (every track: no copies)
-        out, fits = _image_result(models, full, starts, z, measured, has_pos, status, cfg, cameras)
+        out, fits = _image_result(models, full, starts, z, measured, has_pos, status, cfg, cameras, given)
         parts.append(_finish(out, starts, frame_times))
     elif rows.any():
         full, starts = _rows(full, rows)
         out, fits = _image_result(models, full, starts, z[rows], measured[rows], has_pos[rows], status[rows], cfg,
-                                  cameras)
+                                  cameras, given)
         parts.append(_finish(out, starts, frame_times))
     return parts, fits
 
 
 def _image_result(models: Mapping[str, SmoothingModel], full: pl.DataFrame, starts: np.ndarray, z: np.ndarray,
                   measured: np.ndarray, has_pos: np.ndarray, status: np.ndarray, cfg: SmoothConfig,
-                  cameras: Mapping[int, PtzCamera] | None) -> tuple[pl.DataFrame, list[TrackFit]]:
+                  cameras: Mapping[int, PtzCamera] | None, given=None) -> tuple[pl.DataFrame, list[TrackFit]]:
     """The image tracks' rows: ``x, y, vx, vy`` smoothed, gaps filled, the other columns interpolated."""
     conf = full["confidence"].to_numpy().astype(float)
     bounds = list(zip(starts[:-1].tolist(), starts[1:].tolist()))
-    smoothed = smooth_tracks([z[a:b] for a, b in bounds], [conf[a:b] for a, b in bounds], cfg)
+    smoothed = (smooth_tracks([z[a:b] for a, b in bounds], [conf[a:b] for a, b in bounds], cfg) if given is None
+                else given(full, starts))
     xs, var, outliers = (smoothed[0][k] if len(smoothed) == 1 else np.concatenate([s[k] for s in smoothed])
                          for k in range(3))  # (one track: its own arrays)
     plan = _plan(measured & ~outliers, measured, has_pos, status, starts, cfg.max_gap)
@@ -552,6 +565,23 @@ def smooth_trajectory(df: pl.DataFrame, config: SmoothConfig = SmoothConfig(), *
     return _sorted(out), sorted(fits, key=lambda f: (f.tracker, f.track_id))
 
 
+def smooth_track_piece(piece: pl.DataFrame, config: SmoothConfig, given, *, frame_times: Mapping[int, int] | None = None,
+                       cameras: Mapping[int, PtzCamera] | None = None) -> tuple[pl.DataFrame, list[TrackFit]]:
+    """:func:`smooth_trajectory` of consecutive rows of one track whose smoother results are known
+    (:mod:`.smooth_long`): ``given(full, starts)`` gives them for the piece's span (an image track:
+    ``[(x, var, outliers, fit)]``, :func:`smooth_tracks`' value; a 3-D one: ``([fitted], [frame rate])``,
+    :func:`_fit_space`'s value and :func:`frame_rate`). Everything else (spans, gaps, interpolations, times,
+    lines of sight) is the whole table's code on the piece."""
+    table = _sorted(piece.select(COLUMNS))
+    tracker = table["tracker"][0]
+    models = {tracker: smoothing_model(tracker)}
+    if isinstance(models[tracker], SpaceSmoothing):
+        parts, fits = _smooth_space(table, models[tracker], config, None, frame_times, given)
+    else:
+        parts, fits = _smooth_image(table, models, config, None, frame_times, cameras, given)
+    return _sorted(pl.concat([p.select(SMOOTH_COLUMNS).cast({**SCHEMA, **EXTRA_SCHEMA}) for p in parts])), fits
+
+
 def _sorted(df: pl.DataFrame) -> pl.DataFrame:
     """``df`` sorted by :data:`KEYS` (stable), not copied when it already is (a long table's copy)."""
     now, before = [pl.col(k) for k in KEYS], [pl.col(k).shift(1) for k in KEYS]
@@ -572,8 +602,9 @@ class _SpaceTrack:
 
 
 def _smooth_space(table: pl.DataFrame, model: SpaceSmoothing, cfg: SmoothConfig, raw: pl.DataFrame | None,
-                  frame_times: Mapping[int, int] | None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
-    """Every 3-D track of one tracker (groups): rows and fits, all tracks at once."""
+                  frame_times: Mapping[int, int] | None, given=None) -> tuple[list[pl.DataFrame], list[TrackFit]]:
+    """Every 3-D track of one tracker (groups): rows and fits, all tracks at once (``given(full, starts)``:
+    the fits and frame rates, already computed: :func:`smooth_track_piece`)."""
     sp = _spans(table, pl.col("X").is_not_null() & (pl.col("status") != "lost"))
     parts = [_finish(df, segments.offsets(df["_tid"].to_numpy()), frame_times) for df in (sp.bare, sp.outside)]
     full, starts = sp.full, sp.starts
@@ -589,22 +620,27 @@ def _smooth_space(table: pl.DataFrame, model: SpaceSmoothing, cfg: SmoothConfig,
         parts.append(_finish(idle, idle_starts, frame_times))
     if not rows.any():
         return parts, []
-    bounds = [(a, b) for a, b, e in zip(starts[:-1].tolist(), starts[1:].tolist(), enough) if e]
-    # each track's own rows of z and R0 (views: the outliers are removed in place, and z, R0 serve nothing after)
-    tracks = [_SpaceTrack(z[a:b], R0[a:b], ok[a:b].copy(), g) for (a, b), g in
-              zip(bounds, [g for g, e in zip(grids, enough) if e])]
-    fitted = _fit_space(model, tracks, cfg)
-    del z, R0, tracks
+    rate = None
+    if given is None:
+        bounds = [(a, b) for a, b, e in zip(starts[:-1].tolist(), starts[1:].tolist(), enough) if e]
+        # each track's own rows of z and R0 (views: the outliers are removed in place, and z, R0 serve nothing after)
+        tracks = [_SpaceTrack(z[a:b], R0[a:b], ok[a:b].copy(), g) for (a, b), g in
+                  zip(bounds, [g for g, e in zip(grids, enough) if e])]
+        fitted = _fit_space(model, tracks, cfg)
+        del tracks
+    else:
+        fitted, rate = given(full, starts)
+    del z, R0
     if not rows.all():
         full, starts = _rows(full, rows)
         status, P3, has_pos, measured = status[rows], P3[rows], has_pos[rows], measured[rows]
-    out, fits = _space_result(model, full, starts, fitted, status, P3, has_pos, measured, cfg, frame_times)
+    out, fits = _space_result(model, full, starts, fitted, status, P3, has_pos, measured, cfg, frame_times, rate)
     return parts + [_finish(out, starts, frame_times)], fits
 
 
 def _space_result(model: SpaceSmoothing, full: pl.DataFrame, starts: np.ndarray, fitted: list[tuple], status: np.ndarray,
                   P3: np.ndarray, has_pos: np.ndarray, measured: np.ndarray, cfg: SmoothConfig,
-                  frame_times: Mapping[int, int] | None) -> tuple[pl.DataFrame, list[TrackFit]]:
+                  frame_times: Mapping[int, int] | None, rate: np.ndarray | None = None) -> tuple[pl.DataFrame, list[TrackFit]]:
     """The 3-D tracks' rows (groups): 3-D position and velocity smoothed, gaps filled."""
     def joined(k: int, of=lambda x: x) -> np.ndarray:  # (one track: its own array)
         return of(fitted[0][k]) if len(fitted) == 1 else np.concatenate([of(f[k]) for f in fitted])
@@ -612,7 +648,7 @@ def _space_result(model: SpaceSmoothing, full: pl.DataFrame, starts: np.ndarray,
     xs, ok, outliers = joined(3), joined(5), joined(6)
     Ps = joined(4, lambda P: P if P.ndim == 2 else np.diagonal(P, axis1=1, axis2=2))  # variances
     plan = _plan(ok, measured, has_pos, status, starts, cfg.max_gap)
-    cols = _space_columns(full, starts, xs, Ps, plan, has_pos, P3, frame_times)
+    cols = _space_columns(full, starts, xs, Ps, plan, has_pos, P3, frame_times, rate)
     out = _assemble(full, cols, np.where(plan.filled, np.nan, full["confidence"].to_numpy().astype(float)), plan)
     heads = full.select(pl.col("tracker", "track_id").gather(starts[:-1]))
     counted = zip(*(segments.counts(m, starts).tolist() for m in (ok, outliers, plan.filled)))
@@ -665,21 +701,26 @@ def _space_filter_axes(model: SpaceSmoothing, tracks: list[_SpaceTrack], accel: 
     (:mod:`.rts`) on three position axes, observed with ``R = s² I``."""
     out: list = [None] * len(tracks)
     width = LANE_ELEMENTS if keep else max(1, LANE_ELEMENTS // len(accel))
-    for lane in _lanes([len(t.z) for t in tracks], width):
+    def pack(lane: list[int]) -> rts.Columns:  # (packed where used: a long lane's columns go when done with)
         zs = [np.concatenate([tracks[i].z, np.full_like(tracks[i].z, np.nan)], axis=1) for i in lane]
-        cols = rts.Columns.pack(zs, [np.ones(len(z)) for z in zs])
+        return rts.Columns.pack(zs, [np.ones(len(z)) for z in zs])
+
+    for lane in _lanes([len(t.z) for t in tracks], width):
         a, sc = (accel[lane], s[lane]) if keep else (accel, s)
         Q, s2 = rts.axis_noise(model.Q, a), sc * sc
         if not keep:
-            ll = rts.grid_loglik(cols, Q, s2, np.zeros_like(s2), LANE_ELEMENTS, SPACE_PRIOR)
+            ll = rts.grid_loglik(lambda lane=lane: pack(lane), Q, s2, np.zeros_like(s2), LANE_ELEMENTS, SPACE_PRIOR)
             for j, i in enumerate(lane):
                 out[i] = ll[:, j]
             continue
-        p, v, pa, pb, pc = rts.smooth_columns(cols, Q, s2, np.zeros_like(s2), SPACE_PRIOR)
-        for j, i in enumerate(lane):
-            n = len(tracks[i].z)
-            xs = np.stack([p[:n, :, j], v[:n, :, j]], axis=2).reshape(n, 6)  # X Ẋ Y Ẏ Z Ż
-            out[i] = (xs, np.tile(np.stack([pa[:n, 0, j], pc[:n, 0, j]], axis=1), 3))  # the axes share one covariance
+        for i in lane:
+            out[i] = (np.empty((len(tracks[i].z), 6)), np.empty((len(tracks[i].z), 6)))
+        for lo, (p, v, pa, _, pc) in rts.smooth_pieces(pack(lane), Q, s2, np.zeros_like(s2), SPACE_PRIOR):  # last first
+            for j, i in enumerate(lane):
+                m = min(len(tracks[i].z) - lo, len(p))
+                if m > 0:
+                    out[i][0][lo:lo + m] = np.stack([p[:m, :, j], v[:m, :, j]], axis=2).reshape(m, 6)  # X Ẋ Y Ẏ Z Ż
+                    out[i][1][lo:lo + m] = np.tile(np.stack([pa[:m, 0, j], pc[:m, 0, j]], axis=1), 3)  # one covariance
     return out
 
 
@@ -744,6 +785,7 @@ def _fit_space(model: SpaceSmoothing, tracks: list[_SpaceTrack], cfg: SmoothConf
                 outliers[i], t.z[bad], t.R0[bad] = bad, np.nan, np.eye(3)
                 oks[i] = oks[i] & ~bad
                 again.append(i)
+                smoothed[i] = None  # (smoothed again below: not held meanwhile)
     if again:
         redo = _space_filter(model, [tracks[i] for i in again], accel[again], s[again], keep=True)
         for i, sm in zip(again, redo):
@@ -751,21 +793,33 @@ def _fit_space(model: SpaceSmoothing, tracks: list[_SpaceTrack], cfg: SmoothConf
     return [(accel[i], s[i], best[i][2], *smoothed[i], oks[i], outliers[i]) for i in range(len(tracks))]
 
 
-def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: np.ndarray, plan: _Plan,
-                   has_pos: np.ndarray, P3: np.ndarray, frame_times: Mapping[int, int] | None) -> dict[str, np.ndarray]:
-    """Smoothed ``X, Y, Z`` with their std and velocity (m/s at each track's median frame interval);
-    the image columns are the tracker's own box on its rows, linear across filled frames (the 3-D
-    model says nothing about the box), a filled row's image velocity the rate of those positions."""
-    frames = full["frame"].to_numpy().astype(np.int64)
-    t = full["t_ns"].to_numpy().astype(float)
+def span_times(t: np.ndarray, frames: np.ndarray, frame_times: Mapping[int, int] | None) -> np.ndarray:
+    """Each row's time (ns, float; NaN unknown): its own, else the log's time of its frame."""
     if frame_times:
         logged, found = logged_times(frame_times, frames)
         t = np.where(np.isfinite(t), t, np.where(found, logged.astype(float), np.nan))
-    rate = np.full(len(starts) - 1, math.nan)
-    for i, (a, b) in enumerate(zip(starts[:-1].tolist(), starts[1:].tolist())):
-        if np.isfinite(t[a:b]).sum() >= 2:
-            dt = np.nanmedian(np.diff(t[a:b])) * 1e-9
-            rate[i] = 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+    return t
+
+
+def frame_rate(t: np.ndarray) -> float:
+    """A track's frames per second: 1 / its median frame interval (``t``: :func:`span_times` of its span)."""
+    if np.isfinite(t).sum() >= 2:
+        dt = np.nanmedian(np.diff(t)) * 1e-9
+        return 1.0 / dt if np.isfinite(dt) and dt > 0 else math.nan
+    return math.nan
+
+
+def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: np.ndarray, plan: _Plan,
+                   has_pos: np.ndarray, P3: np.ndarray, frame_times: Mapping[int, int] | None,
+                   rate: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Smoothed ``X, Y, Z`` with their std and velocity (m/s at each track's median frame interval;
+    ``rate``: each track's frames per second, when known); the image columns are the tracker's own box
+    on its rows, linear across filled frames (the 3-D model says nothing about the box), a filled row's
+    image velocity the rate of those positions."""
+    frames = full["frame"].to_numpy().astype(np.int64)
+    if rate is None:
+        t = span_times(full["t_ns"].to_numpy().astype(float), frames, frame_times)
+        rate = np.array([frame_rate(t[a:b]) for a, b in zip(starts[:-1].tolist(), starts[1:].tolist())])
     per_s = segments.per_row(rate, starts)
     f = frames.astype(float)
     cols: dict[str, np.ndarray] = {}

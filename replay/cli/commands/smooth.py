@@ -65,8 +65,7 @@ def smooth_and_report(table, log: Path, max_gap: int, observations=None, configs
     out, fits = smooth_trajectory(table, SmoothConfig(max_gap=max_gap), frame_times=times, cameras=cameras,
                                   observations=observations, configs=configs)
     for f in fits:
-        print(f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
-              f"{f.filled} frames filled; {f.noise}")
+        print(_fit_line(f))
     return out
 
 
@@ -124,25 +123,101 @@ class _ReadWhole(Exception):
     """The trajectory does not read a piece at a time (out of canonical order, or a check fails)."""
 
 
-def _pieces(trajectory: Path, rows: int):
-    """:func:`~trackreplay.replay.core.export.ordered_tracks`, a failure to read so as :class:`_ReadWhole`."""
+def _pieces(trajectory: Path, rows: int, long_rows: int):
+    """:func:`_tracks_and_long_pieces`, a failure to read so as :class:`_ReadWhole`."""
     import polars as pl
     from pyarrow.lib import ArrowException
     from trackreplay.replay.core import export
     from trackreplay.schemas.errors import TrackreplayError
 
-    tracks = export.ordered_tracks(trajectory, rows)
+    items = _tracks_and_long_pieces(trajectory, rows, long_rows)
     while True:
         try:
-            part = next(tracks)
+            item = next(items)
         except StopIteration:
             return
         except (export.NotCanonical, TrackreplayError, pl.exceptions.PolarsError, OSError, ArrowException):
             raise _ReadWhole from None
-        yield part
+        yield item
 
 
-def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows: int | None = None) -> int | None:
+def _tracks_and_long_pieces(path: Path, rows: int, long_rows: int, batch: int = 4096):
+    """:func:`~trackreplay.replay.core.export.ordered_tracks` (each batch cast and checked, the order checked),
+    except that a track of more than ``long_rows`` rows is given a batch at a time:
+    ``("tracks", table)`` of whole tracks, ``("long", rows)`` of a long track's next rows, ``("end", None)`` after
+    its last (:mod:`~trackreplay.replay.analysis.smooth_long` smooths it in two passes)."""
+    import polars as pl
+    import pyarrow as pa
+    from trackreplay.replay.analysis import segments
+    from trackreplay.replay.core import export
+    from trackreplay.replay.core.trajectory import COLUMNS
+
+    done: list = []  # whole tracks, not yet given
+    size = 0
+    current: list = []  # the rows so far of the track being read
+    key, current_rows, streaming, last_key = None, 0, False, None
+    for df in export.parquet_batches(path, batch):
+        df = export.conform(df, str(path)).select(COLUMNS)
+        if not df.height:
+            continue
+        keys = df.select(export.KEYS)
+        if not _strictly_ordered(keys if last_key is None else pl.concat([last_key, keys])):
+            raise export.NotCanonical(str(path))
+        last_key = keys.tail(1)
+        runs = segments.offsets(df.select(pl.struct("tracker", "track_id").rle_id()).to_series().to_numpy())
+        for a, b in zip(runs[:-1].tolist(), runs[1:].tolist()):
+            part = df.slice(a, b - a)
+            run = (part["tracker"][0], part["track_id"][0])
+            if run != key:
+                if streaming:
+                    yield "end", None
+                else:
+                    done += current
+                    size += current_rows
+                key, current, current_rows, streaming = run, [], 0, False
+                if size >= rows:
+                    pa.default_memory_pool().release_unused()
+                    yield "tracks", pl.concat(done, rechunk=False)
+                    done, size = [], 0
+            if streaming:
+                yield "long", part
+                continue
+            current.append(part)
+            current_rows += part.height
+            if current_rows > long_rows:
+                if done:
+                    yield "tracks", pl.concat(done, rechunk=False)
+                    done, size = [], 0
+                streaming = True
+                for c in current:
+                    yield "long", c
+                current, current_rows = [], 0
+    if streaming:
+        yield "end", None
+    done += current
+    pa.default_memory_pool().release_unused()
+    if done:
+        yield "tracks", pl.concat(done, rechunk=False)
+
+
+def _strictly_ordered(keys) -> bool:
+    """Whether every row of ``keys`` (tracker, track, frame; no nulls) comes after the one before it."""
+    import polars as pl
+
+    later, same = None, None
+    for c in ("tracker", "track_id", "frame"):
+        gt, eq = pl.col(c) > pl.col(c).shift(1), pl.col(c) == pl.col(c).shift(1)
+        later, same = (gt, eq) if later is None else (later | (same & gt), same & eq)
+    return bool(keys.select(later.fill_null(True).all()).item())
+
+
+def _fit_line(f) -> str:
+    return (f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
+            f"{f.filled} frames filled; {f.noise}")
+
+
+def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows: int | None = None,
+                     long_rows: int | None = None) -> int | None:
     """:func:`smooth_and_report` of a Parquet trajectory in canonical order, read once, a few whole tracks at a
     time (:func:`~trackreplay.replay.core.export.ordered_tracks`), each piece's output written as it is done
     (a Parquet row group, or CSV lines): every track is smoothed alone (its fit, gaps and times are its own),
@@ -151,7 +226,11 @@ def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows:
     sentence (its first frame, how many) is raised. The fits are printed once every piece is done. Returns
     the rows written; None, with nothing printed or written, when the file does not read so (out of order,
     a check fails): the whole read then names any defect. The log is read first (its frame times): a log
-    that fails is reported after the trajectory's own defect, as the whole table's path reports them."""
+    that fails is reported after the trajectory's own defect, as the whole table's path reports them.
+
+    A track longer than ``long_rows`` (:data:`~trackreplay.replay.analysis.smooth_long.LONG_ROWS`)
+    is not gathered: its rows go a batch at a time to a :class:`~trackreplay.replay.analysis.smooth_long.LongTrack`,
+    which smooths it once they are all read and gives its rows back a piece at a time (the same rows)."""
     import os
 
     import polars as pl
@@ -163,7 +242,9 @@ def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows:
         log_context,
         smooth_trajectory,
     )
+    from trackreplay.replay.analysis import smooth_long
     from trackreplay.replay.core.export import (
+        WRITE_ROWS,
         PieceWriter,
         read_trajectory,
         trajectory_format,
@@ -184,25 +265,44 @@ def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows:
     def failed(err: Exception) -> OutputError:  # as write_trajectory words a failed write
         return OutputError(f"cannot write {out} ({err})")
 
+    long = None
+
+    def write(smoothed) -> None:  # row groups of WRITE_ROWS, converted a row group at a time
+        try:
+            for at in range(0, smoothed.height, WRITE_ROWS):
+                writer.write(smoothed.slice(at, WRITE_ROWS))
+        except (OSError, pl.exceptions.PolarsError) as err:
+            raise failed(err) from None
+
     try:
         try:
             writer = PieceWriter(tmp, trajectory_format(out), {**SCHEMA, **EXTRA_SCHEMA}).__enter__()
         except (OSError, pl.exceptions.PolarsError) as err:
             raise failed(err) from None
-        for part in _pieces(trajectory, rows or SMOOTH_ROWS):
+        for kind, part in _pieces(trajectory, rows or SMOOTH_ROWS, long_rows or smooth_long.LONG_ROWS):
+            if kind == "end":  # a long track's rows are all read: smoothed, and written a piece at a time
+                if long is not None and not bad:
+                    for smoothed in long.pieces(config, times, cameras):
+                        write(smoothed)
+                        written += smoothed.height
+                    lines += [_fit_line(long.fit)] if long.fit is not None else []
+                if long is not None:
+                    long.close()
+                long = None
+                continue
             wrong = piece_mismatches(part, times)
             if wrong.height:
                 bad.append(wrong)
             if bad:  # (not smoothed: the trajectory is refused)
                 continue
+            if kind == "long":
+                long = long or smooth_long.LongTrack(part["tracker"][0])
+                long.add(part)
+                continue
             smoothed, fits = smooth_trajectory(part, config, frame_times=times, cameras=cameras)
             del part
-            lines += [f"smooth {f.tracker}/{f.track_id}: {f.observations} observations ({f.outliers} rejected), "
-                      f"{f.filled} frames filled; {f.noise}" for f in fits]
-            try:
-                writer.write(smoothed)
-            except (OSError, pl.exceptions.PolarsError) as err:
-                raise failed(err) from None
+            lines += [_fit_line(f) for f in fits]
+            write(smoothed)
             written += smoothed.height
         if not written and not bad:
             raise _ReadWhole  # no rows: the whole read names it
@@ -216,6 +316,8 @@ def smooth_in_pieces(trajectory: Path, log: Path, max_gap: int, out: Path, rows:
         except (OSError, pl.exceptions.PolarsError) as err:
             raise failed(err) from None
     except BaseException as err:
+        if long is not None:
+            long.close()
         if writer is not None:
             try:
                 writer.__exit__(type(err), err, None)  # closed (not finished) before its file is removed

@@ -152,3 +152,56 @@ def test_filter_of_gathered_columns_is_the_filter_of_their_copy() -> None:
     assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1]) and np.isfinite(got[0]).all()
     for f in snaps:
         assert all(np.array_equal(a, b) for a, b in zip(got[2][f], want[2][f]))
+
+
+def _pieces_together(cols, Q, s2, sv2, spill: bool) -> tuple[np.ndarray, ...]:
+    out = [np.full((cols.zp.shape[0], *x.shape[1:]), np.nan) for x in rts.smooth_columns(cols, Q, s2, sv2)]
+    order = []
+    for lo, piece in rts.smooth_pieces(cols, Q, s2, sv2, spill=spill):
+        order.append(lo)
+        for x, y in zip(out, piece):
+            x[lo:lo + len(y)] = y
+    assert order == sorted(order, reverse=True)  # the last piece first
+    return tuple(out)
+
+
+@pytest.mark.parametrize("velocity", [False, True])
+@pytest.mark.parametrize("lengths", [(300, 611, 257), (611,)])
+def test_rts_in_pieces_spilled_is_the_whole_pass(velocity: bool, lengths: tuple[int, ...], monkeypatch) -> None:
+    """Issue 33: a long lane's RTS a piece of ``SCAN_FRAMES`` frames at a time (the forward pass's states
+    written to a temporary file, the backward pass piece by piece, the last first) gives the in-memory
+    pass's numbers to the bit: several pieces, unobserved frames, tracks ending in different pieces, and
+    one track alone (filtered in Python floats)."""
+    tracks = [_track(n, velocity, seed=n) for n in lengths]
+    cols = rts.Columns.pack([z for z, _ in tracks], [r for _, r in tracks])
+    b = len(lengths)
+    Q = rts.axis_noise(DEFAULT_SMOOTHING.Q, np.array([1e-3, 0.1, 10.0][:b]))
+    s2, sv2 = np.array([0.09, 1.0, 9.0][:b]), np.array([0.01, 1.0, 0.25][:b])
+    one_scan = rts.smooth_columns(cols, Q, s2, sv2)  # 611 frames: one scan
+    monkeypatch.setattr(rts, "SCAN_FRAMES", 64)  # ten pieces
+    whole = rts.smooth_columns(cols, Q, s2, sv2)
+    spilled = _pieces_together(cols, Q, s2, sv2, spill=True)
+    kept = _pieces_together(cols, Q, s2, sv2, spill=False)
+    for w, s, k, o in zip(whole, spilled, kept, one_scan):
+        assert np.isfinite(s).all() and np.array_equal(w, s) and np.array_equal(w, k)
+        # the pieces change only how the backward maps are associated: rounding, against one scan of the lane
+        assert np.allclose(s, o, rtol=1e-12, atol=1e-12 * np.abs(o).max())
+
+
+def test_filter_in_pieces_is_the_whole_filter() -> None:
+    """The forward pass a piece at a time carries its state: the same filtered states to the bit."""
+    tracks = [_track(n, True, seed=n) for n in (300, 611, 257)]
+    cols = rts.Columns.pack([z for z, _ in tracks], [r for _, r in tracks])
+    Q = tuple(x[None] for x in rts.axis_noise(DEFAULT_SMOOTHING.Q, np.array([1e-3, 0.1, 10.0])))
+    s2, sv2 = np.array([[0.09, 1.0, 9.0]]), np.array([[0.01, 1.0, 0.25]])
+    _, whole = rts.filter_columns(cols, Q, s2, sv2, True)
+    pieces = list(rts.filter_chunks(cols, Q, s2, sv2, rts.IMAGE_PRIOR, 100))
+    assert [lo for lo, _ in pieces] == list(range(0, 611, 100))
+    for k, w in enumerate(whole):
+        assert np.array_equal(w, np.concatenate([p[k] for _, p in pieces]))
+    one = rts.Columns.pack([tracks[1][0]], [tracks[1][1]])
+    q = tuple(float(x[0, 1]) for x in Q)
+    floats = rts.filter_one(one, q, 1.0, 1.0)
+    chunks = list(rts.filter_one_chunks(one, q, 1.0, 1.0, rts.IMAGE_PRIOR, 100))
+    for k, w in enumerate(floats):
+        assert np.array_equal(w, np.concatenate([p[k] for _, p in chunks]))

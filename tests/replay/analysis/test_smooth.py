@@ -427,17 +427,28 @@ def _many_flow_tracks() -> pl.DataFrame:
 
 @pytest.mark.parametrize("order", ["canonical", "shuffled"])
 @pytest.mark.parametrize("suffix", [".parquet", ".csv"])
-@pytest.mark.parametrize("case", ["flow", "groups"])
+@pytest.mark.parametrize("case", ["flow", "groups", "flow-long", "groups-long"])
 def test_smooth_command_in_pieces_writes_the_whole_tables_output(tmp_path: Path, monkeypatch, capsys, case: str,
                                                                   suffix: str, order: str) -> None:
     """Issue 33: `smooth` on a Parquet trajectory in canonical order reads it once from its start, a few rows
     at a time (a track across several reads), and smooths and writes a few whole tracks at a time; the printed
     fits and the written table are the whole table's (compared with the path that reads it whole). A file in
-    another order is read whole."""
+    another order is read whole. ``…-long``: every track is a long one (``LONG_ROWS``), smoothed in two
+    passes and written in pieces of a few frames (``smooth_long``)."""
     import functools
 
+    from trackreplay.replay.analysis import smooth_long
     from trackreplay.replay.cli.commands import smooth as command
-    from trackreplay.replay.core import export
+
+    long = case.endswith("-long")
+    case = case.split("-")[0]
+    longs: list[int] = []
+    if long:
+        monkeypatch.setattr(smooth_long, "LONG_ROWS", 6)
+        monkeypatch.setattr(smooth_long, "PIECE_FRAMES", 5)
+        pieces_of = smooth_long.LongTrack.pieces
+        monkeypatch.setattr(smooth_long.LongTrack, "pieces", lambda self, *a: (longs.append(1) or p
+                                                                                for p in pieces_of(self, *a)))
 
     log = GOLDEN / ("flow-sim1-24f.mcap" if case == "flow" else "groups-crossing-320x240.mcap")
     traj = tmp_path / "t.parquet"
@@ -446,15 +457,17 @@ def test_smooth_command_in_pieces_writes_the_whole_tables_output(tmp_path: Path,
         table = table.sample(fraction=1.0, shuffle=True, seed=4)
     table.write_parquet(traj)
     pieces: list[int] = []
-    ordered = export.ordered_tracks
-    monkeypatch.setattr(export, "ordered_tracks", lambda *a: (pieces.append(p.height) or p
-                                                              for p in functools.partial(ordered, batch=7)(*a)))
+    reader = command._tracks_and_long_pieces
+    monkeypatch.setattr(command, "_tracks_and_long_pieces", lambda *a: (pieces.append(0 if p is None else p.height)
+                                                                        or (k, p) for k, p in
+                                                                        functools.partial(reader, batch=7)(*a)))
     monkeypatch.setattr(command, "SMOOTH_ROWS", 30 if case == "flow" else 1)  # a track or two a piece
     capsys.readouterr()
     assert main(["smooth", str(traj), str(log), "--out", str(tmp_path / f"a{suffix}")]) == 0
     streamed = capsys.readouterr().out
     if order == "canonical":
         assert len(pieces) >= 2 and sum(pieces) == table.height
+        assert len(longs) >= (5 if long else 0)  # (long tracks cut in pieces of 5 frames)
     else:
         assert len(pieces) <= 1  # refused at its first rows out of order: read whole
     monkeypatch.setattr(command, "smooth_in_pieces", lambda *a, **k: None)  # the whole table
@@ -521,3 +534,27 @@ def test_a_pieces_frame_mismatches_by_search_are_the_joins(as_dict: bool) -> Non
     want = frame_time_mismatches(table, pl.DataFrame({"frame": logged, "t_ns": logged * 10}), missing=True)
     got = piece_mismatches(table, times)
     assert want.height > 10 and got.equals(want, null_equal=True)
+
+
+@pytest.mark.parametrize("tracker", ["flow", "groups"])
+def test_tracks_smoothed_in_spilled_pieces_are_the_tables_in_memory(tracker: str, benchmark_module, monkeypatch) -> None:
+    """Issue 33: a long track's RTS pass a piece at a time, its filtered states in a temporary file and each
+    piece written straight into the track's rows, smooths the same table to the bit as keeping the pass in
+    memory: one long track (Python floats) and several of different lengths (a lane), gaps and outliers."""
+    from trackreplay.replay.analysis import rts
+
+    bench = benchmark_module("bench_smooth")
+    monkeypatch.setattr(rts, "SCAN_FRAMES", 100)
+    spilled, spill = [], rts._Spill
+    for tracks in (1, 3):
+        table = bench.synthetic_trajectory(1200, tracker, tracks=tracks, seed=7)
+        monkeypatch.setattr(rts, "SPILL_FRAMES", 200)  # every lane of more than two pieces spills
+        calls: list[int] = []
+        monkeypatch.setattr(rts, "_Spill", lambda: calls.append(1) or spill())
+        got, fits = smooth_trajectory(table)
+        monkeypatch.setattr(rts, "SPILL_FRAMES", 10**9)
+        want, want_fits = smooth_trajectory(table)
+        assert calls and got.equals(want, null_equal=True) and fits == want_fits
+        assert got["fill"].is_in(["rts_gap"]).any() and got["fill"].is_in(["rts_outlier"]).any()
+        spilled.append(len(calls))
+    assert spilled[0] >= 2  # the track was smoothed again without its outliers, spilled both times
