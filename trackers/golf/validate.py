@@ -7,8 +7,13 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   ``s = sqrt(σx² + σy²) + D/2`` (the samples' spread after eq. (1) and the ball diameter), ``s``
   at most ``max_spread_px + D`` so a cloud spread wide after a loss does not accept anything in
   the picture. Only shape-accepted blobs inside the gate are the observation ``z_t`` of eq. (2);
-- **confidence** of the in-gate blob nearest the prediction: ``fit * exp(-d² / 2s²)``, ``fit``
-  from its area and roundness against the targets. ``measured`` needs ``min_confidence``, and
+- **confidence** of the likeliest in-gate blob, the one with the largest ``L = fit * exp(-d² / 2s²)``
+  (``fit`` from its area and roundness against the targets, ``d`` its distance from the prediction):
+  ``L`` times that blob's share ``L / ΣL`` of the in-gate blobs' likelihoods, the probability that it,
+  of them, is the ball (PDA's association probability without a missed-detection term). Alone in the
+  gate it keeps ``L``; beside a look-alike as near it holds half (a shuttle among a player's white
+  socks: on the wide-angle rally the track then stays ``predicted`` instead of following a sock).
+  ``measured`` needs ``min_confidence``, and
   ``min_fit`` from the shape alone (a speck a fifth of the ball's area right on the predicted path
   is not the ball: the edge of a cup's liner after the ball merged with it); below, the row is
   ``predicted`` and nothing (targets, EKF, LUTs) learns from the blob;
@@ -236,7 +241,7 @@ class Validator:
 
     def seen_in_gate(self, *, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
                      size: tuple[int, int], scale: float, lost: bool) -> tuple[Validation | None, np.ndarray, bool]:
-        """The in-gate blob nearest the prediction as a "measured", "low_confidence" or "merged_nearer" validation
+        """The likeliest in-gate blob (module docstring) as a "measured", "low_confidence" or "merged_nearer" validation
         (None: no blob in the gate), the in-gate mask and whether the prediction left the picture.
         Changes nothing (the tracker also asks it of the other LUT's silhouette)."""
         width, height = size
@@ -252,10 +257,13 @@ class Validator:
             outside = not in_gate.any() and bool(beyond_edges(predicted, size).any())
         if not in_gate.any():
             return None, in_gate, outside
-        k = int(np.flatnonzero(in_gate)[np.argmin(d[in_gate])])
-        fit = blob_fit(gated, k, self.blobs, scale)
-        motion = math.exp(-0.5 * (float(d[k]) / s) ** 2)
-        confidence = fit * motion
+        rows = np.flatnonzero(in_gate)
+        fits = np.array([blob_fit(gated, int(j), self.blobs, scale) for j in rows])
+        motions = np.exp(-0.5 * (d[rows] / s) ** 2)
+        like = fits * motions
+        best = int(np.argmax(like))
+        k, fit, motion = int(rows[best]), float(fits[best]), float(motions[best])
+        confidence = fit * motion * float(like[best] / like.sum())
         verdict = "measured" if confidence >= self.cfg.min_confidence and fit >= self.cfg.min_fit else "low_confidence"
         if verdict == "measured" and self._merged_nearer(gated, k, d, scale):
             verdict = "merged_nearer"

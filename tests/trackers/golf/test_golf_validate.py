@@ -292,3 +292,38 @@ def test_the_gate_is_never_wider_than_a_quarter_of_the_picture():
     wide = validator.seen_in_gate(gated=gated, predicted=np.array([190.0, 140.0]), spread=np.full(2, 50.0),
                                   diameter=32.0, size=(1280, 960), scale=2.0, lost=False)[0]
     assert wide is not None and wide.verdict == "measured"  # the same blob in a picture four times as large
+
+
+def _discs(*discs: tuple[float, float, int]) -> GatedBlobs:
+    """Shape-accepted discs ``(x, y, radius)``; the targets are the first disc's area."""
+    mask = np.zeros(SIZE[::-1], np.uint8)
+    for x, y, r in discs:
+        cv2.circle(mask, (int(x), int(y)), r, 1, -1)
+    blobs = measure_blobs(mask)
+    first = int(np.argmin(np.hypot(blobs.centroid[:, 0] - discs[0][0], blobs.centroid[:, 1] - discs[0][1])))
+    return GatedBlobs(blobs, np.zeros(len(blobs.area), np.int64), -1, np.array([float(blobs.area[first]), 0.9]), 1.0)
+
+
+def _seen(gated: GatedBlobs, spread: float = 8.0):
+    found, _, _ = Validator(ValidateConfig(), BlobConfig()).seen_in_gate(
+        gated=gated, predicted=np.array([600.0, 300.0]), spread=np.full(2, spread), diameter=9.0, size=SIZE, scale=1.0,
+        lost=False)
+    return found
+
+
+def test_of_the_blobs_in_the_gate_the_likeliest_ball_is_taken_not_the_nearest():
+    # A speck a ninth of the ball's area 3 px from the prediction, the ball 10 px away.
+    found = _seen(_discs((610.0, 300.0, 6), (597.0, 300.0, 2)))
+    centre = found and _discs((610.0, 300.0, 6), (597.0, 300.0, 2)).blobs.centroid[found.candidate]
+    assert found.verdict == "measured" and abs(centre[0] - 610.0) < 1.0
+
+
+def test_a_look_alike_in_the_gate_shares_the_confidence():
+    """The confidence is the chosen blob's fit times motion times its share of the in-gate blobs' (the
+    association probability among them): with a twin as near the prediction the track cannot tell which
+    one is its ball, and each holds half (a shuttle among a player's white socks and shoes)."""
+    alone = _seen(_discs((620.0, 300.0, 4)))
+    twins = _seen(_discs((620.0, 300.0, 4), (580.0, 300.0, 4)))
+    assert alone.verdict == "measured"
+    assert twins.confidence == pytest.approx(alone.confidence / 2.0, rel=0.05)
+    assert twins.verdict == "low_confidence"  # below min_confidence: "predicted", nothing learns from either
