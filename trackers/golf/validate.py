@@ -7,12 +7,14 @@ whether it can *be* the ball given the motion model, and gives every frame a con
   ``s = sqrt(σx² + σy²) + D/2`` (the samples' spread after eq. (1) and the ball diameter), ``s``
   at most ``max_spread_px + D`` so a cloud spread wide after a loss does not accept anything in
   the picture. Only shape-accepted blobs inside the gate are the observation ``z_t`` of eq. (2);
-- **confidence** of the likeliest in-gate blob, the one with the largest ``L = fit * exp(-d² / 2s²)``
-  (``fit`` from its area and roundness against the targets, ``d`` its distance from the prediction):
-  ``L`` times that blob's share ``L / ΣL`` of the in-gate blobs' likelihoods, the probability that it,
-  of them, is the ball (PDA's association probability without a missed-detection term). Alone in the
-  gate it keeps ``L``; beside a look-alike as near it holds half (a shuttle among a player's white
-  socks: on the wide-angle rally the track then stays ``predicted`` instead of following a sock).
+- **confidence** of the in-gate blob nearest the prediction, ``L = fit * exp(-d² / 2s²)`` (``fit`` from
+  its area and roundness against the targets, ``d`` its distance from the prediction), times its share
+  ``L / ΣL`` of the in-gate blobs' likelihoods (each blob's ``L`` alike), the probability that it,
+  of them, is the ball (PDA's association probability without a missed-detection term). A blob within a
+  ball diameter of it is a piece of the same ball (a ball split by a seam's shadow), not a rival, and is
+  left out of the sum. Alone in the gate it keeps ``L``; beside a look-alike as near it holds half (a
+  shuttle among a player's white socks: on the wide-angle rally the track then stays ``predicted``
+  instead of following a sock).
   ``measured`` needs ``min_confidence``, and
   ``min_fit`` from the shape alone (a speck a fifth of the ball's area right on the predicted path
   is not the ball: the edge of a cup's liner after the ball merged with it); below, the row is
@@ -241,7 +243,8 @@ class Validator:
 
     def seen_in_gate(self, *, gated: GatedBlobs, predicted: np.ndarray, spread: np.ndarray, diameter: float,
                      size: tuple[int, int], scale: float, lost: bool) -> tuple[Validation | None, np.ndarray, bool]:
-        """The likeliest in-gate blob (module docstring) as a "measured", "low_confidence" or "merged_nearer" validation
+        """The in-gate blob nearest the prediction, its confidence shared with look-alikes in the gate (module
+        docstring), as a "measured", "low_confidence" or "merged_nearer" validation
         (None: no blob in the gate), the in-gate mask and whether the prediction left the picture.
         Changes nothing (the tracker also asks it of the other LUT's silhouette)."""
         width, height = size
@@ -261,9 +264,11 @@ class Validator:
         fits = np.array([blob_fit(gated, int(j), self.blobs, scale) for j in rows])
         motions = np.exp(-0.5 * (d[rows] / s) ** 2)
         like = fits * motions
-        best = int(np.argmax(like))
+        best = int(np.argmin(d[rows]))  # §2.1: the accepted blob nearest the prediction is the ball
         k, fit, motion = int(rows[best]), float(fits[best]), float(motions[best])
-        confidence = fit * motion * float(like[best] / like.sum())
+        # a look-alike is another object: a blob within a ball's diameter of this one is a piece of it
+        apart = np.hypot(c[rows, 0] - c[k, 0], c[rows, 1] - c[k, 1]) > diameter
+        confidence = fit * motion * float(like[best] / (like[best] + like[apart].sum()))
         verdict = "measured" if confidence >= self.cfg.min_confidence and fit >= self.cfg.min_fit else "low_confidence"
         if verdict == "measured" and self._merged_nearer(gated, k, d, scale):
             verdict = "merged_nearer"
