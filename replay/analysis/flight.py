@@ -442,6 +442,95 @@ def observations(traj: pl.DataFrame, cameras: dict[int, PtzCamera], *, track_id:
     return Observations(frames, rows["t_ns"].to_numpy().astype(float) * 1e-9, los, size, fx, np.asarray(position, float), conf)
 
 
+# --- the trajectory read for a fit: only the rows and columns it uses ---------------------------------
+READ_ROWS = 4096  # rows of a trajectory file read, cast and checked at a time (issue 33)
+OBSERVED = ("tracker", "track_id", "frame", "t_ns", "x", "w", "h", "dx", "dy", "dz", "status", "confidence")
+
+
+@dataclass(frozen=True, eq=False)
+class FlightInput:
+    """What ``flight`` uses of a trajectory: the ball's trackers' rows (every tracker's when none is a
+    ball's) reduced to their measured rows with a position and a line of sight (:data:`OBSERVED`,
+    canonical order), the tracks they hold and each track's measured rows."""
+
+    rows: pl.DataFrame
+    tracks: frozenset[int]
+    measured: dict[int, int]
+
+    def most_measured(self) -> int | None:
+        """The track with the most measured rows (the lowest id among equals); None when none has one."""
+        return min(self.measured, key=lambda t: (-self.measured[t], t)) if self.measured else None
+
+
+def _observed(table: pl.DataFrame) -> pl.DataFrame:
+    return table.filter((pl.col("status") == "measured") & pl.col("dx").is_not_null()
+                        & pl.col("x").is_not_null()).select(OBSERVED)
+
+
+def _input(parts: list[pl.DataFrame], counts: pl.DataFrame, ball: Callable[[str], bool]) -> FlightInput:
+    """``parts``: :func:`_observed` rows in canonical order; ``counts``: ``tracker, track_id, measured`` of
+    every track."""
+    names = [n for n in counts["tracker"].unique().sort().to_list() if ball(n)]
+    if names:
+        counts = counts.filter(pl.col("tracker").is_in(names))
+    rows = pl.concat(parts) if parts else pl.DataFrame(schema={c: SCHEMA[c] for c in OBSERVED})
+    if names:
+        rows = rows.filter(pl.col("tracker").is_in(names))
+    per_track = counts.group_by("track_id").agg(pl.col("measured").sum())
+    measured = {int(t): int(n) for t, n in per_track.iter_rows() if n > 0}
+    return FlightInput(rows, frozenset(int(t) for t in counts["track_id"]), measured)
+
+
+def _counts(table: pl.DataFrame) -> pl.DataFrame:
+    return table.group_by("tracker", "track_id").agg((pl.col("status") == "measured").sum().cast(pl.Int64).alias("measured"))
+
+
+def flight_input(table: pl.DataFrame, ball: Callable[[str], bool]) -> FlightInput:
+    """The :class:`FlightInput` of a whole table (``read_trajectory``'s); ``ball(name)``: whether a tracker's
+    tracks are a ball in flight."""
+    return _input([_observed(table).sort(["tracker", "track_id", "frame"], maintain_order=True)], _counts(table), ball)
+
+
+def read_flight_input(path, ball: Callable[[str], bool], rows: int | None = None) -> FlightInput | None:
+    """:func:`flight_input` of a Parquet or CSV trajectory read ``rows`` (:data:`READ_ROWS`) at a time, each
+    batch cast and checked as ``read_trajectory`` checks the whole table (``conform``), keeping only the
+    observed rows and the per-track counts (issue 33: the whole table was ~150 bytes a row). None when a
+    check fails, the file does not read, holds no rows or is not in canonical order (a track's frame twice
+    across batches would go unseen): then read it whole, which names a defect in its own words."""
+    from pathlib import Path
+
+    from pyarrow.lib import ArrowException
+
+    from trackreplay.replay.core import export
+
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if not path.is_file() or suffix not in (".parquet", ".csv"):
+        return None
+    if suffix == ".parquet":
+        batches = (export.conform(b, str(path)) for b in export.parquet_batches(path, rows or READ_ROWS))
+    else:
+        batches = (part for part, _ in export._csv_parts(path))
+    kept, counts, last, n = [], [], None, 0
+    try:
+        for batch in batches:
+            if not batch.height:
+                continue
+            keys = batch.select(export.KEYS)
+            if not export._strictly_ordered(keys if last is None else pl.concat([last, keys])):
+                return None
+            last = keys.tail(1)
+            n += batch.height
+            kept.append(_observed(batch))
+            counts.append(_counts(batch))
+    except (export._ReadWhole, TrackreplayError, pl.exceptions.PolarsError, OSError, ArrowException):
+        return None
+    if not n:
+        return None
+    total = pl.concat(counts).group_by("tracker", "track_id").agg(pl.col("measured").sum())
+    return _input(kept, total, ball)
+
+
 def _residuals(theta: np.ndarray, obs: Observations, cfg: FlightConfig, t_end: float, basis: np.ndarray) -> np.ndarray:
     shot = simulate(theta, cfg, t_end)
     pos, _ = shot.at(obs.t)
@@ -564,12 +653,22 @@ class FlightFit:
         so a long log's frames cost 49 bytes each (position, 1-σ, phase), not also their derivatives' 360."""
         times = np.asarray(times, dtype=np.float64)
         pos, std, phase = np.empty((len(times), 3)), np.empty((len(times), 3)), np.empty(len(times), np.int8)
-        shots = self._perturbed(times)
-        for lo in range(0, len(times), POSITION_CHUNK):
-            part = slice(lo, lo + POSITION_CHUNK)
-            pos[part], J, phase[part] = self._sensitivity(times[part], shots)
-            std[part] = np.sqrt(np.maximum(np.einsum("nap,pq,naq->na", J, self.cov, J), 0.0))
+        lo = 0
+        for p, s, ph in self.position_parts(times):
+            part = slice(lo, lo + len(p))
+            pos[part], std[part], phase[part] = p, s, ph
+            lo += len(p)
         return pos, std, phase
+
+    def position_parts(self, times: np.ndarray, chunk: int | None = None):
+        """:meth:`positions` ``chunk`` (:data:`POSITION_CHUNK`) times at a time, in order (the perturbed
+        flights simulated once, to the last of all ``times``): each part's values are those of all at once."""
+        times = np.asarray(times, dtype=np.float64)
+        chunk = chunk or POSITION_CHUNK
+        shots = self._perturbed(times)
+        for lo in range(0, len(times), chunk):
+            pos, J, phase = self._sensitivity(times[lo:lo + chunk], shots)
+            yield pos, np.sqrt(np.maximum(np.einsum("nap,pq,naq->na", J, self.cov, J), 0.0)), phase
 
     def sensitivity(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fitted positions at log times (s), their derivatives by the parameters ``(n, 3, p)``
@@ -804,14 +903,39 @@ def _report(problem: _Problem, theta: np.ndarray, theta_out: np.ndarray, pstd: n
     )
 
 
+ROWS_CHUNK = 8192  # frames of the fitted flight built (and written: a Parquet row group) at a time
+
+
 def flight_rows(fit: FlightFit, frame_times: dict[int, int], cameras: dict[int, PtzCamera],
                 tracker: str = "golf", track_id: int = 1) -> pl.DataFrame:
     """The fitted 3-D trajectory at every frame time: ★ trajectory rows (status ``interpolated``:
     a model value, not a measurement) with ``X, Y, Z``, the line of sight ``dx, dy, dz``, the image
     position in that frame's camera, and extra columns ``X_std, Y_std, Z_std`` (m) and ``phase``."""
+    return pl.concat(list(flight_row_parts(fit, frame_times, cameras, tracker, track_id)))
+
+
+FLIGHT_SCHEMA = {**SCHEMA, "X_std": pl.Float64, "Y_std": pl.Float64, "Z_std": pl.Float64, "phase": pl.String}
+
+
+def flight_row_parts(fit: FlightFit, frame_times: dict[int, int], cameras: dict[int, PtzCamera],
+                     tracker: str = "golf", track_id: int = 1, chunk: int | None = None):
+    """:func:`flight_rows` ``chunk`` (:data:`ROWS_CHUNK`) frames at a time, in frame order (a long log's
+    table is never whole: issue 33); at least one part, each the whole table's rows on its frames."""
+    chunk = chunk or ROWS_CHUNK
     frames = np.array(sorted(frame_times), dtype=np.int64)
-    t = np.array([frame_times[int(f)] for f in frames], dtype=np.float64) * 1e-9
-    pos, std, phase = fit.positions(t)
+    t_ns = np.array([frame_times[int(f)] for f in frames], dtype=np.int64)
+    lo = 0
+    for pos, std, phase in fit.position_parts(t_ns.astype(np.float64) * 1e-9, chunk):
+        part = slice(lo, lo + len(pos))
+        lo += len(pos)
+        yield _flight_table(fit, frames[part], t_ns[part], cameras, pos, std, phase, tracker, track_id)
+    if not len(frames):
+        empty = np.empty((0, 3))
+        yield _flight_table(fit, frames, t_ns, cameras, empty, empty, np.empty(0, np.int8), tracker, track_id)
+
+
+def _flight_table(fit: FlightFit, frames: np.ndarray, t_ns: np.ndarray, cameras, pos: np.ndarray, std: np.ndarray,
+                  phase: np.ndarray, tracker: str, track_id: int) -> pl.DataFrame:
     rel = pos - fit.observations.camera
     d = rel / np.linalg.norm(rel, axis=1, keepdims=True)
     uv = np.full((len(frames), 2), np.nan)
@@ -825,10 +949,41 @@ def flight_rows(fit: FlightFit, frame_times: dict[int, int], cameras: dict[int, 
     nan = np.full(n, np.nan)
     df = pl.DataFrame({
         "tracker": [tracker] * n, "track_id": np.full(n, track_id, np.int64), "frame": frames,
-        "t_ns": np.array([frame_times[int(f)] for f in frames], dtype=np.int64),
+        "t_ns": t_ns,
         "x": uv[:, 0], "y": uv[:, 1], "w": nan, "h": nan, "X": pos[:, 0], "Y": pos[:, 1], "Z": pos[:, 2],
         "dx": d[:, 0], "dy": d[:, 1], "dz": d[:, 2], "vx": nan, "vy": nan, "status": ["interpolated"] * n,
         "confidence": nan, "X_std": std[:, 0], "Y_std": std[:, 1], "Z_std": std[:, 2],
         "phase": [PHASES[int(p)] for p in phase],
     }, nan_to_null=True)
     return df.cast(SCHEMA).select(*COLUMNS, "X_std", "Y_std", "Z_std", "phase")
+
+
+def write_flight(fit: FlightFit, frame_times: dict[int, int], cameras: dict[int, PtzCamera], path,
+                 tracker: str = "golf", track_id: int = 1, chunk: int | None = None) -> int:
+    """:func:`flight_rows` written to ``path`` (.parquet: a row group a part; .csv) a part at a time, under
+    this process's own partial name until complete; the rows written."""
+    import os
+    from pathlib import Path
+
+    from trackreplay.recorder.atomic import claim_partial
+    from trackreplay.replay.core.export import PieceWriter, trajectory_format
+    from trackreplay.schemas.errors import OutputError
+
+    path = Path(path)
+    kind = trajectory_format(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = claim_partial(path)
+    written = 0
+    try:
+        with PieceWriter(tmp, kind, FLIGHT_SCHEMA) as out:
+            for part in flight_row_parts(fit, frame_times, cameras, tracker, track_id, chunk):
+                out.write(part)
+                written += part.height
+        os.replace(tmp, path)
+    except (OSError, pl.exceptions.PolarsError) as err:
+        tmp.unlink(missing_ok=True)
+        raise OutputError(f"cannot write {path} ({err})") from None
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    return written

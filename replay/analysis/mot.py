@@ -22,7 +22,7 @@ similarity is ≥ α. ``tests/replay/analysis/test_hota_parity.py`` matches Trac
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -171,39 +171,50 @@ def distance_similarity(gt: np.ndarray, hyp: np.ndarray, max_distance: float) ->
     return np.clip(1.0 - d / max_distance, 0.0, None) if d.size else d
 
 
-def hota(frames: Iterable[Frame]) -> HotaSummary:
+def hota(frames: Iterable[Frame] | Callable[[], Iterable[Frame]]) -> HotaSummary:
     """HOTA, DetA, AssA, LocA (and DetRe/DetPr/AssRe/AssPr) over frames of (gt ids, hyp ids,
-    similarity (n, m) in [0, 1]; NaN counts as 0)."""
-    seq = []
-    for oids, hids, sim in frames:
-        oids, hids = np.asarray(oids, np.int64).ravel(), np.asarray(hids, np.int64).ravel()
-        sim = np.nan_to_num(np.asarray(sim, np.float64).reshape(len(oids), len(hids)), nan=0.0)
-        seq.append((oids, hids, sim))
-    gts = sorted({int(o) for oids, _, _ in seq for o in oids})
-    hyps = sorted({int(h) for _, hids, _ in seq for h in hids})
-    gi, hi = {o: k for k, o in enumerate(gts)}, {h: k for k, h in enumerate(hyps)}
-    n_alpha = len(ALPHAS)
-    tp, fn, fp, loc = np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha)
-    n_gt = sum(len(o) for o, _, _ in seq)
-    n_hyp = sum(len(h) for _, h, _ in seq)
-    if n_gt == 0 or n_hyp == 0:  # nothing to match: DetA 0, LocA 1 by convention (as TrackEval)
-        zero = np.zeros(n_alpha)
-        return _hota_summary(zero, zero + n_gt, zero + n_hyp, np.ones(n_alpha), zero, zero, zero)
-    idx = [(np.array([gi[int(o)] for o in oids], np.int64), np.array([hi[int(h)] for h in hids], np.int64), sim)
-           for oids, hids, sim in seq]
-    # global alignment: soft Jaccard per id pair, each frame's similarity shared out like an IoU
-    potential = np.zeros((len(gts), len(hyps)))
-    gt_count, hyp_count = np.zeros((len(gts), 1)), np.zeros((1, len(hyps)))
-    for g, h, sim in idx:
+    similarity (n, m) in [0, 1]; NaN counts as 0). ``frames`` may be a function giving the same frames
+    afresh on each call: they are then gone through twice (the global alignment, then each frame's
+    assignment) and never held together (issue 33: a long log)."""
+    if not callable(frames):
+        kept = list(frames)
+        frames = lambda: kept  # noqa: E731
+    # pass 1, global alignment: soft Jaccard per id pair, each frame's similarity shared out like an IoU
+    potential: dict[tuple[int, int], float] = {}
+    gt_counts: dict[int, int] = {}
+    hyp_counts: dict[int, int] = {}
+    n_gt = n_hyp = 0
+    for oids, hids, sim in _hota_frames(frames()):
+        n_gt += len(oids)
+        n_hyp += len(hids)
         if sim.size:
             denom = sim.sum(axis=0, keepdims=True) + sim.sum(axis=1, keepdims=True) - sim
             share = np.where(denom > _EPS, sim / np.where(denom > _EPS, denom, 1.0), 0.0)
-            np.add.at(potential, (g[:, None], h[None, :]), share)
-        np.add.at(gt_count, (g, 0), 1)
-        np.add.at(hyp_count, (0, h), 1)
-    alignment = potential / (gt_count + hyp_count - potential)
+            for i, j in zip(*np.nonzero(share)):  # row by row, as np.add.at adds them (a zero adds nothing)
+                key = (int(oids[i]), int(hids[j]))
+                potential[key] = potential.get(key, 0.0) + float(share[i, j])
+        for o in oids.tolist():
+            gt_counts[o] = gt_counts.get(o, 0) + 1
+        for h in hids.tolist():
+            hyp_counts[h] = hyp_counts.get(h, 0) + 1
+    gts, hyps = sorted(gt_counts), sorted(hyp_counts)
+    gi, hi = {o: k for k, o in enumerate(gts)}, {h: k for k, h in enumerate(hyps)}
+    n_alpha = len(ALPHAS)
+    tp, fn, fp, loc = np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha), np.zeros(n_alpha)
+    if n_gt == 0 or n_hyp == 0:  # nothing to match: DetA 0, LocA 1 by convention (as TrackEval)
+        zero = np.zeros(n_alpha)
+        return _hota_summary(zero, zero + n_gt, zero + n_hyp, np.ones(n_alpha), zero, zero, zero)
+    pot = np.zeros((len(gts), len(hyps)))
+    for (o, h), v in potential.items():
+        pot[gi[o], hi[h]] = v
+    gt_count = np.array([[gt_counts[o]] for o in gts], np.float64).reshape(len(gts), 1)
+    hyp_count = np.array([hyp_counts[h] for h in hyps], np.float64).reshape(1, len(hyps))
+    alignment = pot / (gt_count + hyp_count - pot)
+    # pass 2: each frame's pairs, by one assignment maximising similarity x alignment
     pair_tp = np.zeros((n_alpha, len(gts), len(hyps)))
-    for g, h, sim in idx:
+    for oids, hids, sim in _hota_frames(frames()):
+        g = np.array([gi[int(o)] for o in oids], np.int64)
+        h = np.array([hi[int(v)] for v in hids], np.int64)
         if len(g) == 0 or len(h) == 0:
             fn += len(g)
             fp += len(h)
@@ -227,6 +238,12 @@ def hota(frames: Iterable[Frame]) -> HotaSummary:
         ass_pr[a] = (m * m / np.maximum(1.0, hyp_count)).sum() / denom
     loca = np.maximum(1e-10, loc) / np.maximum(1e-10, tp)
     return _hota_summary(tp, fn, fp, loca, ass_a, ass_re, ass_pr)
+
+
+def _hota_frames(frames: Iterable[Frame]) -> Iterator[Frame]:
+    for oids, hids, sim in frames:
+        oids, hids = np.asarray(oids, np.int64).ravel(), np.asarray(hids, np.int64).ravel()
+        yield oids, hids, np.nan_to_num(np.asarray(sim, np.float64).reshape(len(oids), len(hids)), nan=0.0)
 
 
 def _hota_summary(tp, fn, fp, loca, ass_a, ass_re, ass_pr) -> HotaSummary:
@@ -305,3 +322,111 @@ def format_hota(s: HotaSummary, label: str) -> str:
 def format_mot(s: MotSummary, label: str) -> str:
     return (f"{label}: MOTA {s.mota:.3f}  MOTP {s.motp:.3f}  IDF1 {s.idf1:.3f}  IDSW {s.id_switches}  "
             f"FP {s.false_positives}  FN {s.misses}  ({s.objects} truth, {s.hypotheses} tracked)")
+
+
+# --- a long log a chunk of frames at a time (issue 33) ---------------------------------------------------
+CHUNK_FRAMES = 4096  # annotated frames read, matched and scored at a time
+
+
+def truth_chunks(reader, topic: str, chunk_frames: int | None = None):
+    """``chunks()``: the log's truth ``chunk_frames`` (:data:`CHUNK_FRAMES`) messages at a time, each as (its
+    annotated frames, their rows), the rows as
+    :func:`~trackreplay.replay.log.groundtruth.groundtruth_with_frames` reads them (``GroundTruthFrame.from_pb``,
+    its columns). For a log whose messages come in increasing frame order, an object at most once in each,
+    and without a rig pose (whose world transform is applied to the whole table at once)."""
+    from trackreplay.replay.log.groundtruth import GT_SCHEMA
+    from trackreplay.schemas.records import GroundTruthFrame
+
+    chunk_frames = chunk_frames or CHUNK_FRAMES
+
+    def chunks():
+        rows: list[tuple] = []
+        frames: list[int] = []
+        for item in reader.messages([topic]):
+            gt = GroundTruthFrame.from_pb(item.decode())
+            frames.append(gt.frame)
+            for o in gt.objects:
+                rows.append((gt.frame, gt.t_ns, o.id, o.x, o.y, o.w, o.h, o.X, o.Y, o.Z, o.vx, o.vy, o.visible, o.group))
+            if len(frames) >= chunk_frames:
+                yield np.array(frames, np.int64), pl.DataFrame(rows, schema=GT_SCHEMA, orient="row")
+                rows, frames = [], []
+        if frames:
+            yield np.array(frames, np.int64), pl.DataFrame(rows, schema=GT_SCHEMA, orient="row")
+
+    return chunks
+
+
+class ChunkedTables:
+    """The trajectory (a lazy Parquet scan: each chunk's frames read with the filter pushed down) and the
+    truth (``truth()``: :func:`truth_chunks`) a chunk of frames at a time, for :func:`mot_metrics_chunked` and
+    :func:`hota_metrics_chunked`; also notes whether the visible truth has X, Y, Z (:func:`three_d_missing`)."""
+
+    def __init__(self, traj: pl.LazyFrame, truth) -> None:
+        self.traj, self.truth = traj, truth
+        self.truth_located: bool | None = None  # known once the truth has been gone through
+
+    def chunks(self):
+        located = False
+        for annotated, gt in self.truth():
+            lo, hi = int(annotated.min()), int(annotated.max())
+            rows = self.traj.filter(pl.col("frame").is_between(lo, hi) & pl.col("x").is_not_null()
+                                    & (pl.col("status") != "lost")).select(
+                "tracker", "track_id", "frame", "x", "y", "w", "h", "X", "Y", "Z").collect()
+            visible = gt.filter(pl.col("visible").fill_null(True))
+            located = located or _has_xyz(visible)
+            # the whole table's order within a frame: the truth by object, the trajectory by tracker and track
+            yield (np.unique(annotated), visible.sort(["frame", "id"], maintain_order=True),
+                   rows.sort(["frame", "tracker", "track_id"], maintain_order=True))
+        self.truth_located = located
+
+    def three_d_missing(self) -> str | None:
+        """:func:`three_d_missing` of the whole tables."""
+        if not self.traj.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost")
+                                & pl.all_horizontal(pl.col(c).is_not_null() for c in "XYZ")).select(pl.len()).collect().item():
+            return "the trajectory has no X, Y, Z"
+        if self.truth_located is None:
+            for _ in self.chunks():
+                pass
+        return None if self.truth_located else "the ground truth has no X, Y, Z"
+
+
+def _has_xyz(df: pl.DataFrame) -> bool:
+    return df.select(pl.all_horizontal(pl.col(c).is_not_null() for c in "XYZ").any()).item() is True
+
+
+def frames_from_chunks(chunks, *, space: str = "image", min_iou: float = 0.5, max_distance_m: float = 1.0,
+                       similarity: bool = False) -> Iterator[Frame]:
+    """:func:`frames_from_tables`' frames from ``chunks`` of (annotated frames (sorted, unique), the visible
+    truth on them by frame and object, the trajectory's positioned rows on them (not lost) by frame,
+    tracker and track): the same frames, with the same values, one chunk held at a time."""
+    for annotated, g, t in chunks:
+        gf, tf = g["frame"].to_numpy(), t["frame"].to_numpy()
+        if space == "image":
+            box = (pl.col("x") - pl.col("w") / 2), (pl.col("y") - pl.col("h") / 2), "w", "h"
+            gv, tv = g.select(*box).to_numpy(), t.select(*box).to_numpy()
+        else:
+            gv, tv = g.select("X", "Y", "Z").to_numpy(), t.select("X", "Y", "Z").to_numpy()
+        gid, tid = g["id"].to_numpy(), t["track_id"].to_numpy()
+        ga, gb = np.searchsorted(gf, annotated, "left"), np.searchsorted(gf, annotated, "right")
+        ta, tb = np.searchsorted(tf, annotated, "left"), np.searchsorted(tf, annotated, "right")
+        for k in range(len(annotated)):
+            a, b = np.ascontiguousarray(gv[ga[k]:gb[k]]), np.ascontiguousarray(tv[ta[k]:tb[k]])
+            if space == "image":
+                d = iou_similarity(a, b) if similarity else iou_distance(a, b, 1.0 - min_iou)
+            elif similarity:
+                d = distance_similarity(a, b, max_distance_m)
+            else:
+                d = euclidean_distance(a, b, max_distance_m)
+            yield gid[ga[k]:gb[k]], tid[ta[k]:tb[k]], d
+
+
+def mot_metrics_chunked(tables: ChunkedTables, *, space: str = "image", min_iou: float = 0.5,
+                        max_distance_m: float = MAX_DISTANCE_M) -> MotSummary:
+    """:func:`mot_metrics` a chunk of frames at a time (one pass)."""
+    return clear_mot(frames_from_chunks(tables.chunks(), space=space, min_iou=min_iou, max_distance_m=max_distance_m))
+
+
+def hota_metrics_chunked(tables: ChunkedTables, *, space: str = "image",
+                         max_distance_m: float = MAX_DISTANCE_M) -> HotaSummary:
+    """:func:`hota_metrics` a chunk of frames at a time (two passes)."""
+    return hota(lambda: frames_from_chunks(tables.chunks(), space=space, max_distance_m=max_distance_m, similarity=True))

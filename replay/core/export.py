@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -121,10 +122,15 @@ def write_mot(df: pl.DataFrame, path: Path) -> None:
     pixels** (the top-left pixel is (1, 1) there, (0, 0) here): ``bb_left = x - w/2 + 1``.
     ``recorder.sources.groundtruth.read_mot`` undoes it, so MOT ground truth imported, tracked
     and exported compares in ``motmetrics`` without a 1 px offset."""
+    _mot_lines(df).write_csv(path, include_header=False, float_precision=3)
+
+
+def _mot_lines(df: pl.DataFrame) -> pl.DataFrame:
+    """:func:`write_mot`'s rows of ``df``, by frame and id (rows of one frame and id in ``df``'s order)."""
     rows = df.filter(pl.col("x").is_not_null() & (pl.col("status") != "lost")).with_columns(
         w=pl.col("w").fill_null(1.0), h=pl.col("h").fill_null(1.0)
     )
-    out = rows.select(
+    return rows.select(
         (pl.col("frame") + 1).alias("frame"),
         pl.col("track_id").alias("id"),
         (pl.col("x") - pl.col("w") / 2 + 1).alias("bb_left"),
@@ -135,8 +141,7 @@ def write_mot(df: pl.DataFrame, path: Path) -> None:
         pl.col("X").fill_null(-1.0).alias("x"),
         pl.col("Y").fill_null(-1.0).alias("y"),
         pl.col("Z").fill_null(-1.0).alias("z"),
-    ).sort(["frame", "id"])
-    out.write_csv(path, include_header=False, float_precision=3)
+    ).sort(["frame", "id"], maintain_order=True)
 
 
 def trajectory_format(path: str | Path) -> str:
@@ -498,38 +503,73 @@ def export_trajectory(table, path: str | Path, method: str = "linear", max_gap: 
     written a piece at a time (whole short tracks, a long track ``rows`` frames at a time, cut at a known
     row both pieces hold) in Parquet or CSV: the same rows as filling the whole table, in memory
     bounded by ``rows`` instead of the log. Cubic splines span their whole track: a track is not cut
-    then; MOTChallenge (sorted by frame) is written from the whole table."""
+    then. MOTChallenge (sorted by frame) is written from the filled pieces, written first to a temporary
+    Parquet file, then read back ``MOT_FRAMES`` frames at a time (a filter pushed down to the scan)."""
     from trackreplay.replay.core.trajectory import SpilledTrajectory
 
     if method not in (*METHODS, "none"):
         raise TrackreplayError(f"interpolation method must be one of {', '.join(METHODS)}, not {method!r}")
     kind = trajectory_format(path)
     streamed = isinstance(table, (SpilledTrajectory, CheckedParquet))
-    if not streamed or kind == "mot":
-        df = table.frame() if streamed else table
-        df = df if method == "none" else fill_gaps(df, method, max_gap)
+    if not streamed:
+        df = table if method == "none" else fill_gaps(table, method, max_gap)
         write_trajectory(df, path)
         return df.height, df.filter(pl.col("status") == "interpolated").height
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = claim_partial(path)
-    written = filled = 0
+    filled_file = None
     try:
-        with PieceWriter(tmp, kind) as out:
-            cast = isinstance(table, CheckedParquet)
-            for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic", cast=cast):
-                if method != "none" and counts is not None:  # a piece of one track
-                    part = canonical_order(_fill_track(part, method, max_gap, counts))
-                elif method != "none":
-                    part = fill_gaps(part, method, max_gap)
-                part = part.slice(1) if drop_first else part
-                out.write(part)
-                written, filled = written + part.height, filled + part.filter(pl.col("status") == "interpolated").height
+        if kind == "mot":
+            fd, name = tempfile.mkstemp(prefix="trackreplay-export-", suffix=".parquet")
+            os.close(fd)
+            filled_file = Path(name)
+            counts = _write_filled(table, filled_file, "parquet", method, max_gap, rows)
+            _write_mot_in_frames(filled_file, tmp)
+        else:
+            counts = _write_filled(table, tmp, kind, method, max_gap, rows)
         os.replace(tmp, path)
     except (OSError, pl.exceptions.PolarsError) as err:
         tmp.unlink(missing_ok=True)
         raise OutputError(f"cannot write {path} ({err})") from None
+    finally:
+        if filled_file is not None:
+            filled_file.unlink(missing_ok=True)
+    return counts
+
+
+def _write_filled(table, target: Path, kind: str, method: str, max_gap: int, rows: int) -> tuple[int, int]:
+    """:func:`export_trajectory`'s pieces, filled, written to ``target`` (Parquet or CSV) one after the other."""
+    written = filled = 0
+    with PieceWriter(target, kind) as out:
+        cast = isinstance(table, CheckedParquet)
+        for part, drop_first, counts in _pieces(table.path, rows, split=method != "cubic", cast=cast):
+            if method != "none" and counts is not None:  # a piece of one track
+                part = canonical_order(_fill_track(part, method, max_gap, counts))
+            elif method != "none":
+                part = fill_gaps(part, method, max_gap)
+            part = part.slice(1) if drop_first else part
+            out.write(part)
+            written, filled = written + part.height, filled + part.filter(pl.col("status") == "interpolated").height
     return written, filled
+
+
+MOT_FRAMES = 4096  # frames of MOTChallenge lines written at a time
+
+
+def _write_mot_in_frames(filled: Path, target: Path, frames: int | None = None) -> None:
+    """:func:`write_mot` of the table in ``filled`` (canonical order), ``frames`` frames at a time: the lines of
+    the whole table, in its order (each window's rows in the file's order, then sorted by frame and id)."""
+    frames = frames or MOT_FRAMES
+    scan = pl.scan_parquet(filled)
+    lo, hi = scan.select(pl.col("frame").min().alias("lo"), pl.col("frame").max().alias("hi")).collect().row(0)
+    with open(target, "wb") as fh:
+        if lo is None:
+            _mot_lines(scan.collect()).write_csv(fh, include_header=False, float_precision=3)
+            return
+        for start in range(lo, hi + 1, frames):
+            part = scan.filter(pl.col("frame").is_between(start, start + frames - 1)).collect()
+            _mot_lines(part).write_csv(fh, include_header=False, float_precision=3)
 
 
 WRITE_ROWS = 1 << 15  # rows of a Parquet row group PieceWriter writes (at most)

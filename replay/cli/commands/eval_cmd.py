@@ -19,7 +19,7 @@ from trackreplay.replay.analysis.eval import (check_frames, checked_scan, evalua
                                               format_summary, object_followed, object_followed_parts, truth_index,
                                               truth_parts)
 from trackreplay.replay.core.export import read_trajectory
-from trackreplay.replay.log.frames import image_times
+from trackreplay.replay.log.frames import image_times, read_rig_pose
 from trackreplay.replay.log.groundtruth import groundtruth_with_frames
 from trackreplay.replay.analysis.mot import MAX_DISTANCE_M
 from trackreplay.replay.analysis.mot_files import drop_distractor_matches, read_mot_result, read_mot_sequence
@@ -59,10 +59,10 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     mot_result = args.trajectory.suffix.lower() == ".txt"
-    # one track of a long Parquet trajectory is scored from a lazy scan, a chunk of frames at a time
+    # a long Parquet trajectory is scored from a lazy scan, a chunk of frames at a time (one track, or all: --mot)
     # (docs/memory.md); the keys stand in for the table in the checks
     lazy = (checked_scan(args.trajectory) if args.trajectory.suffix.lower() == ".parquet" and args.trajectory.is_file()
-            and not (args.mot or args.per_frame or _is_sequence(args.log)) else None)
+            and not (args.per_frame or _is_sequence(args.log)) else None)
     traj = lazy[1] if lazy else read_mot_result(args.trajectory) if mot_result else read_trajectory(args.trajectory)
     index = None
     if _is_sequence(args.log):
@@ -90,9 +90,13 @@ def run(args: argparse.Namespace) -> int:
     objects = sorted(index.seen) if index is not None else None
     every_object = (lambda: truth_parts(reader, topic, None)) if index is not None else None
     if args.mot or _score_all(args, traj, gt, objects, every_object):
+        if gt is None and read_rig_pose(reader) is None:  # a chunk of frames at a time (docs/memory.md)
+            from trackreplay.replay.analysis.mot import ChunkedTables, truth_chunks
+
+            return _run_mot(args, _Chunked(ChunkedTables(lazy[0], truth_chunks(reader, topic))))
         if gt is None:
             gt = groundtruth_with_frames(reader, topic)[0]
-        return _run_mot(args, read_trajectory(args.trajectory) if lazy else traj, gt, frames)
+        return _run_mot(args, _Whole(read_trajectory(args.trajectory) if lazy else traj, gt, frames))
     if index is not None:
         parts = truth_parts(reader, topic, index.gt_id(args.gt_id))
         summary, per_frame = evaluate_parts(lazy[0], parts, track_id=args.track_id), None
@@ -169,18 +173,60 @@ def _sequence_truth(args: argparse.Namespace, traj: pl.DataFrame) -> tuple[pl.Da
     return traj, seq.gt, seq.frames
 
 
-def _run_mot(args: argparse.Namespace, traj: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> int:
+class _Whole:
+    """The multi-object metrics of the whole trajectory and truth tables."""
+
+    def __init__(self, traj: pl.DataFrame, gt: pl.DataFrame, frames: pl.Series) -> None:
+        self.traj, self.gt, self.frames = traj, gt, frames
+
+    def mot(self, **kw):
+        from trackreplay.replay.analysis.mot import mot_metrics
+
+        return mot_metrics(self.traj, self.gt, frames=self.frames, **kw)
+
+    def hota(self, **kw):
+        from trackreplay.replay.analysis.mot import hota_metrics
+
+        return hota_metrics(self.traj, self.gt, frames=self.frames, **kw)
+
+    def three_d_missing(self) -> str | None:
+        from trackreplay.replay.analysis.mot import three_d_missing
+
+        return three_d_missing(self.traj, self.gt)
+
+
+class _Chunked:
+    """The same metrics a chunk of frames at a time (:class:`~trackreplay.replay.analysis.mot.ChunkedTables`)."""
+
+    def __init__(self, tables) -> None:
+        self.tables = tables
+
+    def mot(self, **kw):
+        from trackreplay.replay.analysis.mot import mot_metrics_chunked
+
+        return mot_metrics_chunked(self.tables, **kw)
+
+    def hota(self, **kw):
+        from trackreplay.replay.analysis.mot import hota_metrics_chunked
+
+        return hota_metrics_chunked(self.tables, **kw)
+
+    def three_d_missing(self) -> str | None:
+        return self.tables.three_d_missing()
+
+
+def _run_mot(args: argparse.Namespace, metrics: _Whole | _Chunked) -> int:
     """CLEAR MOT and HOTA over every annotated frame, on image boxes and, where both the trajectory and
     the truth have them, on 3-D positions."""
-    from trackreplay.replay.analysis.mot import format_hota, format_mot, hota_metrics, mot_metrics, three_d_missing
+    from trackreplay.replay.analysis.mot import format_hota, format_mot
 
-    image = mot_metrics(traj, gt, space="image", frames=frames)
-    image_hota = hota_metrics(traj, gt, space="image", frames=frames)
-    why_not = three_d_missing(traj, gt)
+    image = metrics.mot(space="image")
+    image_hota = metrics.hota(space="image")
+    why_not = metrics.three_d_missing()
     space = space_hota = None
     if why_not is None:
-        space = mot_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m, frames=frames)
-        space_hota = hota_metrics(traj, gt, space="3d", max_distance_m=args.max_distance_m, frames=frames)
+        space = metrics.mot(space="3d", max_distance_m=args.max_distance_m)
+        space_hota = metrics.hota(space="3d", max_distance_m=args.max_distance_m)
     label = f"3-D positions (<= {args.max_distance_m:g} m)"
     print(format_mot(image, "image boxes (IoU >= 0.5)"))
     print(format_mot(space, label) if space else f"{label}: not applicable ({why_not})")

@@ -28,15 +28,20 @@ def add_parser(sub: argparse._SubParsersAction) -> argparse.ArgumentParser:
     return p
 
 
-def _ball_rows(table):
-    """The rows of the trackers whose spec says their tracks are a ball in flight (golf); the whole
-    table when it has none (a table of another tracker, or of several: the ball's rows)."""
-    import polars as pl
-
+def _is_ball(name: str) -> bool:
+    """Whether the tracker's spec says its tracks are a ball in flight (golf): only those trackers' rows are
+    used, or every tracker's when the table has none (a table of another tracker, or of several)."""
     from trackreplay.replay.core import registry
 
-    names = [n for n in table["tracker"].unique(maintain_order=True).to_list()
-             if (spec := registry.find(n)) is not None and spec.ball_flight]
+    spec = registry.find(name)
+    return spec is not None and spec.ball_flight
+
+
+def _ball_rows(table):
+    """The rows of the ball's trackers (:func:`_is_ball`); the whole table when it has none."""
+    import polars as pl
+
+    names = [n for n in table["tracker"].unique(maintain_order=True).to_list() if _is_ball(n)]
     balls = table.filter(pl.col("tracker").is_in(names))
     return balls if balls.height else table
 
@@ -54,10 +59,9 @@ def stage_printer(enabled: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    import polars as pl
-
     from trackreplay.replay.core.export import read_trajectory, write_trajectory
-    from trackreplay.replay.analysis.flight import FlightConfig, fit_flight, flight_rows, observations
+    from trackreplay.replay.analysis.flight import (FlightConfig, fit_flight, flight_input, flight_rows, observations,
+                                                    read_flight_input, write_flight)
     from trackreplay.replay.analysis.smooth import log_context
 
     from trackreplay.schemas.errors import TrackreplayError
@@ -65,17 +69,21 @@ def run(args: argparse.Namespace) -> int:
     for flag, path, what in (("--out", args.out, "a flight"), ("--rescan", args.rescan, "a trajectory")):
         if path is not None and path.suffix.lower() not in (".parquet", ".csv"):  # before the fit, not after it
             raise TrackreplayError(f"{flag} {path}: {what} is written as .parquet or .csv")
-    table = read_trajectory(args.trajectory, keep_fill=True)
-    traj = _ball_rows(table)
+    # the fit reads only the ball's measured rows with a line of sight, a batch at a time (issue 33); the
+    # rescan looks at every row, so it reads the table whole
+    table = read_trajectory(args.trajectory, keep_fill=True) if args.rescan is not None else None
+    found_input = None if table is not None else read_flight_input(args.trajectory, _is_ball)
+    if found_input is None and table is None:  # a defect, or out of canonical order: read whole (names a defect)
+        table = read_trajectory(args.trajectory, keep_fill=True)
+    given = found_input if found_input is not None else flight_input(table, _is_ball)
     track = args.track
-    if track is not None and track not in set(traj["track_id"].to_list()):
-        have = ", ".join(str(t) for t in sorted(set(traj["track_id"].to_list())))
+    if track is not None and track not in given.tracks:
+        have = ", ".join(str(t) for t in sorted(given.tracks))
         raise TrackreplayError(f"{args.trajectory} has no track {track} (tracks: {have or 'none'})")
-    if track is None and not traj.is_empty():
-        counts = traj.filter(pl.col("status") == "measured").group_by("track_id").len().sort(["len", "track_id"], descending=[True, False])
-        track = int(counts["track_id"][0]) if counts.height else None
+    if track is None:
+        track = given.most_measured()
     times, cameras = log_context(args.log)
-    obs = observations(traj, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
+    obs = observations(given.rows, cameras, track_id=track, what=f"{args.trajectory} (log {args.log})")
     fps = (len(times) - 1) / ((max(times.values()) - min(times.values())) * 1e-9) if len(times) > 1 else 30.0
     config = FlightConfig(use_size=not args.no_size)
     say = stage_printer(not args.quiet and sys.stderr.isatty())
@@ -86,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         if say is not None:
             say("rescanning along the fitted flight (several fits)")
         found = rescan(table, args.log, times, cameras, track_id=track, flight=config, fps=fps,
-                       what=f"{args.trajectory} (log {args.log})", tracker=str(traj["tracker"][0]))
+                       what=f"{args.trajectory} (log {args.log})", tracker=str(_ball_rows(table)["tracker"][0]))
         for warning in found.warnings:
             print(f"trackreplay: rescan: {warning}", file=sys.stderr)
         fit, rescanned = found.fit, frozenset(s.frame for s in found.sightings)
@@ -98,10 +106,11 @@ def run(args: argparse.Namespace) -> int:
     else:
         fit = fit_flight(obs, config, fps, None if say is None else lambda stage: say(f"fitting: {stage}"))
     print(fit.report.describe())
-    rows = flight_rows(fit, times, cameras, track_id=track or 1)
+    # the fitted flight at every frame of the log is written a part at a time (Rerun's view takes it whole)
+    rows = flight_rows(fit, times, cameras, track_id=track or 1) if args.rrd else None
     if args.out:
-        write_trajectory(rows, args.out)
-        print(f"wrote {args.out}: {rows.height} rows")
+        written = write_flight(fit, times, cameras, args.out, track_id=track or 1)
+        print(f"wrote {args.out}: {written} rows")
     if args.report:
         args.report.parent.mkdir(parents=True, exist_ok=True)
         from trackreplay.replay.core.outputs import write_bytes  # NAME.partial, renamed when complete

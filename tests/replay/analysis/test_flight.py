@@ -114,3 +114,84 @@ def test_positions_in_chunks_are_the_positions_at_once(chip, monkeypatch) -> Non
     pos, J, phase = fit.sensitivity(t)
     assert np.array_equal(pos, whole[0]) and J.shape == (len(t), 3, len(fit.theta))
     assert np.array_equal(whole[1], np.sqrt(np.maximum(np.einsum("nap,pq,naq->na", J, fit.cov, J), 0.0)))
+
+
+def _long_table() -> pl.DataFrame:
+    """The golden tee shot's rows, a second golf track, and a flow track (not a ball's): three trackers' rows."""
+    from trackreplay.replay.core.export import read_trajectory
+
+    golf = read_trajectory(GOLDEN / "golf.trajectory.parquet")
+    second = golf.with_columns(pl.lit(2, dtype=pl.Int64).alias("track_id"),
+                               pl.when(pl.col("frame") % 3 == 0).then(pl.lit("predicted")).otherwise(pl.col("status")).alias("status"))
+    flow = golf.with_columns(pl.lit("flow").alias("tracker"))
+    return pl.concat([golf, second, flow]).sort("tracker", "track_id", "frame")
+
+
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_flight_input_read_in_batches_is_the_whole_tables(tmp_path, suffix) -> None:
+    """Issue 33: ``flight`` keeps only the ball's measured rows with a line of sight, read a few rows at a time;
+    the same rows, tracks and counts as the whole table's; a file it cannot read so is left to the whole read."""
+    from trackreplay.replay.analysis.flight import flight_input, read_flight_input
+    from trackreplay.replay.cli.commands.flight import _is_ball
+    from trackreplay.replay.core.export import read_trajectory, write_trajectory
+
+    path = write_trajectory(_long_table(), tmp_path / f"t{suffix}")
+    whole = flight_input(read_trajectory(path, keep_fill=True), _is_ball)
+    for rows in (5, 7, 64, 4096):
+        got = read_flight_input(path, _is_ball, rows=rows)
+        assert got is not None and got.rows.equals(whole.rows, null_equal=True)
+        assert got.tracks == whole.tracks == {1, 2} and got.measured == whole.measured and got.most_measured() == 1
+    assert set(whole.rows["tracker"]) == {"golf"} and whole.rows.height == 2 * 17 - 6  # flow's rows left out
+    # no ball tracker at all: every tracker's rows
+    flows = write_trajectory(_long_table().filter(pl.col("tracker") == "flow"), tmp_path / f"f{suffix}")
+    assert read_flight_input(flows, _is_ball, rows=5).rows.height == 17
+    # out of canonical order (a frame twice across batches would go unseen), or a defect: read whole
+    shuffled = write_trajectory(_long_table().reverse(), tmp_path / f"r{suffix}")
+    assert read_flight_input(shuffled, _is_ball, rows=5) is None
+    bad = write_trajectory(_long_table().with_columns(pl.when(pl.col("frame") == 40).then(pl.lit("seen"))
+                                                      .otherwise(pl.col("status")).alias("status")), tmp_path / f"b{suffix}")
+    assert read_flight_input(bad, _is_ball, rows=5) is None
+    with pytest.raises(TrackreplayError, match="status 'seen'"):
+        read_trajectory(bad)
+
+
+def test_flight_rows_written_in_parts_are_the_whole_table(chip, tmp_path) -> None:
+    """The fitted flight at every frame is built and written a part at a time: the same rows (Parquet) and the
+    same bytes (CSV) as the whole table."""
+    from trackreplay.replay.analysis.flight import flight_row_parts, flight_rows, write_flight
+    from trackreplay.replay.core.export import write_trajectory
+
+    _, _, fit = chip
+    times = {int(f): int(f) * 33_333_333 for f in range(-5, 300)}  # before the launch and after the shot
+    whole = flight_rows(fit, times, {})
+    parts = list(flight_row_parts(fit, times, {}, chunk=37))
+    assert len(parts) == 9 and pl.concat(parts).equals(whole, null_equal=True) and whole["X"].is_not_null().all()
+    for suffix in (".parquet", ".csv"):
+        assert write_flight(fit, times, {}, tmp_path / f"p{suffix}", chunk=37) == whole.height
+        write_trajectory(whole, tmp_path / f"w{suffix}")
+    assert pl.read_parquet(tmp_path / "p.parquet").equals(pl.read_parquet(tmp_path / "w.parquet"), null_equal=True)
+    assert (tmp_path / "p.csv").read_bytes() == (tmp_path / "w.csv").read_bytes()
+
+
+def test_flight_command_reading_and_writing_in_parts_is_the_whole_tables(tmp_path, monkeypatch, capsys) -> None:
+    """The command on the golden tee shot, its trajectory read 5 rows at a time and its output written 16 frames
+    at a time, against the whole table's path: the same report and the same rows."""
+    import trackreplay.replay.analysis.flight as flight
+    from trackreplay.replay.core.export import write_trajectory
+
+    log = GOLDEN / "golf-teeshot-640x360.mcap"
+    traj = write_trajectory(_long_table(), tmp_path / "t.parquet")
+    outputs = {}
+    for name in ("parts", "whole"):
+        with monkeypatch.context() as m:
+            if name == "parts":
+                m.setattr(flight, "READ_ROWS", 5)
+                m.setattr(flight, "ROWS_CHUNK", 16)
+            else:
+                m.setattr(flight, "read_flight_input", lambda *a, **k: None)
+                m.setattr(flight, "ROWS_CHUNK", 1 << 20)
+            out, report = tmp_path / f"{name}.parquet", tmp_path / f"{name}.json"
+            assert main(["flight", str(traj), str(log), "--out", str(out), "--report", str(report), "--quiet"]) == 0
+            outputs[name] = (pl.read_parquet(out), report.read_text(), capsys.readouterr().out.replace(str(out), "OUT"))
+    (a, ra, pa), (b, rb, pb) = outputs["parts"], outputs["whole"]
+    assert a.equals(b, null_equal=True) and ra == rb and pa == pb and a.height == 60

@@ -441,3 +441,27 @@ def test_export_of_a_csv_file_streams_its_checks_and_pieces(tmp_path: Path, monk
             errors.append(capsys.readouterr().err)
         assert errors[0] == errors[1] and ("not a number" in errors[0] or "second row" in errors[0])
     assert len(streamed) == 1
+
+
+@pytest.mark.parametrize("method", ["linear", "cubic", "none"])
+def test_a_spilled_trajectory_is_written_as_motchallenge_a_window_of_frames_at_a_time(tmp_path: Path, monkeypatch,
+                                                                                        method: str) -> None:
+    """Issue 33: MOTChallenge lines (sorted by frame) of a spilled trajectory are written from its filled pieces a
+    few frames at a time: the same bytes as the whole table's, two trackers with the same track ids included."""
+    from trackreplay.replay.core import export as ex
+    from trackreplay.replay.core.export import export_trajectory, write_mot
+    from trackreplay.replay.core.trajectory import SpilledTrajectory, canonical_order
+
+    table = _long_tracks()
+    table = pl.concat([table, table.with_columns(pl.lit("colorpf").alias("tracker"), pl.col("x") + 1.0)])
+    spill = tmp_path / "spill.parquet"
+    table.write_parquet(spill, row_group_size=128)
+    want = canonical_order(table) if method == "none" else fill_gaps(canonical_order(table), method, 15)
+    write_mot(want, tmp_path / "whole.txt")
+    monkeypatch.setattr(ex, "MOT_FRAMES", 37)
+    monkeypatch.setattr(ex, "write_trajectory", lambda *a, **k: pytest.fail("the whole table written"))
+    rows, filled = export_trajectory(SpilledTrajectory(spill), tmp_path / "t.txt", method, 15, rows=100)
+    assert (tmp_path / "t.txt").read_bytes() == (tmp_path / "whole.txt").read_bytes()
+    assert (rows, filled) == (want.height, want.filter(pl.col("status") == "interpolated").height)
+    assert len((tmp_path / "t.txt").read_text().splitlines()) == want.filter(
+        pl.col("x").is_not_null() & (pl.col("status") != "lost")).height
