@@ -114,6 +114,11 @@ class LutConfig:
     min_count: float = 0.02  # ... and the smoothed ball count is above this
     core: float = 0.8  # ball samples: the ellipse inscribed in the marked box, shrunk by this
     background_margin: float = 1.5  # background: the whole frame minus the box grown by this
+    # The ring round a user's box (inside the box grown by this, outside the background_margin one): a
+    # colour denser there than in the box's ball samples is what the ball lies on, not the ball's
+    # (:func:`.lut.separable_from_ring`). 3 (twice the guard): local, yet a sample of the surroundings
+    # 6.75 times the box's area. Not tuned: the one value tried. <= background_margin: off (as before).
+    ring_margin: float = 3.0
     background_stride: int = 2  # subsample background pixels (speed; the LUT is smoothed anyway)
     context: float = 4.0  # reference luminance histogram: window this many box sizes, min search.min_px
     hist_bins: int = 32  # context luminance histogram bins

@@ -17,7 +17,7 @@ Y, Cb, Cr). What is golf's:
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -25,7 +25,7 @@ import numpy as np
 from trackreplay.schemas.records import InitRegion
 from trackreplay.trackers.appearance.color import to_ycbcr, to_ycrcb
 from trackreplay.trackers.appearance.histogram import colour_histogram, level_counts
-from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut
+from trackreplay.trackers.appearance.lut import ColourCounts, ColourLut, coarse_counts, coarse_index, two_class_table
 from trackreplay.trackers.geometry.box import centre_box, clip_box
 from trackreplay.trackers.golf.config import LutConfig
 
@@ -35,8 +35,13 @@ SKY_SCORE_THRESHOLD = 8.0  # (Cb - Cr) + (Y - 128)/4 of the context: blue sky ~ 
 
 
 def _ellipse_mask(h: int, w: int, cx: float, cy: float, rx: float, ry: float) -> np.ndarray:
+    return _ellipse_r2(h, w, cx, cy, rx, ry) <= 1.0
+
+
+def _ellipse_r2(h: int, w: int, cx: float, cy: float, rx: float, ry: float) -> np.ndarray:
+    """Each pixel's squared normalised distance from the ellipse's centre (<= 1: inside it)."""
     ys, xs = np.mgrid[0:h, 0:w]
-    return ((xs + 0.5 - cx) / max(rx, 0.5)) ** 2 + ((ys + 0.5 - cy) / max(ry, 0.5)) ** 2 <= 1.0
+    return ((xs + 0.5 - cx) / max(rx, 0.5)) ** 2 + ((ys + 0.5 - cy) / max(ry, 0.5)) ** 2
 
 
 def luminance_hist(y: np.ndarray, bins: int) -> np.ndarray:
@@ -53,6 +58,8 @@ class RegionSamples:
     background: np.ndarray  # (m, 3) uint8
     context_y: np.ndarray  # (k,) uint8 luminance around the box
     sky_score: float
+    ring: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.uint8))  # (r, 3) uint8: the ball's own surroundings (:func:`ring_pixels`)
+    centre_weight: np.ndarray | None = None  # (n,) each ball sample's weight in the ring test (1 at the centre, 0 at the rim)
 
 
 def sky_score(context_ycc: np.ndarray) -> float:
@@ -80,8 +87,10 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
     # the context window) rather than the whole frame, the same values; the masks at those sizes.
     x0, y0, x1, y1 = clip_box(*centre_box(region.x, region.y, region.w, region.h), width, height)
     box = _ycbcr(image[y0:y1, x0:x1])
-    core = _ellipse_mask(y1 - y0, x1 - x0, region.x - x0, region.y - y0, cfg.core * region.w / 2, cfg.core * region.h / 2)
+    r2 = _ellipse_r2(y1 - y0, x1 - x0, region.x - x0, region.y - y0, cfg.core * region.w / 2, cfg.core * region.h / 2)
+    core = r2 <= 1.0
     ball = box[core]
+    centre_weight = 1.0 - r2[core]  # Epanechnikov, 1 - r²: the rim, where a loose box holds the ground, weighs least
 
     gw, gh = region.w * cfg.background_margin, region.h * cfg.background_margin
     gx0, gy0, gx1, gy1 = clip_box(*centre_box(region.x, region.y, gw, gh), width, height)
@@ -111,7 +120,24 @@ def region_samples(image: np.ndarray, region: InitRegion, cfg: LutConfig, min_co
         name = "ground"
     else:
         name = "sky" if score > SKY_SCORE_THRESHOLD else "ground"
-    return RegionSamples(name, ball, background, context[:, 0].copy(), score)
+    ring = ring_pixels(image, region, (gx0, gy0, gx1, gy1), cfg)
+    return RegionSamples(name, ball, background, context[:, 0].copy(), score, ring, centre_weight)
+
+
+def ring_pixels(image: np.ndarray, region: InitRegion, guard: tuple[int, int, int, int], cfg: LutConfig) -> np.ndarray:
+    """The (Y, Cb, Cr) pixels of the ring round a marked box: inside the box grown by ``ring_margin``,
+    outside the ``guard`` box (the box grown by ``background_margin``). What the ball will be seen
+    against; (0, 3) when the ring is off (``ring_margin <= background_margin``) or outside the picture."""
+    if cfg.ring_margin <= cfg.background_margin:
+        return np.zeros((0, 3), np.uint8)
+    height, width = image.shape[:2]
+    rx0, ry0, rx1, ry1 = clip_box(*centre_box(region.x, region.y, region.w * cfg.ring_margin, region.h * cfg.ring_margin),
+                                  width, height)
+    around = _ycbcr(image[ry0:ry1, rx0:rx1])
+    keep = np.ones(around.shape[:2], bool)
+    gx0, gy0, gx1, gy1 = guard
+    keep[max(gy0 - ry0, 0):max(gy1 - ry0, 0), max(gx0 - rx0, 0):max(gx1 - rx0, 0)] = False
+    return around[keep]
 
 
 def every_nth(image: np.ndarray, s: int) -> np.ndarray:
@@ -168,6 +194,7 @@ class GolfLuts:
         self.reference_height = reference_height
         self.luts: dict[str, NamedLut] = {}
         self._counts: dict[str, ColourCounts] = {}
+        self._ring_colours: dict[str, np.ndarray] = {}  # per LUT: colours of the rings round its boxes (:func:`separable_from_ring`)
         self._context: dict[str, np.ndarray] = {}
         self._count: dict[str, int] = {}
         self.consumed: set = set()  # keys of regions already added
@@ -222,7 +249,9 @@ class GolfLuts:
         if name in self.luts and last == 0.0:  # built from marks only: remember the area, learn on a zoom change
             self._learned[name] = (count, max(area, 1e-6))
             return ""
-        added = self.add(image, [InitRegion(region.frame, region.t_ns, region.x, region.y, region.w, region.h, name)])
+        # the box is the measured blob's: tight by construction, nothing of the ring in it to keep out
+        added = self.add(image, [InitRegion(region.frame, region.t_ns, region.x, region.y, region.w, region.h, name)],
+                         ring=False)
         if not added:
             return ""
         self._learned[name] = (count + 1, max(area, 1e-6))
@@ -235,8 +264,10 @@ class GolfLuts:
         count, last = self._learned.get(name, (0, 0.0))
         return name in self.luts and (count >= cfg.learn_max or (last > 0 and abs(np.log(max(area, 1e-6) / last)) < np.log(cfg.learn_area_factor)))
 
-    def add(self, image: np.ndarray, regions: Sequence[InitRegion]) -> list[RegionSamples]:
-        """Add the marked boxes of one image and rebuild the LUTs they touch."""
+    def add(self, image: np.ndarray, regions: Sequence[InitRegion], ring: bool = True) -> list[RegionSamples]:
+        """Add the marked boxes of one image and rebuild the LUTs they touch; ``ring``: keep the colours
+        of the ring round each box out of its ball's (:func:`separable_from_ring`; a user's box may be
+        loose, or hold the ball's shaded side)."""
         cfg = self.config
         touched: list[str] = []
         added = []
@@ -246,7 +277,10 @@ class GolfLuts:
                 continue
             added.append(samples)
             name = samples.name
-            self._counts.setdefault(name, ColourCounts(cfg.bin)).add(samples.ball, samples.background)
+            ball, ring_colours = separable_from_ring(samples, cfg) if ring else (samples.ball, None)
+            self._counts.setdefault(name, ColourCounts(cfg.bin)).add(ball, samples.background)
+            if ring_colours is not None:
+                self._ring_colours[name] = self._ring_colours.get(name, False) | ring_colours
             self._context.setdefault(name, np.zeros(cfg.hist_bins))
             self._context[name] += luminance_hist(samples.context_y, cfg.hist_bins)
             self._count[name] = self._count.get(name, 0) + 1
@@ -255,6 +289,8 @@ class GolfLuts:
         for name in touched:
             lut = self._counts[name].lut(smooth=cfg.smooth_bins, foreground_weight=cfg.ball_weight,
                                          min_count=cfg.min_count, background_scale=cfg.background_stride**2)
+            if name in self._ring_colours:
+                lut = ColourLut(np.ascontiguousarray(lut.coarse & ~self._ring_colours[name]), lut.bin)
             ref = self._context[name] / max(self._context[name].sum(), 1e-12)
             self.luts[name] = NamedLut(name, lut, ref, self._count[name])
         if touched:
@@ -311,6 +347,41 @@ class GolfLuts:
             if scores[LUT_NAMES.index(best)] < scores[LUT_NAMES.index(current)] + self.config.switch_margin:
                 best = current
         return best, scores
+
+
+def separable_from_ring(samples: RegionSamples, cfg: LutConfig) -> tuple[np.ndarray, np.ndarray | None]:
+    """The ball samples whose colours stand out from the ring round their box, and the colours of the
+    ring that the ball's must not take (None: every sample stands out, or there is no ring).
+
+    Round a ball, the ball and its surroundings are about equally likely a priori (the ring is a few
+    times the box's area, not the picture's ~10^3 times), so the whole frame's prior (``ball_weight``)
+    does not apply there: a colour the ring holds more densely than the ball's samples is what the ball
+    lies on (its shaded underside matching the carpet under it, the grass inside a loose box); learned
+    as ball, it joins the ball to its surroundings in every silhouette. Such samples are dropped, and
+    since the ball's colours then border the ring's, the ring's colours are kept out of the LUT too
+    (the smoothed counts of the colours kept would otherwise reach them). The ball's density weighs each
+    sample by :attr:`RegionSamples.centre_weight` (a loose box's rim holds the ground); both densities
+    are smoothed as the LUT's counts are. The ring starts at the guard (``background_margin``), so a box
+    down to 1/1.5 of the ball leaves the ball out of it. A box well inside a larger ball (a quarter of the
+    VOT ball) kept every sample: its ring is more of the ball, no denser in the box's own colours.
+    A box whose samples all fall to the ring keeps them too (as learned before; the spill check judges it)."""
+    ball, ring = samples.ball, samples.ring
+    if not len(ball) or not len(ring):
+        return ball, None
+    q = 256 // cfg.bin
+    cells = coarse_index(ball.reshape(-1, 3), cfg.bin)
+    core = np.bincount(cells, weights=samples.centre_weight, minlength=q**3).reshape(q, q, q)
+    n_core, n_ring = float(core.sum()), float(len(ring))
+    if n_core <= 0:
+        return ball, None
+    around = coarse_counts(ring, cfg.bin)
+    stands_out = two_class_table(core, around, smooth=cfg.smooth_bins, foreground_weight=n_ring, min_count=0.0,
+                                 background_scale=n_core).reshape(-1)[cells]
+    if stands_out.all() or not stands_out.any():
+        return ball, None
+    ring_colours = two_class_table(around, core, smooth=cfg.smooth_bins, foreground_weight=n_core, min_count=0.0,
+                                   background_scale=n_ring)
+    return ball[stands_out], ring_colours
 
 
 def _nanargmax(values: np.ndarray) -> int:

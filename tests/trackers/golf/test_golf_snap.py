@@ -68,12 +68,17 @@ def test_the_track_starts_on_the_ball_from_a_loose_box(backdrop, draw_ball):
     states, area = first(GolfConfig())
     assert all(s.status == "measured" and np.hypot(s.x - BALL[0], s.y - BALL[1]) < 1.0 for s in states)
     assert area == pytest.approx(np.pi * 25, rel=0.25)
-    # without the snap the box's grass is learned as ball: what the LUT picks out runs past twice the box,
-    # and the mark is refused rather than tracked (tracker._marked_ball, blobs.spills_over)
+    # without the snap the box's grass is in the ball's samples; the ring round the box (lut.separable_from_ring)
+    # is grass too, so the grass is not learned as ball and the track still starts on the ball
+    unsnapped = GolfConfig(snap=dataclasses.replace(GolfConfig().snap, enabled=False))
+    states, _ = first(unsnapped)
+    assert all(s.status == "measured" and np.hypot(s.x - BALL[0], s.y - BALL[1]) < 1.0 for s in states)
+    # without either, the grass is learned as ball: what the LUT picks out runs past twice the box, and the
+    # mark is refused rather than tracked (tracker._marked_ball, blobs.spills_over)
     from trackreplay.schemas.errors import LogError
 
     with pytest.raises(LogError, match="holds no ball the golf tracker can tell from its surroundings"):
-        first(GolfConfig(snap=dataclasses.replace(GolfConfig().snap, enabled=False)))
+        first(dataclasses.replace(unsnapped, lut=dataclasses.replace(unsnapped.lut, ring_margin=0.0)))
 
 
 def test_bad_settings_are_refused():
