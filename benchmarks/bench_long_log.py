@@ -448,8 +448,6 @@ def smooth_only(sizes: list[int], out: Path, models: tuple[str, ...] = ("flow", 
     """`trackreplay smooth` of one long track of each model: as it is against the whole table (fresh processes)."""
     import os
 
-    import polars as pl
-
     from benchmarks import bench_smooth
 
     load_before = [round(x, 2) for x in os.getloadavg()]
@@ -461,21 +459,7 @@ def smooth_only(sizes: list[int], out: Path, models: tuple[str, ...] = ("flow", 
             for tracker in models:
                 table = Path(tmp) / f"{tracker}-{n}.parquet"
                 bench_smooth.synthetic_trajectory(n, tracker, tracks=1, seed=2).write_parquet(table)
-                entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item()}
-                for name, whole in (("pieces", False), ("whole_table", True)):
-                    target, printed = Path(tmp) / f"{name}.parquet", Path(tmp) / f"{name}.txt"
-                    argv = ["smooth", str(table), str(log), "--out", str(target)]
-                    code = bench_smooth.COMMAND.format(root=str(ROOT), whole=whole, printed=str(printed), argv=argv)
-                    got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
-                                         cwd=ROOT).stdout.split()
-                    status, base, peak, cpu, wall = int(got[-5]), int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
-                    entry[name] = {"exit": status, "base_rss_kib": base, "peak_rss_kib": peak,
-                                   "command_mb": round((peak - base) / 1024, 1), "cpu_seconds": round(cpu, 2),
-                                   "seconds": round(wall, 2), "rows_per_cpu_s": round(entry["rows"] / cpu)}
-                entry["identical"] = pl.read_parquet(Path(tmp) / "pieces.parquet").equals(
-                    pl.read_parquet(Path(tmp) / "whole_table.parquet"), null_equal=True)
-                entry["same_printed_fits"] = ((Path(tmp) / "pieces.txt").read_text().splitlines()[:-1]
-                                              == (Path(tmp) / "whole_table.txt").read_text().splitlines()[:-1])
+                entry = bench_smooth.pieces_against_whole(table, log, Path(tmp))
                 runs[f"{tracker}/{n}"] = entry
                 print(tracker, n, json.dumps(entry), flush=True)
     growth = {t: {k: round(runs[f"{t}/{sizes[-1]}"][k]["command_mb"] - runs[f"{t}/{sizes[0]}"][k]["command_mb"], 1)

@@ -458,9 +458,31 @@ def write_frames_log(path: Path, frames: int) -> None:
             log.write(T.CAMERA_IMAGE, compressed_image(png, "png", t_ns, "camera"), t_ns)
 
 
+def pieces_against_whole(table: Path, log: Path, tmp: Path) -> dict:
+    """``trackreplay smooth TABLE LOG`` in a fresh process, in pieces and with the whole table: each one's
+    exit, peak RSS above the process's base, CPU and wall time, rows per CPU-second; whether the two
+    outputs and printed fits are the same."""
+    import subprocess
+
+    entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item()}
+    for name, whole in (("pieces", False), ("whole_table", True)):
+        out, printed = tmp / f"{name}.parquet", tmp / f"{name}.txt"
+        argv = ["smooth", str(table), str(log), "--out", str(out)]
+        code = COMMAND.format(root=str(ROOT), whole=whole, printed=str(printed), argv=argv)
+        got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True, cwd=ROOT).stdout.split()
+        status, base, peak, cpu, wall = int(got[-5]), int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
+        entry[name] = {"exit": status, "base_rss_kib": base, "peak_rss_kib": peak,
+                       "command_mb": round((peak - base) / 1024, 1), "cpu_seconds": round(cpu, 2),
+                       "seconds": round(wall, 2), "rows_per_cpu_s": round(entry["rows"] / cpu)}
+    entry["identical"] = pl.read_parquet(tmp / "pieces.parquet").equals(pl.read_parquet(tmp / "whole_table.parquet"),
+                                                                         null_equal=True)
+    entry["same_printed_fits"] = ((tmp / "pieces.txt").read_text().splitlines()[:-1]
+                                  == (tmp / "whole_table.txt").read_text().splitlines()[:-1])
+    return entry
+
+
 def bench_command(sizes: list[int], track_rows: int, models: tuple[str, ...] = MODELS) -> dict:
     """``trackreplay smooth`` in pieces and on the whole table, fresh processes (see the module docstring)."""
-    import subprocess
     import tempfile
 
     result: dict = {}
@@ -473,21 +495,7 @@ def bench_command(sizes: list[int], track_rows: int, models: tuple[str, ...] = M
                 for layout, tracks in (("one_track", 1), (f"tracks_of_{track_rows}", max(1, rows // track_rows))):
                     table = Path(tmp) / f"{tracker}-{layout}-{rows}.parquet"
                     synthetic_trajectory(rows, tracker, tracks=tracks, seed=2).write_parquet(table)
-                    entry: dict = {"rows": pl.scan_parquet(table).select(pl.len()).collect().item(), "tracks": tracks}
-                    for name, whole in (("pieces", False), ("whole_table", True)):
-                        out, printed = Path(tmp) / f"{name}.parquet", Path(tmp) / f"{name}.txt"
-                        argv = ["smooth", str(table), str(logs[rows]), "--out", str(out)]
-                        code = COMMAND.format(root=str(ROOT), whole=whole, printed=str(printed), argv=argv)
-                        got = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True,
-                                             cwd=ROOT).stdout.split()
-                        status, base, peak, cpu, wall = int(got[-5]), int(got[-4]), int(got[-3]), float(got[-2]), float(got[-1])
-                        entry[name] = {"exit": status, "base_rss_kib": base, "peak_rss_kib": peak,
-                                       "command_mb": round((peak - base) / 1024, 1), "cpu_seconds": round(cpu, 2),
-                                       "seconds": round(wall, 2), "rows_per_cpu_s": round(entry["rows"] / cpu)}
-                    entry["identical"] = pl.read_parquet(Path(tmp) / "pieces.parquet").equals(
-                        pl.read_parquet(Path(tmp) / "whole_table.parquet"), null_equal=True)
-                    entry["same_printed_fits"] = ((Path(tmp) / "pieces.txt").read_text().splitlines()[:-1]
-                                                  == (Path(tmp) / "whole_table.txt").read_text().splitlines()[:-1])
+                    entry = {**pieces_against_whole(table, logs[rows], Path(tmp)), "tracks": tracks}
                     result[f"{tracker}/{layout}/{rows}"] = entry
                     print(tracker, layout, rows, json.dumps(entry), flush=True)
     growth: dict = {}
