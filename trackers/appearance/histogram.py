@@ -131,12 +131,14 @@ KERNELS = ("uniform", "epanechnikov")
 
 
 def kernel_and_part(dy: np.ndarray, dx: np.ndarray, height: np.ndarray | float, width: np.ndarray | float,
-                    kernel: str = "uniform", parts: int = 1) -> tuple[np.ndarray, np.ndarray]:
+                    kernel: str = "uniform", parts: int = 1, *,
+                    out: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Weight and part index of pixels at offsets ``(dy, dx)`` (pixel centres, from the box's
     top-left corner) in boxes of ``height`` x ``width`` (all broadcast together).
 
     ``"uniform"``: weight 1; ``"epanechnikov"``: ``max(1 - u² - v², 0)`` with ``u = (dx - w/2)/(w/2)``,
     ``v = (dy - h/2)/(h/2)``. The part is the horizontal band ``floor(parts dy / h)`` (0 = top).
+    ``out``: a float64 array of the broadcast shape the Epanechnikov weights are written into (the same numbers).
     """
     dy = np.asarray(dy, dtype=np.float64)
     dx = np.asarray(dx, dtype=np.float64)
@@ -147,21 +149,42 @@ def kernel_and_part(dy: np.ndarray, dx: np.ndarray, height: np.ndarray | float, 
     elif kernel == "epanechnikov":
         u = (dx - ww / 2.0) / (ww / 2.0)
         v = (dy - hh / 2.0) / (hh / 2.0)
-        weight = np.maximum(1.0 - u * u - v * v, 0.0)
+        weight = np.subtract(1.0 - u * u, v * v, out=out)  # (1 - u²) - v², as written out; then clipped in place
+        np.maximum(weight, 0.0, out=weight)
     else:
         raise ValueError(f"kernel must be one of {', '.join(KERNELS)}, not {kernel!r}")
     part = np.clip(np.floor(parts * dy / hh), 0, parts - 1).astype(np.int64)
     return weight, np.broadcast_to(part, weight.shape)
 
 
+SCRATCH_MAX = 1 << 20  # elements: a larger block (a scan of thousands of boxes) is allocated afresh, not kept
+
+
+def _scratch(scratch: dict[str, np.ndarray] | None, name: str, shape: tuple[int, int, int],
+             dtype: np.dtype) -> np.ndarray | None:
+    """A C-ordered array of ``shape`` in ``scratch``'s buffer ``name`` (grown as needed), or None without one."""
+    n = shape[0] * shape[1] * shape[2]
+    if scratch is None or n > SCRATCH_MAX:
+        return None
+    kept = scratch.get(name)
+    if kept is None or kept.size < n or kept.dtype != dtype:
+        kept = np.empty(max(n, 1), dtype)
+        scratch[name] = kept
+    return kept[:n].reshape(shape)
+
+
 def box_part_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *, kernel: str = "uniform",
-                        parts: int = 1, max_pixels: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+                        parts: int = 1, max_pixels: int | None = None,
+                        scratch: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Like :func:`box_histograms`, with kernel weights and ``parts`` bands per box: (K, parts, n_bins)
     histograms, each part normalised to sum 1 over its weights (all zeros when it holds no weight),
     and the (K,) number of pixels counted per box. One ``np.bincount`` over all boxes and parts.
 
     The boxes' pixels are gathered as one (K, rows, columns) block padded to the largest box
-    (boxes of one tracker differ in size by tens of per cent), the padding weighted 0.
+    (boxes of one tracker differ in size by tens of per cent), the padding weighted 0. ``scratch``: a dict
+    the caller keeps between calls, whose buffers hold the block's weights, pixel offsets and bins (the same
+    numbers; a fresh block of ~100,000 elements a call costs more in page faults than in arithmetic). The
+    returned arrays never share its memory.
     """
     boxes = np.asarray(boxes, dtype=np.int64).reshape(-1, 4)
     k = len(boxes)
@@ -176,16 +199,24 @@ def box_part_histograms(index: np.ndarray, boxes: np.ndarray, n_bins: int, *, ke
     if k == 0 or n.max(initial=0) == 0:
         return np.zeros((k, parts, n_bins)), n
     rows, cols = np.arange(int(ny.max())), np.arange(int(nx.max()))
+    block = (k, len(rows), len(cols))
     s = stride[:, None, None]
     dy, dx = s * rows[None, :, None] + 0.5, s * cols[None, None, :] + 0.5  # (K, R, 1), (K, 1, C)
-    weight, part = kernel_and_part(dy, dx, h[:, None, None], w[:, None, None], kernel, parts)
+    weight_out = _scratch(scratch, "weight", block, np.dtype(np.float64))
+    weight, part = kernel_and_part(dy, dx, h[:, None, None], w[:, None, None], kernel, parts,
+                                   out=weight_out if kernel == "epanechnikov" else None)
     if kernel == "uniform":
-        weight = ((rows[None, :, None] < ny[:, None, None]) & (cols[None, None, :] < nx[:, None, None])).astype(np.float64)
+        inside = (rows[None, :, None] < ny[:, None, None], cols[None, None, :] < nx[:, None, None])
+        weight = np.logical_and(*inside).astype(np.float64) if weight_out is None else \
+            np.logical_and(*inside, out=weight_out)  # 1.0 and 0.0 either way
     # else the padding (dy >= h + 1/2 or dx >= w + 1/2: r > 1) already weighs +0.0: it reads any pixel
     # (np.take clips), and adding +0.0 to its box's bin leaves the sums in the same order, the same bits
-    flat = ((y0 * index.shape[1] + x0)[:, None, None] + s * rows[None, :, None] * index.shape[1]) + s * cols[None, None, :]
+    flat = np.add((y0 * index.shape[1] + x0)[:, None, None] + s * rows[None, :, None] * index.shape[1],
+                  s * cols[None, None, :], out=_scratch(scratch, "flat", block, np.dtype(np.int64)))
     slot = np.arange(k)[:, None, None] * parts + part[:, :, :1]  # (box, part): a part is a band of rows
-    bins = np.take(index.reshape(-1), flat, mode="clip") + slot * n_bins
+    taken = np.take(index.reshape(-1), flat, mode="clip", out=_scratch(scratch, "taken", block, index.dtype))
+    # the bins written over the pixel offsets, no longer needed (one large array fewer: the same numbers)
+    bins = np.add(taken, slot * n_bins, out=flat)
     counts = np.bincount(bins.reshape(-1), weights=weight.reshape(-1), minlength=k * parts * n_bins)
     counts = counts.reshape(k, parts, n_bins)
     total = counts.sum(axis=2, keepdims=True)

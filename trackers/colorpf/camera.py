@@ -21,7 +21,9 @@ small). The key frame is renewed when fewer than half of its corners are still t
 (:func:`window_deformation`: LK matches a translated window, and a zooming camera's corners stay
 "tracked" long after their windows stopped matching). A probe of a
 few corners comes first: when they have not moved since last found, the last transform stands (a
-still camera costs the probe alone; docs/colorpf_robustness.md's table is unchanged by it).
+still camera costs the probe alone; docs/colorpf_robustness.md's table is unchanged by it); after a frame on
+which the scene moved, every corner is followed in one LK call and the probe read from it (the same answers,
+one pair of image pyramids fewer).
 
 :func:`snap`: a transform that moves no pixel of the frame by half a pixel or more through its
 scale and rotation is taken as a translation rounded to whole pixels (a still camera is then
@@ -120,6 +122,11 @@ class CameraMotion:
         self._transform = IDENTITY.copy()
         self._factor = 1
         self._probed: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None  # this frame's probe: picks, LK's answer
+        # the scene moved at the last measurement (a moving camera: the full measurement is likely again), so
+        # every corner is followed in one LK call and the probe read from it (LK follows each point on its own:
+        # the same answers as the probe's call and the rest's, one call's image pyramids fewer)
+        self._moving = False
+        self._followed: tuple[np.ndarray, np.ndarray] | None = None  # this frame's every corner, followed
 
     @property
     def transform(self) -> np.ndarray:
@@ -148,8 +155,14 @@ class CameraMotion:
             return False
         pick = np.linspace(0, len(self._corners) - 1, PROBE).round().astype(np.int64)
         last = self._last[pick]
-        moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners[pick], last.copy(),
-                                                    flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+        if self._moving:  # it moved at the last measurement: every corner followed at once, the probe read from it
+            everyone, everyone_status, _ = cv2.calcOpticalFlowPyrLK(
+                self._key, matched, self._corners, self._last.copy(), flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
+            self._followed = (everyone, everyone_status)
+            moved, status = everyone[pick], everyone_status[pick]
+        else:
+            moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners[pick], last.copy(),
+                                                        flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
         self._probed = (pick, moved, status)
         ok = status.ravel() == 1
         if 2 * ok.sum() < PROBE:
@@ -161,6 +174,8 @@ class CameraMotion:
         follows each point on its own (the same images and first guess give the same answer in any
         call), so the probe's corners are taken from the probe and only the others are followed."""
         assert self._corners is not None and self._last is not None
+        if self._followed is not None:  # followed with the probe (_unmoved)
+            return self._followed
         if self._probed is None:
             moved, status, _ = cv2.calcOpticalFlowPyrLK(self._key, matched, self._corners, self._last.copy(),
                                                         flags=cv2.OPTFLOW_USE_INITIAL_FLOW, **LK)
@@ -191,9 +206,11 @@ class CameraMotion:
             return self.transform
         gain = self._key_mean / max(float(g[::4, ::4].mean()), 1.0)
         matched = cv2.convertScaleAbs(g, alpha=gain)  # the key's brightness
-        self._probed = None
+        self._probed = self._followed = None
         if self._unmoved(matched):
+            self._moving = False
             return self.transform
+        self._moving = True
         moved, status = self._follow(matched)
         height, width = g.shape
         inside = ((moved[:, 0, 0] >= 0) & (moved[:, 0, 0] <= width - 1) & (moved[:, 0, 1] >= 0)

@@ -586,10 +586,17 @@ class RedetectConfig:
     stride: float = 0.5  # half a box: every position within a quarter box per axis of a grid centre
     max_boxes: int = 4096  # bounds the scan's cost on a large picture (the stride widens)
     share: float = 0.5
+    # The scan runs on the first lost frame and then every `every` frames at frame_rate (a duration, converted
+    # as hold.max_frames is: 3 frames at 30 fps, every frame at 10 fps), ten times a second: the scan over the
+    # whole picture was the lost track's largest cost (otb_human3: a fifth of the tracker's time, profiled), and a
+    # target walking back into view is there on the next scan a tenth of a second later. 1: every lost frame
+    # (the third pass). Set, not tuned; on the box corpus it changes no replay (docs/colorpf.md, "Speed, issue 31").
+    every: int = 3
 
     def __post_init__(self) -> None:
-        if not self.stride > 0 or self.max_boxes < 1 or not 0.0 < self.share <= 1.0:
-            raise ValueError("redetect.stride must be > 0, redetect.max_boxes >= 1 and 0 < redetect.share <= 1")
+        if not self.stride > 0 or self.max_boxes < 1 or not 0.0 < self.share <= 1.0 or self.every < 1:
+            raise ValueError("redetect.stride must be > 0, redetect.max_boxes >= 1, 0 < redetect.share <= 1 "
+                             "and redetect.every >= 1")
 
 
 @dataclass(frozen=True)

@@ -15,7 +15,7 @@ an estimate with the same histograms. A histogram here is flat, ``parts * n_bins
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,6 +32,11 @@ class ColourModel:
 
     config: LikelihoodConfig
     edge_min: float = 1.0
+    # box_part_histograms' buffers, kept between the frames of one tracker (the same numbers, fewer page faults)
+    scratch: dict[str, np.ndarray] = field(default_factory=dict, compare=False, repr=False)
+    # the last bin-index crop made (:meth:`crop_index`): the picture it is of, its corners, the index
+    recent: list[tuple[np.ndarray, tuple[int, int, int, int], np.ndarray]] = field(default_factory=list, compare=False,
+                                                                                    repr=False)
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -57,7 +62,8 @@ class ColourModel:
     def histograms(self, index: np.ndarray, boxes: np.ndarray, max_pixels: int | None) -> tuple[np.ndarray, np.ndarray]:
         """(K, parts * n_bins) histograms of integer boxes ``x0, y0, x1, y1`` in a bin-index image."""
         cfg = self.config
-        h, n = box_part_histograms(index, boxes, self.n_bins, kernel=cfg.kernel, parts=cfg.parts, max_pixels=max_pixels)
+        h, n = box_part_histograms(index, boxes, self.n_bins, kernel=cfg.kernel, parts=cfg.parts, max_pixels=max_pixels,
+                                   scratch=self.scratch)
         return h.reshape(len(h), -1), n
 
     def similarity(self, hists: np.ndarray, reference: np.ndarray) -> np.ndarray:
@@ -83,7 +89,19 @@ class ColourModel:
 
     def crop_index(self, image: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
         """:meth:`index` of ``image[y0:y1, x0:x1]``; ``"gradient"`` reads one pixel more on each side where
-        the image has it, so a crop's edge pixels have the derivatives they have in the whole frame."""
+        the image has it, so a crop's edge pixels have the derivatives they have in the whole frame. A crop within
+        the last one made of the same picture (the estimate's box in the particles' union, the particles' union in
+        a scan's) is cut from it: every pixel's bin is its own (``"gradient"``: a pixel's derivatives read its
+        3x3 neighbours, which the larger crop holds or the picture's edge bounds alike)."""
+        if self.recent:
+            picture, (a0, b0, a1, b1), index = self.recent[0]
+            if picture is image and a0 <= x0 and b0 <= y0 and x1 <= a1 and y1 <= b1:
+                return index[y0 - b0:y1 - b0, x0 - a0:x1 - a0]
+        index = self._crop_index(image, x0, y0, x1, y1)
+        self.recent[:] = [(image, (int(x0), int(y0), int(x1), int(y1)), index)]
+        return index
+
+    def _crop_index(self, image: np.ndarray, x0: int, y0: int, x1: int, y1: int) -> np.ndarray:
         if self.config.histogram != "gradient":
             return self.index(image[y0:y1, x0:x1])
         height, width = image.shape[:2]

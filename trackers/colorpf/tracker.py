@@ -79,7 +79,7 @@ from trackreplay.trackers.appearance.gradient import edge_threshold
 from trackreplay.trackers.base import TrackerBase, TrackState
 from trackreplay.trackers.colorpf.aspect import AspectEstimate, AspectUpdate, box_from_area
 from trackreplay.trackers.colorpf.calibration import RowEvidence, calibrated, cloud_evidence
-from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, scale_of, snap, warp
+from trackreplay.trackers.colorpf.camera import IDENTITY as NO_MOTION, CameraMotion, apply, resamples, scale_of, snap
 from trackreplay.trackers.colorpf.config import ColorPfConfig
 from trackreplay.trackers.colorpf.foreground import (IDENTITY, Band, brightness_gain, foreground_contrast,
                                                      foreground_region, neighbour_shares, region_layout,
@@ -96,6 +96,7 @@ from trackreplay.trackers.colorpf.size import (WeakPerspectiveSize, foot_points,
 from trackreplay.trackers.colorpf.support import Support
 from trackreplay.trackers.colorpf.template import TemplateModel, template_scores
 from trackreplay.trackers.colorpf.timing import FrameClock, frames_for, noise_for, smoothing_for
+from trackreplay.trackers.colorpf.warped import WarpedBackground, warped_band
 from trackreplay.trackers.filters.particles import ParticleFilter
 from trackreplay.trackers.frame import Frame
 from trackreplay.trackers.geometry.ground_plane import GroundPlane
@@ -132,7 +133,7 @@ class ForegroundView:
     """This frame's eq. (7) background where the scene is now (None: none, or the scene changed), the
     brightness gain against it and, where it was resampled, its registration band."""
 
-    background: np.ndarray | None
+    background: np.ndarray | WarpedBackground | None
     gain: float
     band: Band | None
 
@@ -210,6 +211,9 @@ class ColorPfTracker(TrackerBase):
         self._pending: list[str] = []
         self._box_reference: tuple[Reference, float] | None = None  # the marked box's own reference and S_mark
         self._refused = False  # reference.refuse_unseparated: eq. (7)'s reference was refused
+        self._warp_cache: tuple[np.ndarray, np.ndarray, WarpedBackground] | None = None  # _warped_background's last
+        self._lost_steps = 0  # redetect.every: frames tracked while lost since the track was last not lost
+        self._band_cache: tuple[np.ndarray, Band | None] | None = None  # _band_of's last band and the warp it is of
         # frame_rate: each step's interval over the stated one (colorpf.timing; 1 at the stated rate)
         self.clock = FrameClock(config.frame_rate)
         self.intermediates = ColorPfIntermediates.idle()
@@ -230,6 +234,7 @@ class ColorPfTracker(TrackerBase):
         track starts (:meth:`_start`); then the camera's motion, the "early" reference once its median is
         ready, and the filter's stages (:meth:`_track`)."""
         self.clock.step(frame.t_ns)  # frame_rate: the constants that describe time, at this step's interval
+        self.model.recent.clear()  # ColourModel.crop_index: a bin-index crop serves the frame it was made on alone
         if not self._find_mark(frame):
             return self._idle()
         assert self.mark is not None and self.background is not None
@@ -586,7 +591,8 @@ class ColorPfTracker(TrackerBase):
         if not weigh_only:
             self._predict(prev, plane)
             self._lost_unsupported = self._lost_unsupported and self.life.lost  # cleared once found again
-            if self.config.redetect.enabled and self.life.lost:
+            self._lost_steps = self._lost_steps if self.life.lost else 0  # redetect.every: from the first lost frame
+            if self.config.redetect.enabled and self.life.lost and self._scan_due():
                 self._redetect(image, view, prev)
         m = measure(self.model, image, self.pf.particles, working)  # eqs. (4)-(5)
         estimate = self._weigh(self._cues(m.likelihood, image, view, prev, mask))
@@ -612,6 +618,13 @@ class ColorPfTracker(TrackerBase):
             self._remember(frame.index, estimate, status == "measured" or placed)
         self.intermediates = self._intermediates(m, shown, score, size, mask, status, evidence)
         return self._rows(status, shown, prev, confidence, weigh_only)
+
+    def _scan_due(self) -> bool:
+        """``redetect.every``: the lost track's scan is due on its first lost frame, then every ``every`` frames
+        (at ``frame_rate``: the same duration at another frame rate)."""
+        due = self._lost_steps % frames_for(self.config.redetect.every, self.clock.typical) == 0
+        self._lost_steps += 1
+        return due
 
     def _redetect(self, image: np.ndarray, view: ForegroundView, prev: np.ndarray) -> None:
         """``redetect.enabled``, while lost: a scan of the whole picture at the last supported size against H_ref
@@ -699,7 +712,7 @@ class ColorPfTracker(TrackerBase):
         cfg = self.config
         background, gain, band = self.background_image, 1.0, None
         if background is not None:  # camera.compensate: the background (marked frame's place) where the scene is now
-            background = warp(background, self.camera_transform)
+            background = self._warped_background(background)
         uses_foreground = cfg.likelihood.foreground > 0 or cfg.neighbour_check or cfg.refine.mode == "foreground"
         if background is not None and uses_foreground:
             gain = brightness_gain(image, background)  # a uniform illumination change is not foreground
@@ -709,8 +722,35 @@ class ColorPfTracker(TrackerBase):
                 if cfg.reference.forget_on_change:  # ... nor on any later one: the background is not this scene's
                     self._forget_background()
             else:  # resampled (not a whole-pixel shift): its edges may be off by a fraction of a pixel
-                band = registration_band(background, self.camera_transform, cfg.reference.registration_tolerance)
+                band = self._band_of(background)
         return ForegroundView(background, gain, band)
+
+    def _warped_background(self, background: np.ndarray) -> np.ndarray | WarpedBackground:
+        """Eq. (7)'s background where the scene is now: itself under the identity (a still camera), else a
+        :class:`.warped.WarpedBackground` (warped where it is read: the whole warp's pixels, a crop's but for a rare
+        one-level rounding), kept while neither the background nor the camera's transform changes (a probe that
+        finds the scene unmoved keeps it)."""
+        if np.array_equal(self.camera_transform, NO_MOTION):
+            return background
+        kept = self._warp_cache
+        if kept is not None and kept[0] is background and np.array_equal(kept[1], self.camera_transform):
+            return kept[2]
+        warped = WarpedBackground(background, self.camera_transform)
+        self._warp_cache = (background, self.camera_transform.copy(), warped)
+        return warped
+
+    def _band_of(self, warped: np.ndarray | WarpedBackground) -> Band | None:
+        """:func:`.foreground.registration_band` of this frame's background (a :class:`.warped.WarpedBackground`'s
+        band made crop by crop as it is read), kept with it."""
+        if self._band_cache is not None and self._band_cache[0] is warped:
+            return self._band_cache[1]
+        mode = self.config.reference.registration_tolerance
+        if isinstance(warped, WarpedBackground):
+            band = warped_band(warped) if mode == "resampled" and resamples(self.camera_transform) else None
+        else:
+            band = registration_band(warped, self.camera_transform, mode)
+        self._band_cache = (warped, band)
+        return band
 
     def _forget_background(self) -> None:
         """``reference.forget_on_change``: the background is no longer this scene's: nothing uses it as foreground

@@ -44,13 +44,20 @@ def sort_frames(stack: np.ndarray) -> np.ndarray:
     whole-frame ``np.minimum``/``np.maximum`` (contiguous, vectorised passes; numpy's sort along the
     first axis walks the memory with a stride, ~15x slower on 25 frames). Values only: equal values
     are indistinguishable, so the result is the same array."""
-    rows = list(np.array(stack, order="C", copy=True))
+    rows = _sorted_rows(np.array(stack, order="C", copy=True))
+    return np.stack(rows) if rows else np.array(stack, copy=True)
+
+
+def _sorted_rows(stack: np.ndarray) -> list[np.ndarray]:
+    """:func:`sort_frames`'s frames, sorted in place in ``stack`` (C-ordered, the caller's to overwrite) and
+    one spare frame, as a list (not stacked again: a median reads one or a few of them)."""
+    rows = list(stack)
     spare = np.empty_like(rows[0]) if rows else None
     for i, j in sorting_network(len(rows)):
         np.minimum(rows[i], rows[j], out=spare)
         np.maximum(rows[i], rows[j], out=rows[j])
         rows[i], spare = spare, rows[i]
-    return np.stack(rows) if rows else np.array(stack, copy=True)
+    return rows
 
 
 def _largest(dtype: np.dtype) -> np.generic:
@@ -93,7 +100,7 @@ class MedianBackground:
         count, so it is always one of the observed values), or None before any frame."""
         if not self._frames:
             return None
-        return sort_frames(np.stack(self._frames))[len(self._frames) // 2]
+        return _sorted_rows(np.stack(self._frames))[len(self._frames) // 2].copy()
 
     def clear(self) -> None:
         """Let the frames go (the model, once taken, is all a tracker keeps)."""
@@ -150,7 +157,8 @@ class ExcludingMedianBackground(MedianBackground):
     def model(self) -> np.ndarray | None:
         """Per pixel the median (the upper middle value, as :meth:`MedianBackground.model`) of the
         frames that leave it in; of all the frames where none does. One :func:`sort_frames` of the
-        frames with the left-out values last (and the plain median only where every frame leaves a pixel out)."""
+        frames with the left-out values last (and the plain median only where every frame leaves a pixel out); a
+        pixel every frame leaves in reads the middle rank, the others theirs within the bounds of those left out."""
         if not self._frames:
             return None
         stack = np.stack(self._frames)  # (F, H, W[, C])
@@ -158,18 +166,25 @@ class ExcludingMedianBackground(MedianBackground):
         out = self._inside(0, 0, width, height)  # (F, H, W)
         every = out.all(axis=0)  # left out of every frame: the plain median
         some = out.any(axis=0) & ~every  # left out of some frames, not of all
-        plain = super().model() if every.any() or not some.any() else None
         if not some.any():
-            return plain
+            return super().model()
+        # the plain median of the pixels left out of every frame only (sorting just them: the same values)
+        plain = sort_frames(stack[:, every])[len(self._frames) // 2] if every.any() else None
         # a left-out value becomes the dtype's largest: sorted, the kept values come first (a kept
         # value equal to it is the same number), so the k-th of the kept ones is the k-th of all; a
         # pixel no frame leaves out sorts its own values, its plain median
         stack[out] = _largest(stack.dtype)
-        ranked = sort_frames(stack)
-        k = ((~out).sum(axis=0) // 2).reshape(1, height, width, *([1] * (stack.ndim - 3)))
-        median = np.take_along_axis(ranked, np.broadcast_to(k, (1, *stack.shape[1:])), axis=0)[0]
+        ranked = _sorted_rows(stack)
+        k = (~out).sum(axis=0) // 2  # per pixel the rank of its median among the sorted values
+        middle = len(self._frames) // 2  # a pixel every frame leaves in (most of them)
+        median = ranked[middle].copy()
+        ys, xs = np.nonzero(some.any(axis=1))[0], np.nonzero(some.any(axis=0))[0]  # the pixels of lower rank: bounds
+        y0, y1, x0, x1 = int(ys[0]), int(ys[-1]) + 1, int(xs[0]), int(xs[-1]) + 1
+        ranks = np.stack([r[y0:y1, x0:x1] for r in ranked[:middle + 1]])  # within those bounds only
+        kk = k[y0:y1, x0:x1].reshape(1, y1 - y0, x1 - x0, *([1] * (stack.ndim - 3)))
+        median[y0:y1, x0:x1] = np.take_along_axis(ranks, np.broadcast_to(kk, (1, *ranks.shape[1:])), axis=0)[0]
         if plain is not None:
-            median[every] = plain[every]
+            median[every] = plain
         return median
 
     def clear(self) -> None:

@@ -140,13 +140,18 @@ def _plain_box_part_histograms(index, boxes, n_bins, kernel, parts, max_pixels):
 def test_box_part_histograms_equal_their_plain_form_bit_for_bit(kernel, parts, max_pixels):
     rng = np.random.default_rng(parts)
     index = rng.integers(0, 100, (90, 70)).astype(np.int32)
-    for k in (1, 7, 40):
+    scratch: dict = {}  # kept buffers, reused (and grown) from one block shape to the next
+    for k in (1, 7, 40, 3):
         corners = np.sort(rng.integers(0, 71, (k, 2, 2)), axis=1)  # x0 <= x1, y0 <= y1 (some empty)
         boxes = np.column_stack([corners[:, 0, 0], corners[:, 0, 1], corners[:, 1, 0], corners[:, 1, 1]])
         boxes[:, [1, 3]] = np.minimum(boxes[:, [1, 3]] + rng.integers(0, 20, (k, 1)), 90)
-        got, n = box_part_histograms(index, boxes, 100, kernel=kernel, parts=parts, max_pixels=max_pixels)
         want, n_want = _plain_box_part_histograms(index, boxes, 100, kernel, parts, max_pixels)
-        assert np.array_equal(got, want) and np.array_equal(n, n_want)
+        for buffers in (None, scratch):
+            got, n = box_part_histograms(index, boxes, 100, kernel=kernel, parts=parts, max_pixels=max_pixels,
+                                         scratch=buffers)
+            assert np.array_equal(got, want) and np.array_equal(n, n_want)
+            assert not any(np.shares_memory(got, b) for b in scratch.values())
+    assert scratch  # the buffers were used
 
 
 def test_hs_index_is_the_plain_table_look_up():

@@ -107,3 +107,21 @@ def test_box_corners_is_its_plain_clip_form():
     expected = np.concatenate([lo, np.clip(np.maximum(hi, lo), 0, limit)], axis=1).astype(np.int64)
     assert np.array_equal(box_corners(states, 360, 240), expected)
     assert np.array_equal(box_corners(states[3], 360, 240), expected[3:4])
+
+
+def test_a_crop_within_the_last_index_made_is_cut_from_it():
+    """ColourModel.crop_index: a crop within the last one made of the same picture is that crop's own index (H-S:
+    per pixel; the grey gradient index: its derivatives read the neighbours the larger crop holds)."""
+    rng = np.random.default_rng(4)
+    image = rng.integers(0, 256, (60, 80, 3), dtype=np.uint8)
+    for config in (LikelihoodConfig(), LikelihoodConfig(histogram="gradient")):
+        model, fresh = ColourModel(config, 20.0), ColourModel(config, 20.0)
+        union = model.crop_index(image, 10, 5, 70, 55)
+        for x0, y0, x1, y1 in ((10, 5, 70, 55), (11, 6, 30, 40), (10, 5, 12, 7), (40, 30, 70, 55)):
+            cut = model.crop_index(image, x0, y0, x1, y1)
+            assert np.shares_memory(cut, union)  # cut from it
+            fresh.recent.clear()
+            assert np.array_equal(cut, fresh.crop_index(image, x0, y0, x1, y1))
+        outside = model.crop_index(image, 0, 0, 20, 20)  # not within: made afresh, and the last one from then on
+        assert not np.shares_memory(outside, union)
+        assert np.array_equal(model.crop_index(image.copy(), 0, 0, 10, 10), fresh.crop_index(image, 0, 0, 10, 10))

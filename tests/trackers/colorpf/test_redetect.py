@@ -85,3 +85,41 @@ def test_re_detection_is_deterministic_and_off_in_paper():
     a, b = _rows(ColorPfConfig(), seed=3), _rows(ColorPfConfig(), seed=3)
     assert [(r.status, r.x, r.y, r.confidence) for r in a] == [(r.status, r.x, r.y, r.confidence) for r in b]
     assert config_from_dict(ColorPfConfig, PAPER).redetect.enabled is False
+
+
+class _Scans(ColorPfTracker):
+    """The tracker, noting the frames on which the lost track's scan runs."""
+
+    def __init__(self, config: ColorPfConfig, rng: np.random.Generator) -> None:
+        super().__init__(config, rng)
+        self.frame, self.scanned = -1, []
+
+    def step(self, frame: Frame) -> list:
+        self.frame = frame.index
+        return super().step(frame)
+
+    def _redetect(self, image, view, prev) -> None:
+        self.scanned.append(self.frame)
+        super()._redetect(image, view, prev)
+
+
+def _scans(config: ColorPfConfig, interval_ns: int) -> tuple[list[int], list[int]]:
+    """The lost frames (the track lost before the frame's step) and the frames scanned."""
+    mark = InitRegion(0, 0, 40 + SIDE / 2 - 0.5, 60 + SIDE / 2 - 0.5, SIDE, SIDE, "target")
+    tracker = _Scans(config, np.random.default_rng(0))
+    lost = []
+    for i, image in enumerate(_frames(False)[:BACK]):  # hidden from GONE on: lost, and never found
+        if tracker.life.lost:
+            lost.append(i)
+        tracker.step(Frame(index=i, t_ns=i * interval_ns, image=image, all_hints=(mark,),
+                           hints=(mark,) if i == 0 else ()))
+    return lost, tracker.scanned
+
+
+def test_the_lost_track_is_scanned_ten_times_a_second():
+    lost, scanned = _scans(ColorPfConfig(), 33_333_333)  # 30 fps: the first lost frame, then every 3rd
+    assert len(lost) >= 6 and scanned == lost[::3]
+    lost, scanned = _scans(ColorPfConfig(), 100_000_000)  # 10 fps: every lost frame (a tenth of a second apart)
+    assert len(lost) >= 3 and scanned == lost
+    lost, scanned = _scans(ColorPfConfig(redetect=RedetectConfig(every=1)), 33_333_333)
+    assert scanned == lost
