@@ -444,6 +444,17 @@ def sidecar_only(sizes: list[int], out: Path) -> int:
     return 0 if all(r["same_fields_and_values"] for r in runs) else 1
 
 
+def write_results(out: Path, load_before: list[float], scene: str, runs, growth_key: str, growth: dict) -> None:
+    """A benchmark's JSON: the machine, the load before and after, the scene, the runs and the growth against
+    the issue's target (<= 50 MB)."""
+    import os
+
+    results = {"machine": describe(), "load_average_before": load_before,
+               "load_average_after": [round(x, 2) for x in os.getloadavg()], "scene": scene, "runs": runs,
+               growth_key: {**growth, "target": "<= 50"}}
+    out.write_text(json.dumps(results, indent=2) + "\n")
+
+
 def smooth_only(sizes: list[int], out: Path, models: tuple[str, ...] = ("flow", "colorpf", "groups")) -> int:
     """`trackreplay smooth` of one long track of each model: as it is against the whole table (fresh processes)."""
     import os
@@ -464,12 +475,9 @@ def smooth_only(sizes: list[int], out: Path, models: tuple[str, ...] = ("flow", 
                 print(tracker, n, json.dumps(entry), flush=True)
     growth = {t: {k: round(runs[f"{t}/{sizes[-1]}"][k]["command_mb"] - runs[f"{t}/{sizes[0]}"][k]["command_mb"], 1)
                   for k in ("pieces", "whole_table")} for t in models}
-    results = {"machine": describe(), "load_average_before": load_before,
-               "load_average_after": [round(x, 2) for x in os.getloadavg()],
-               "scene": "one track of each model (benchmarks/bench_smooth.py synthetic_trajectory, seed 2), written by "
-                        "polars; a log of 8x8 PNG frames at its frame times",
-               "runs": runs, "command_mb_growth": {"from_rows": sizes[0], "to_rows": sizes[-1], **growth, "target": "<= 50"}}
-    out.write_text(json.dumps(results, indent=2) + "\n")
+    write_results(out, load_before, "one track of each model (benchmarks/bench_smooth.py synthetic_trajectory, seed 2), "
+                  "written by polars; a log of 8x8 PNG frames at its frame times", runs,
+                  "command_mb_growth", {"from_rows": sizes[0], "to_rows": sizes[-1], **growth})
     for t in models:
         hi = runs[f"{t}/{sizes[-1]}"]
         print(f"{t}: peak above the process {sizes[0]} -> {sizes[-1]} rows +{growth[t]['pieces']} MB "
@@ -576,12 +584,9 @@ def flight_only(sizes: list[int], out: Path) -> int:
             runs.append(entry)
             print(json.dumps(entry), flush=True)
     growth = {k: round(runs[-1][k]["command_mb"] - runs[0][k]["command_mb"], 1) for k in ("pieces", "whole_table")}
-    results = {"machine": describe(), "load_average_before": load_before,
-               "load_average_after": [round(x, 2) for x in os.getloadavg()],
-               "scene": "the golden tee shot's log and trajectory continued to N frames (a 32x32 PNG and the last PTZ "
-                        "reading a frame; the ball's track predicted, with a line of sight, on every later frame)",
-               "runs": runs, "command_mb_growth": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
-    out.write_text(json.dumps(results, indent=2) + "\n")
+    write_results(out, load_before, "the golden tee shot's log and trajectory continued to N frames (a 32x32 PNG and the "
+                  "last PTZ reading a frame; the ball's track predicted, with a line of sight, on every later frame)", runs,
+                  "command_mb_growth", {"from_frames": sizes[0], "to_frames": sizes[-1], **growth})
     print(f"flight: peak above the process {sizes[0]} -> {sizes[-1]} frames +{growth['pieces']} MB "
           f"(whole table +{growth['whole_table']})")
     return 0 if all(r["identical"] and r["same_report"] and r["pieces"]["exit"] == 0 for r in runs) else 1
@@ -633,13 +638,9 @@ def mot_only(sizes: list[int], out: Path, objects: int = 3) -> int:
             runs.append(entry)
             print(json.dumps(entry), flush=True)
     growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("chunked", "whole_table")}
-    results = {"machine": describe(), "load_average_before": load_before,
-               "load_average_after": [round(x, 2) for x in os.getloadavg()],
-               "scene": f"the long-log scene's log ({objects} truth objects) and a track on each (the flow track, one row a "
-                        "frame, 3 % lost; still tracks on the still boxes, 5 % lost)",
-               "runs": runs,
-               "peak_rss_growth_mb": {"from_frames": sizes[0], "to_frames": sizes[-1], **growth, "target": "<= 50"}}
-    out.write_text(json.dumps(results, indent=2) + "\n")
+    write_results(out, load_before, f"the long-log scene's log ({objects} truth objects) and a track on each (the flow "
+                  "track, one row a frame, 3 % lost; still tracks on the still boxes, 5 % lost)", runs,
+                  "peak_rss_growth_mb", {"from_frames": sizes[0], "to_frames": sizes[-1], **growth})
     print(f"eval --mot peak RSS growth {sizes[0]} -> {sizes[-1]} frames (MB): {growth} (target <= 50)")
     return 0 if all(r["same_json"] and r["chunked"]["exit"] == 0 for r in runs) else 1
 
