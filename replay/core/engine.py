@@ -134,6 +134,7 @@ class ReplayResult:
     observations: pl.DataFrame | None = None  # raw measurements when ReplayRequest.observations (smooth.OBS_SCHEMA)
     # The frame X Y Z are in when the tracker says ("world": Z up, from the log's rig pose; "camera")
     position_frame: str | None = None
+    step_seconds: float = 0.0  # of ``seconds``, the time inside the tracker's step (no reading, decoding, digest or sink)
 
     @property
     def trajectory(self) -> pl.DataFrame:
@@ -218,6 +219,7 @@ class ReplaySteps(Iterator[ReplayStep]):
         # a no-op for trackers that need no look ahead
         self.tracker.prepare(marked_images(reader, topics, start_ns=start_ns, end_ns=end_ns))
         self.report = BundleReport()
+        self.step_seconds = 0.0  # wall time inside the tracker's step, summed over frames
         self.total = reader.topics()[topics.image].count  # images in the log (the progress bar's end)
         self._frames = prefetch(iter_frames(reader, topics, start_ns=start_ns, end_ns=end_ns, report=self.report,
                                             strict=req.strict), req.prefetch)
@@ -225,7 +227,11 @@ class ReplaySteps(Iterator[ReplayStep]):
     def __next__(self) -> ReplayStep:
         frame = next(self._frames)
         try:
+            # the clock only measures the tracker's own work for reporting (`evaluate`'s speed beside CSRT's update
+            # calls); nothing the replay writes depends on it
+            started = time.perf_counter()
             states = tuple(self.tracker.step(frame))
+            self.step_seconds += time.perf_counter() - started
         except TrackreplayError as err:  # a tracker refusing its input (a mark round no ball) names the log too
             raise type(err)(f"{self.request.log}: {err}") from None
         return ReplayStep(frame, states, self.tracker.intermediates)
@@ -310,4 +316,5 @@ def replay(req: ReplayRequest) -> ReplayResult:
     return ReplayResult(req.tracker, req.seed, table, digest.finish(table), steps.report.frames, seconds, steps.report,
                         req.rrd, tuple(notices), steps.config, digest.frames, None if extra is None else tuple(extra),
                         observations=None if observed is None else observations_table(observed),
-                        position_frame=None if spec.position_frame is None else spec.position_frame(steps.tracker))
+                        position_frame=None if spec.position_frame is None else spec.position_frame(steps.tracker),
+                        step_seconds=steps.step_seconds)

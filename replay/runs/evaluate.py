@@ -61,7 +61,7 @@ CASES_SCHEMA: dict[str, Any] = {
     **GROUND_SCHEMA,
 }
 TIMINGS_SCHEMA = {"case": pl.String, "tracker": pl.String, "seed": pl.Int64, "frames": pl.Int64,
-                  "seconds": pl.Float64, "ms_per_frame": pl.Float64}
+                  "seconds": pl.Float64, "ms_per_frame": pl.Float64, "replay_seconds": pl.Float64}
 
 
 @dataclass(frozen=True)
@@ -191,22 +191,25 @@ def run_task(task: EvalTask, prep: PreparedCase | str, opts: EvalOptions) -> tup
         with contextlib.redirect_stderr(io.StringIO()):  # notices go to the row, not the console
             if task.tracker == BASELINE:
                 traj, seconds, frames = _csrt(task, prep, log, marks, opts)
+                replay_seconds = None
             else:
-                traj, seconds, frames = _replay(task, log, row)
+                traj, seconds, frames, replay_seconds = _replay(task, log, row)
             row |= score(prep, log, traj)
     except Exception as err:  # noqa: BLE001 - a failing replay is a row, never the end of the run
         return row | {"status": "error", "error": _clean(one_line(err), opts)}, None
     timing = {"case": task.case, "tracker": task.tracker, "seed": task.seed, "frames": frames, "seconds": seconds,
-              "ms_per_frame": 1e3 * seconds / frames if frames else None}
+              "ms_per_frame": 1e3 * seconds / frames if frames else None, "replay_seconds": replay_seconds}
     return row | {"frames": frames}, timing
 
 
-def _replay(task: EvalTask, log: Path, row: dict[str, Any]) -> tuple[pl.DataFrame, float, int]:
+def _replay(task: EvalTask, log: Path, row: dict[str, Any]) -> tuple[pl.DataFrame, float, int, float]:
+    """The replay's trajectory, the time in the tracker's steps (what CSRT's update calls are timed against),
+    its frames and the whole replay's time (reading and decoding too)."""
     from trackreplay.replay.core.engine import ReplayRequest, replay
 
     result = replay(ReplayRequest(log=log, tracker=task.tracker, seed=task.seed))
     row |= {"digest": result.digest, "notices": " | ".join(result.notices) or None}
-    return result.trajectory, result.seconds, result.frames
+    return result.trajectory, result.step_seconds, result.frames, result.seconds
 
 
 def _csrt(task: EvalTask, prep: PreparedCase, log: Path, marks, opts: EvalOptions) -> tuple[pl.DataFrame, float, int]:

@@ -160,11 +160,12 @@ def _write(args: argparse.Namespace, name: str, rows, seeds, skipped: list[str],
 
 
 def speed_markdown(timings: pl.DataFrame) -> str:
-    """Median ms per frame per tracker (this machine, this run: the one table that is not reproducible)."""
+    """Median ms per frame per tracker, in the tracker's own work (our ``step``, CSRT's ``update``; this machine,
+    this run: the one table that is not reproducible)."""
     if timings.is_empty():
         return ""
     per = timings.group_by("tracker", maintain_order=True).agg(pl.col("ms_per_frame").median().alias("ms"),
                                                                pl.len().alias("n"))
-    lines = ["## Speed (this machine, this run)", "", "| tracker | median ms per frame | replays |", "|---|---|---|"]
+    lines = ["## Speed (this machine, this run)", "", "| tracker | median ms per frame (the tracker's own step) | replays |", "|---|---|---|"]
     lines += [f"| {t} | {ms:.1f} | {n} |" for t, ms, n in per.iter_rows() if ms is not None]
     return "\n".join(lines) + "\n"

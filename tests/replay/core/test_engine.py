@@ -158,3 +158,21 @@ def test_a_replay_its_tracker_cannot_start_on_is_refused(tracker, message, capsy
     assert cli(["replay", str(log), "--tracker", tracker, "--quiet"]) == 2
     err = capsys.readouterr().err
     assert f"trackreplay: error: {log}: {message}" in err and err.count("\n") == 1
+
+
+def test_the_tracker_s_own_time_is_counted_apart_from_the_replay_s(short_sim: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``step_seconds`` is the time inside the tracker's step alone (what evaluate sets beside CSRT's update calls)."""
+    import time as clock
+
+    class Slow(FlowTracker):
+        def step(self, frame):
+            clock.sleep(0.01)
+            return super().step(frame)
+
+    spec = dataclasses.replace(registry.get("flow"), tracker_cls=Slow)
+    monkeypatch.setattr(registry, "get", lambda name: spec)
+    result = replay(ReplayRequest(log=short_sim, tracker="flow"))
+    assert result.frames * 0.01 <= result.step_seconds <= result.seconds
+    monkeypatch.undo()
+    plain = replay(ReplayRequest(log=short_sim, tracker="flow"))
+    assert plain.digest == result.digest  # a slower step changes nothing the replay writes
