@@ -255,6 +255,18 @@ def export_only(sizes: list[int], out: Path) -> int:
     return 0
 
 
+def eval_against_whole(traj: Path, log: Path, tmp: Path, n: int, options: list[str]) -> dict:
+    """``trackreplay eval TRAJ LOG [options]`` in a fresh process, chunked and on the whole table (``--per-frame``
+    takes the whole-table path): each one's exit, peak RSS and seconds, and whether the two ``--json`` agree."""
+    entry: dict = {}
+    for name, extra in (("chunked", []), ("whole_table", ["--per-frame", str(tmp / f"pf-{n}.parquet")])):
+        argv = ["eval", str(traj), str(log), *options, "--json", str(tmp / f"{name}-{n}.json"), *extra]
+        code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=argv))
+        entry[name] = {"exit": int(code), "peak_rss_kib": rss, "seconds": round(seconds, 2)}
+    entry["same_json"] = (tmp / f"chunked-{n}.json").read_text() == (tmp / f"whole_table-{n}.json").read_text()
+    return entry
+
+
 def eval_only(sizes: list[int], out: Path, objects: int = 1) -> int:
     """`eval` alone: the scene's log and its flow track (``write_spill``) as T.parquet, scored in a fresh
     process by the chunked single-object path and by the whole table (``--per-frame`` takes it); the
@@ -266,12 +278,7 @@ def eval_only(sizes: list[int], out: Path, objects: int = 1) -> int:
             log, traj = Path(tmp) / f"long-{n}.mcap", Path(tmp) / f"t-{n}.parquet"
             write_long_log(log, n, objects)
             write_spill(traj, n)
-            entry: dict = {"frames": n, "truth_objects": objects}
-            for name, extra in (("chunked", []), ("whole_table", ["--per-frame", str(Path(tmp) / f"pf-{n}.parquet")])):
-                argv = ["eval", str(traj), str(log), "--json", str(Path(tmp) / f"{name}-{n}.json"), *extra]
-                code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=argv))
-                entry[name] = {"exit": int(code), "peak_rss_kib": rss, "seconds": round(seconds, 2)}
-            entry["same_json"] = (Path(tmp) / f"chunked-{n}.json").read_text() == (Path(tmp) / f"whole_table-{n}.json").read_text()
+            entry = {"frames": n, "truth_objects": objects, **eval_against_whole(traj, log, Path(tmp), n, [])}
             runs.append(entry)
             print(json.dumps(entry), flush=True)
     growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("chunked", "whole_table")}
@@ -629,12 +636,8 @@ def mot_only(sizes: list[int], out: Path, objects: int = 3) -> int:
             log, traj = Path(tmp) / f"long-{n}.mcap", Path(tmp) / f"t-{n}.parquet"
             write_long_log(log, n, objects)
             write_tracks(traj, n, objects)
-            entry: dict = {"frames": n, "truth_objects": objects, "tracks": objects}
-            for name, extra in (("chunked", []), ("whole_table", ["--per-frame", str(Path(tmp) / f"pf-{n}.parquet")])):
-                argv = ["eval", str(traj), str(log), "--mot", "--json", str(Path(tmp) / f"{name}-{n}.json"), *extra]
-                code, rss, seconds = measure(CLI.format(root=str(ROOT), argv=argv))
-                entry[name] = {"exit": int(code), "peak_rss_kib": rss, "seconds": round(seconds, 2)}
-            entry["same_json"] = (Path(tmp) / f"chunked-{n}.json").read_text() == (Path(tmp) / f"whole_table-{n}.json").read_text()
+            entry = {"frames": n, "truth_objects": objects, "tracks": objects,
+                     **eval_against_whole(traj, log, Path(tmp), n, ["--mot"])}
             runs.append(entry)
             print(json.dumps(entry), flush=True)
     growth = {k: round((runs[-1][k]["peak_rss_kib"] - runs[0][k]["peak_rss_kib"]) / 1024, 1) for k in ("chunked", "whole_table")}
