@@ -837,7 +837,37 @@ def _space_columns(full: pl.DataFrame, starts: np.ndarray, xs: np.ndarray, Ps: n
 
 
 
-class FrameCameras(Mapping):
+class _FrameRows(Mapping):
+    """A mapping keyed by frame number over arrays: ``frames`` (int64) in the order they were read, each
+    frame's row found by a search of the sorted copy (by its own value when the frames are 0, 1, 2 ...).
+    Iterates in the order the frames were read."""
+
+    def __init__(self, frames) -> None:
+        self.frames = np.array(frames, dtype=np.int64)
+        self._order = np.argsort(self.frames, kind="stable")
+        self._sorted = self.frames[self._order]
+        # frames 0, 1, 2 ... in order (a log's images as read): a frame is its own row, no search
+        self._dense = bool(np.array_equal(self.frames, np.arange(len(self.frames))))
+
+    def _row(self, frame) -> int:
+        if not isinstance(frame, (int, np.integer)) or isinstance(frame, bool):
+            return -1
+        if self._dense:
+            return int(frame) if 0 <= frame < len(self.frames) else -1
+        i = int(np.searchsorted(self._sorted, frame))
+        return int(self._order[i]) if i < len(self._sorted) and self._sorted[i] == frame else -1
+
+    def __contains__(self, frame) -> bool:
+        return self._row(frame) >= 0
+
+    def __iter__(self):
+        return iter(self.frames.tolist())
+
+    def __len__(self) -> int:
+        return len(self.frames)
+
+
+class FrameCameras(_FrameRows):
     """Frame -> the posed camera of that frame (:class:`PtzCamera`), built when asked from the frame's
     pan, tilt, zoom and focus kept as arrays (32 bytes a frame; a dict of cameras made ``log_context``
     of a 200k-frame log peak at 167 MB, now 59: ``benchmarks/bench_flight.py``). Iterates in the order
@@ -846,18 +876,10 @@ class FrameCameras(Mapping):
 
     def __init__(self, frames, poses, lens) -> None:
         """``frames`` (n,), ``poses`` (n × 4 values: pan, tilt, zoom, focus), ``lens`` the lens table."""
-        self._frames = np.array(frames, dtype=np.int64)
+        super().__init__(frames)
         self._poses = np.array(poses, dtype=np.float64).reshape(-1, 4)
-        self._order = np.argsort(self._frames, kind="stable")
-        self._sorted = self._frames[self._order]
         self._lens = lens
         self._recent: dict[int, PtzCamera] = {}
-
-    def _row(self, frame) -> int:
-        if not isinstance(frame, (int, np.integer)) or isinstance(frame, bool):
-            return -1
-        i = int(np.searchsorted(self._sorted, frame))
-        return int(self._order[i]) if i < len(self._sorted) and self._sorted[i] == frame else -1
 
     def __getitem__(self, frame) -> PtzCamera:
         cam = self._recent.get(frame)
@@ -873,50 +895,20 @@ class FrameCameras(Mapping):
         self._recent[int(frame)] = cam
         return cam
 
-    def __contains__(self, frame) -> bool:
-        return self._row(frame) >= 0
 
-    def __iter__(self):
-        return iter(self._frames.tolist())
-
-    def __len__(self) -> int:
-        return len(self._frames)
-
-
-class FrameTimes(Mapping):
+class FrameTimes(_FrameRows):
     """Frame -> log time (ns) as two int64 arrays (16 bytes a frame, where a dict holds two Python ints and
     its table entry). Iterates in the order the frames were read; ``values()`` in the same order."""
 
     def __init__(self, frames, times) -> None:
-        self.frames = np.array(frames, dtype=np.int64)
+        super().__init__(frames)
         self.times = np.array(times, dtype=np.int64)
-        order = np.argsort(self.frames, kind="stable")
-        self._order, self._sorted = order, self.frames[order]
-        # frames 0, 1, 2 ... in order (a log's images as read): a frame is its own row, no search
-        self._dense = bool(np.array_equal(self.frames, np.arange(len(self.frames))))
-
-    def _row(self, frame) -> int:
-        if not isinstance(frame, (int, np.integer)) or isinstance(frame, bool):
-            return -1
-        if self._dense:
-            return int(frame) if 0 <= frame < len(self.frames) else -1
-        i = int(np.searchsorted(self._sorted, frame))
-        return int(self._order[i]) if i < len(self._sorted) and self._sorted[i] == frame else -1
 
     def __getitem__(self, frame) -> int:
         row = self._row(frame)
         if row < 0:
             raise KeyError(frame)
         return int(self.times[row])
-
-    def __contains__(self, frame) -> bool:
-        return self._row(frame) >= 0
-
-    def __iter__(self):
-        return iter(self.frames.tolist())
-
-    def __len__(self) -> int:
-        return len(self.frames)
 
     def values(self) -> list[int]:  # (not one look-up a frame)
         return self.times.tolist()
