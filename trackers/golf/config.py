@@ -151,6 +151,8 @@ class LutConfig:
             raise ValueError("lut.hist_bins must be >= 2, lut.background_stride >= 1 and lut.learn_max >= 0")
         if min(self.smooth_bins, self.min_count, self.background_margin, self.context) < 0 or not 0 < self.core <= 1:
             raise ValueError("lut.smooth_bins, min_count, background_margin and context must be >= 0, 0 < lut.core <= 1")
+        if not 0 <= self.ring_margin < float("inf"):
+            raise ValueError("lut.ring_margin must be a finite number >= 0 (at most lut.background_margin: no ring)")
 
 
 @dataclass(frozen=True)

@@ -101,3 +101,9 @@ def test_the_vot_ball_is_followed_from_a_box_of_07_to_15_times_its_size(tmp_path
     assert measured.mean() >= 0.9 and (d[measured] <= 10).mean() >= 0.9
     assert not (d[measured] > 25).any()
 
+
+
+@pytest.mark.parametrize("margin", [-1.0, float("nan"), float("inf")])
+def test_a_ring_margin_that_is_no_size_is_refused_in_one_sentence(margin: float) -> None:
+    with pytest.raises(ValueError, match="lut.ring_margin must be a finite number >= 0"):
+        LutConfig(ring_margin=margin)
